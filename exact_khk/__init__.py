@@ -1,0 +1,33 @@
+"""exact_khk — exact certification of Kahan–Hirota–Kimura discretizations.
+
+Quick start (exact rational orbit of the Lie–Poisson family, n = 3):
+
+>>> from exact_khk import LiePoissonSystem, KahanMap
+>>> system = LiePoissonSystem.from_vectors(a="1,0,2", b="0,1,0", c="3,1,1")
+>>> phi = KahanMap(system.field("f"), eps="1/10")          # fastest exact arithmetic
+>>> pts = phi.orbit(["1", "0", "0", "0", "1", "0"], steps=3)
+>>> phi.arith.format(pts[1][0])
+'72745/57239'
+>>> phi.inverse(pts[1]) == pts[0]                          # reversibility, exactly
+True
+"""
+
+from .arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
+from .errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
+                     SingularStepError)
+from .kahan import KahanMap, kahan_step, map_jacobian, orbit
+from .parsing import parse_rational, parse_signs, parse_vector
+from .quadratic import QuadraticField
+from .systems import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
+                      rational_sign_patterns)
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",
+    "ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "SingularStepError",
+    "KahanMap", "kahan_step", "map_jacobian", "orbit",
+    "parse_rational", "parse_signs", "parse_vector",
+    "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",
+    "rational_sign_patterns", "__version__",
+]

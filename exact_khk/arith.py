@@ -1,0 +1,303 @@
+"""Arithmetic contexts: one algorithm, many number systems.
+
+An *arithmetic* (a context, as in mpmath or SymPy's domains) is a small object
+that converts exact rationals into its own raw elements and knows how to print,
+test and solve with them.  Algorithms receive the context and touch numbers
+only through ordinary operators and the context's methods, so the Kahan step
+is written once for all of them.
+
+Names understood by :func:`get_arith`:
+
+========== ============================================================
+``fraction``  :class:`fractions.Fraction` (pure Python, the slow reference)
+``gmpy2``     ``gmpy2.mpq``
+``flint``     ``flint.fmpq`` (python-flint; the fastest exact backend)
+``mp:P``      mpmath binary floats at P bits, in a private ``MPContext``
+``float``     IEEE float64 (Python floats)
+========== ============================================================
+
+>>> ar = get_arith("flint")
+>>> ar.format(ar(Fraction(-3, 4)) * 2)
+'-3/2'
+>>> get_arith("mp:100").format(get_arith("mp:100")(Fraction(1, 3)))
+'0.33333333333333333333333333333346'
+>>> get_arith("float").exact
+False
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from fractions import Fraction
+
+import mpmath
+from mpmath import libmp
+
+from .errors import InputError
+
+
+class Arith:
+    """Base arithmetic context.
+
+    Subclasses set ``name``, ``exact`` (results are exact, compare with ``==``),
+    ``zero``, ``one`` and implement :meth:`convert` and :meth:`format`.
+    ``prec`` is the working precision in bits (``None`` for exact contexts).
+    """
+
+    name = "?"
+    exact = True
+    prec = None
+
+    def __call__(self, value):
+        return self.convert(value)
+
+    def convert(self, value):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def format(self, e) -> str:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def is_zero(self, e):
+        """True / False, or None when undecidable (e.g. a ball containing 0)."""
+        return e == self.zero
+
+    def magnitude(self, e) -> float:
+        """A float measure of |e|, used for pivoting in inexact contexts."""
+        return abs(float(e))
+
+    def is_finite(self, e) -> bool:
+        return True
+
+    def to_fraction(self, e) -> Fraction:
+        raise TypeError(f"arithmetic {self.name!r} has no exact rational values")
+
+    def to_float(self, e) -> float:
+        return float(e)
+
+    @property
+    def unit_roundoff(self) -> float:
+        """2**-prec for floating contexts, 0 for exact ones."""
+        return 0.0 if self.prec is None else 2.0 ** (-self.prec)
+
+    def local(self):
+        """Context manager entered around algorithms (e.g. a ball precision)."""
+        return contextlib.nullcontext()
+
+    # A context may provide a fast exact solver: native_solve(M, B) -> X or
+    # raise ZeroDivisionError when M is singular.  None means "use linalg".
+    native_solve = None
+
+    def __repr__(self):
+        return f"<arith {self.name}>"
+
+    def __eq__(self, other):
+        return isinstance(other, Arith) and other.name == self.name
+
+    def __hash__(self):
+        return hash(self.name)
+
+
+def _as_fraction(value) -> Fraction:
+    """An exact rational from int, Fraction, or anything with numerator/denominator."""
+    if isinstance(value, Fraction):
+        return value
+    if isinstance(value, int):
+        return Fraction(value)
+    for num, den in (("numerator", "denominator"), ("p", "q")):
+        if hasattr(value, num) and hasattr(value, den):
+            return Fraction(int(getattr(value, num)), int(getattr(value, den)))
+    raise TypeError(f"cannot convert {value!r} ({type(value).__name__}) to an exact rational")
+
+
+class RationalArith(Arith):
+    """Exact arithmetic in Q through a backend rational type ``make(p, q)``."""
+
+    exact = True
+
+    def __init__(self, name, make, num, den, native_solve=None):
+        self.name, self._make, self._num, self._den = name, make, num, den
+        self.zero, self.one = make(0, 1), make(1, 1)
+        if native_solve is not None:
+            self.native_solve = native_solve
+
+    def convert(self, value):
+        q = _as_fraction(value)
+        return self._make(q.numerator, q.denominator)
+
+    def to_fraction(self, e) -> Fraction:
+        return Fraction(int(self._num(e)), int(self._den(e)))
+
+    def format(self, e) -> str:
+        p, q = int(self._num(e)), int(self._den(e))
+        return str(p) if q == 1 else f"{p}/{q}"
+
+    def magnitude(self, e) -> float:
+        return abs(float(self.to_fraction(e)))
+
+
+def _fraction_arith():
+    return RationalArith("fraction", Fraction, lambda e: e.numerator, lambda e: e.denominator)
+
+
+def _gmpy2_arith():
+    import gmpy2
+
+    return RationalArith("gmpy2", gmpy2.mpq, lambda e: e.numerator, lambda e: e.denominator)
+
+
+def _flint_arith():
+    import flint
+
+    def solve(M, B):
+        X = flint.fmpq_mat(M).solve(flint.fmpq_mat(B))
+        m = X.ncols()
+        flat = X.entries()
+        return [flat[i * m:(i + 1) * m] for i in range(X.nrows())]
+
+    return RationalArith("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, native_solve=solve)
+
+
+class MPArith(Arith):
+    """mpmath binary floating point at ``prec`` bits, in a private context.
+
+    Each instance owns its own ``mpmath.MPContext``; the global ``mpmath.mp``
+    is never touched.  Conversion of rationals is correctly rounded.
+    """
+
+    exact = False
+
+    def __init__(self, prec: int):
+        if prec < 2:
+            raise InputError(f"arith: precision must be at least 2 bits, got {prec}")
+        self.prec = prec
+        self.name = f"mp:{prec}"
+        self.ctx = mpmath.MPContext()
+        self.ctx.prec = prec
+        self.zero, self.one = self.ctx.zero, self.ctx.one
+
+    def convert(self, value):
+        if isinstance(value, self.ctx.mpf):
+            return +value
+        q = _as_fraction(value)
+        return self.ctx.make_mpf(libmp.from_rational(q.numerator, q.denominator,
+                                                     self.prec, libmp.round_nearest))
+
+    def format(self, e) -> str:
+        return libmp.to_str(e._mpf_, libmp.repr_dps(self.prec))
+
+    def magnitude(self, e) -> float:
+        return float(abs(e))
+
+    def is_finite(self, e) -> bool:
+        return bool(self.ctx.isfinite(e))
+
+    def to_fraction(self, e) -> Fraction:
+        """The exact rational value of a (finite) binary float."""
+        if not self.is_finite(e):
+            raise ValueError(f"{self.name}: {e} has no rational value")
+        sign, man, exp, _ = e._mpf_
+        q = Fraction(int(man)) * Fraction(2) ** int(exp)
+        return -q if sign else q
+
+
+class FloatArith(Arith):
+    """IEEE-754 double precision (Python floats)."""
+
+    name = "float"
+    exact = False
+    prec = 53
+    zero, one = 0.0, 1.0
+
+    def convert(self, value):
+        if isinstance(value, float):
+            return value
+        return float(_as_fraction(value))  # correctly rounded
+
+    def format(self, e) -> str:
+        return repr(float(e))
+
+    def magnitude(self, e) -> float:
+        return abs(e)
+
+    def is_finite(self, e) -> bool:
+        return math.isfinite(e)
+
+    def to_fraction(self, e) -> Fraction:
+        return Fraction(e)
+
+
+# --- the registry of names -------------------------------------------------
+
+_FIXED = {"fraction": _fraction_arith, "gmpy2": _gmpy2_arith, "flint": _flint_arith,
+          "float": FloatArith}
+_PARAMETRIZED = {"mp": MPArith}
+_CACHE: dict[str, Arith] = {}
+
+
+def register_arith(prefix: str, factory, parametrized: bool = True):
+    """Make ``prefix:PARAM`` (or a plain ``prefix``) a name for :func:`get_arith`.
+
+    ``factory(int_param)`` (or ``factory()``) returns an :class:`Arith`.
+    """
+    (_PARAMETRIZED if parametrized else _FIXED)[prefix] = factory
+
+
+def arith_names() -> list[str]:
+    """The names understood by :func:`get_arith` (``X:P`` for parametrized ones)."""
+    return sorted(_FIXED) + sorted(f"{p}:P" for p in _PARAMETRIZED)
+
+
+def get_arith(name=None) -> Arith:
+    """The arithmetic called ``name`` (an :class:`Arith` is passed through).
+
+    ``None`` gives the default: the fastest exact arithmetic installed
+    (``flint``, else ``gmpy2``, else ``fraction``).
+    """
+    if isinstance(name, Arith):
+        return name
+    if name is None:
+        return default_arith()
+    if not isinstance(name, str):
+        raise InputError(f"arith: expected a name such as 'flint' or 'mp:256', got {name!r}")
+    key = name.strip().lower()
+    if key in _CACHE:
+        return _CACHE[key]
+    prefix, _, param = key.partition(":")
+    if not param and prefix in _FIXED:
+        try:
+            ar = _FIXED[prefix]()
+        except ImportError as exc:
+            raise InputError(f"arith: {name!r} needs a package that is not installed ({exc})") from None
+    elif param and prefix in _PARAMETRIZED:
+        try:
+            value = int(param)
+        except ValueError:
+            raise InputError(f"arith: {name!r}: the parameter after ':' must be an integer") from None
+        ar = _PARAMETRIZED[prefix](value)
+    else:
+        raise InputError(f"arith: unknown arithmetic {name!r}; known: {', '.join(arith_names())}")
+    _CACHE[key] = ar
+    return ar
+
+
+def default_arith() -> Arith:
+    """The fastest exact arithmetic that is installed."""
+    for name in ("flint", "gmpy2", "fraction"):
+        try:
+            return get_arith(name)
+        except InputError:
+            continue
+    raise AssertionError("unreachable: fraction is always available")
+
+
+def exact_arith_names() -> list[str]:
+    """The exact rational arithmetics that are installed, fastest first."""
+    out = []
+    for name in ("flint", "gmpy2", "fraction"):
+        try:
+            get_arith(name)
+            out.append(name)
+        except InputError:
+            pass
+    return out

@@ -1,0 +1,57 @@
+"""Typed errors and warnings of exact_khk.
+
+Every error a user can provoke with bad input is an :class:`InputError` (a
+``ValueError``) whose message names the offending argument; an undefined Kahan
+step is a :class:`SingularStepError` naming the point and the step size.
+"""
+
+from __future__ import annotations
+
+
+class ExactKHKError(Exception):
+    """Base class of all exact_khk errors."""
+
+
+class InputError(ExactKHKError, ValueError):
+    """Malformed or inconsistent input (names the argument at fault)."""
+
+
+class NotRationalError(InputError):
+    """An involution asked for over Q whose entries are not rational."""
+
+
+class SingularStepError(ExactKHKError, ArithmeticError):
+    """The Kahan step is undefined: det(I - eps f'(x)) = 0 (or numerically so).
+
+    Attributes: ``x`` (the point, as strings), ``eps`` (string), ``step``
+    (index of the step in an orbit, or None), ``condition`` (condition
+    estimate for floating arithmetic, None when exactly singular).
+    """
+
+    def __init__(self, x, eps, *, step=None, condition=None, detail=""):
+        self.x, self.eps, self.step, self.condition, self.detail = x, eps, step, condition, detail
+        super().__init__(self._message())
+
+    def _message(self):
+        where = f"step {self.step}: " if self.step is not None else ""
+        why = "det(I - eps*f'(x)) = 0" if self.condition is None else (
+            f"I - eps*f'(x) is numerically singular (condition estimate {self.condition:.3g})")
+        pt = "(" + ", ".join(self.x) + ")"
+        extra = f"; {self.detail}" if self.detail else ""
+        return f"{where}Kahan step undefined at x = {pt}, eps = {self.eps}: {why}{extra}"
+
+    def at_step(self, step):
+        """The same error, annotated with the orbit step at which it happened."""
+        return SingularStepError(self.x, self.eps, step=step, condition=self.condition,
+                                 detail=self.detail)
+
+
+class NearSingularWarning(UserWarning):
+    """A floating step was taken with an ill-conditioned matrix I - eps f'(x).
+
+    Attribute ``condition``: the 1-norm condition estimate of I - eps f'(x).
+    """
+
+    def __init__(self, message, condition):
+        super().__init__(message)
+        self.condition = condition

@@ -1,0 +1,116 @@
+"""Dense linear algebra written once over an arithmetic context.
+
+``solve(ar, M, B)`` solves ``M X = B`` (``M`` square, ``B`` a list of rows).
+Exact contexts pivot on the first nonzero entry and report singularity
+exactly; inexact ones use partial pivoting and return a 1-norm condition
+estimate of ``M`` so that callers can warn about or refuse ill-conditioned
+steps.  A context with a native solver (python-flint's ``fmpq_mat.solve``)
+uses it instead of the generic elimination.
+
+>>> from fractions import Fraction as F
+>>> from exact_khk.arith import get_arith
+>>> X, cond = solve(get_arith("fraction"), [[F(2), F(1)], [F(1), F(3)]], [[F(1)], [F(2)]])
+>>> X, cond
+([[Fraction(1, 5)], [Fraction(3, 5)]], None)
+"""
+
+from __future__ import annotations
+
+
+class SingularMatrix(ArithmeticError):
+    """``M`` is singular (exactly, or a floating pivot is exactly zero)."""
+
+
+def identity(ar, n):
+    return [[ar.one if i == j else ar.zero for j in range(n)] for i in range(n)]
+
+
+def matmul(A, B):
+    """Product of two matrices given as lists of rows (any ring elements)."""
+    cols = list(zip(*B))
+    return [[sum((a * b for a, b in zip(row, col)), start=row[0] * 0) for col in cols] for row in A]
+
+
+def matvec(A, x):
+    return [sum((a * b for a, b in zip(row, x)), start=row[0] * 0) for row in A]
+
+
+def transpose(A):
+    return [list(r) for r in zip(*A)]
+
+
+def norm1(ar, A) -> float:
+    """Max column sum of magnitudes (as a float)."""
+    return max(sum(ar.magnitude(A[i][j]) for i in range(len(A))) for j in range(len(A[0])))
+
+
+def lu_factor(ar, M):
+    """LU factorisation with row pivoting: returns (LU, perm), L unit lower.
+
+    Raises :class:`SingularMatrix` when no usable pivot exists.
+    """
+    n = len(M)
+    LU = [list(row) for row in M]
+    perm = list(range(n))
+    for k in range(n):
+        if ar.exact:
+            p = next((i for i in range(k, n) if not ar.is_zero(LU[i][k])), None)
+        else:
+            p = max(range(k, n), key=lambda i: ar.magnitude(LU[i][k]))
+            if ar.is_zero(LU[p][k]) is not False:
+                p = None
+        if p is None:
+            raise SingularMatrix(f"no nonzero pivot in column {k}")
+        if p != k:
+            LU[k], LU[p] = LU[p], LU[k]
+            perm[k], perm[p] = perm[p], perm[k]
+        piv = LU[k][k]
+        for i in range(k + 1, n):
+            if ar.is_zero(LU[i][k]) is True:
+                continue
+            m = LU[i][k] / piv
+            LU[i][k] = m
+            rowk, rowi = LU[k], LU[i]
+            for j in range(k + 1, n):
+                rowi[j] = rowi[j] - m * rowk[j]
+    return LU, perm
+
+
+def lu_solve(LU, perm, B):
+    """Solve with a factorisation from :func:`lu_factor`; ``B`` is a list of rows."""
+    n = len(LU)
+    X = [list(B[perm[i]]) for i in range(n)]
+    m = len(X[0])
+    for i in range(n):
+        for k in range(i):
+            l = LU[i][k]
+            for j in range(m):
+                X[i][j] = X[i][j] - l * X[k][j]
+    for i in reversed(range(n)):
+        for k in range(i + 1, n):
+            u = LU[i][k]
+            for j in range(m):
+                X[i][j] = X[i][j] - u * X[k][j]
+        for j in range(m):
+            X[i][j] = X[i][j] / LU[i][i]
+    return X
+
+
+def solve(ar, M, B):
+    """Solve ``M X = B``; returns ``(X, condition)``.
+
+    ``condition`` is ``None`` for exact contexts, else the 1-norm condition
+    estimate ``|M|_1 |M^-1|_1`` (computed from the same factorisation).
+    Raises :class:`SingularMatrix` if ``M`` is (exactly) singular.
+    """
+    if ar.native_solve is not None:
+        try:
+            return ar.native_solve(M, B), None
+        except ZeroDivisionError as exc:
+            raise SingularMatrix(str(exc)) from None
+    LU, perm = lu_factor(ar, M)
+    X = lu_solve(LU, perm, B)
+    if ar.exact:
+        return X, None
+    inv = lu_solve(LU, perm, identity(ar, len(M)))
+    return X, norm1(ar, M) * norm1(ar, inv)

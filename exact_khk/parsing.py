@@ -1,0 +1,86 @@
+"""Parsing of user input into exact rationals, with errors that name the argument.
+
+>>> parse_rational("-3/4", "eps")
+Fraction(-3, 4)
+>>> parse_vector("1/2,-3,0", "a", length=3)
+(Fraction(1, 2), Fraction(-3, 1), Fraction(0, 1))
+>>> parse_rational("1/0", "eps")
+Traceback (most recent call last):
+...
+exact_khk.errors.InputError: eps: '1/0' is not a rational number (zero denominator)
+"""
+
+from __future__ import annotations
+
+import re
+from fractions import Fraction
+
+from .errors import InputError
+
+_RATIONAL = re.compile(r"^[+-]?(\d+(/\d+)?|\d*\.\d+([eE][+-]?\d+)?|\d+[eE][+-]?\d+)$")
+
+
+def parse_rational(value, name: str) -> Fraction:
+    """An exact rational from ``'p'``, ``'p/q'``, a decimal like ``'0.1'`` (= 1/10),
+    an int, a Fraction, or a backend rational (gmpy2 mpq, flint fmpq).
+
+    Floats are refused: a binary float is rarely the rational a user meant.
+    """
+    if isinstance(value, bool):
+        raise InputError(f"{name}: expected a rational number, got {value!r}")
+    if isinstance(value, Fraction):
+        return value
+    if isinstance(value, int):
+        return Fraction(value)
+    if isinstance(value, float):
+        raise InputError(f"{name}: {value!r} is a binary float, not an exact rational; "
+                         f"write it as a string such as '1/10' or as a Fraction")
+    if isinstance(value, str):
+        text = value.strip().replace(" ", "")
+        if not _RATIONAL.match(text):
+            raise InputError(f"{name}: {value!r} is not a rational number (expected 'p', 'p/q' or a decimal)")
+        try:
+            return Fraction(text)
+        except ZeroDivisionError:
+            raise InputError(f"{name}: {value!r} is not a rational number (zero denominator)") from None
+    for num, den in (("numerator", "denominator"), ("p", "q")):
+        if hasattr(value, num) and hasattr(value, den):
+            try:
+                return Fraction(int(getattr(value, num)), int(getattr(value, den)))
+            except (TypeError, ValueError, ZeroDivisionError):
+                break
+    raise InputError(f"{name}: cannot read {value!r} ({type(value).__name__}) as a rational number")
+
+
+def parse_vector(value, name: str, length: int | None = None) -> tuple[Fraction, ...]:
+    """A tuple of rationals from ``'1/2,-3,0'`` or a sequence; checks the length."""
+    if isinstance(value, str):
+        parts = [p for p in value.replace(";", ",").split(",")]
+        if any(not p.strip() for p in parts):
+            raise InputError(f"{name}: empty entry in {value!r} (expected comma-separated rationals)")
+    else:
+        try:
+            parts = list(value)
+        except TypeError:
+            raise InputError(f"{name}: expected a sequence of rationals, got {value!r}") from None
+    out = tuple(parse_rational(p, f"{name}[{i}]") for i, p in enumerate(parts))
+    if length is not None and len(out) != length:
+        raise InputError(f"{name}: expected {length} entries, got {len(out)}")
+    return out
+
+
+def parse_signs(value, n: int) -> tuple[int, ...]:
+    """A sign pattern ``'-++'`` (s_0 first) as a tuple of ±1 of length n."""
+    if isinstance(value, str):
+        text = value.strip()
+        if len(text) != n or any(ch not in "+-" for ch in text):
+            raise InputError(f"signs: {value!r} must be {n} characters, each '+' or '-' (s_0 first)")
+        return tuple(1 if ch == "+" else -1 for ch in text)
+    out = tuple(int(s) for s in value)
+    if len(out) != n or any(s not in (1, -1) for s in out):
+        raise InputError(f"signs: {value!r} must be {n} entries, each +1 or -1")
+    return out
+
+
+def format_signs(signs) -> str:
+    return "".join("+" if s > 0 else "-" for s in signs)

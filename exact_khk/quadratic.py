@@ -1,0 +1,120 @@
+"""Quadratic vector fields f(x) = Q(x) + L x + c with exact coefficients.
+
+The Kahan machinery (:mod:`exact_khk.kahan`) accepts any
+:class:`QuadraticField`; the Lie–Poisson family (:mod:`exact_khk.systems`) is
+one source of them.  Coefficients are exact (``Fraction``, or any value the
+arithmetic's ``convert`` accepts); they are converted into an arithmetic once
+and cached.
+
+>>> from fractions import Fraction as F
+>>> from exact_khk.arith import get_arith
+>>> # Lotka–Volterra-like field on Q^2: f(x) = (x0*x1, -x0*x1 + x1)
+>>> fld = QuadraticField.from_tensor(
+...     [[[0, F(1, 2)], [F(1, 2), 0]], [[0, F(-1, 2)], [F(-1, 2), 0]]],
+...     linear=[[0, 0], [0, 1]])
+>>> ar = get_arith("fraction")
+>>> fld.evaluate(ar, [ar(2), ar(3)])
+[Fraction(6, 1), Fraction(-3, 1)]
+>>> fld.jacobian(ar, [ar(2), ar(3)])
+[[Fraction(3, 1), Fraction(2, 1)], [Fraction(-3, 1), Fraction(-1, 1)]]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+from .errors import InputError
+
+
+@dataclass(frozen=True, eq=False)
+class QuadraticField:
+    """A quadratic vector field on K^dim.
+
+    ``quad[i]``: tuple of ``((j, k), coef)`` with ``j <= k`` meaning
+    ``f_i += coef * x_j * x_k``; ``linear[i]``: tuple of ``(j, coef)``;
+    ``const[i]``: the constant term.  ``label`` is a short human name.
+    """
+
+    dim: int
+    quad: tuple
+    linear: tuple
+    const: tuple
+    label: str = "f"
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @classmethod
+    def from_tensor(cls, T, linear=None, const=None, label="f"):
+        """From ``T[i][j][k]`` = coefficient of ``x_j x_k`` in ``f_i`` (need not be symmetric)."""
+        N = len(T)
+        quad = []
+        for i in range(N):
+            if len(T[i]) != N or any(len(row) != N for row in T[i]):
+                raise InputError(f"tensor: component {i} is not {N}x{N}")
+            terms = {}
+            for j in range(N):
+                for k in range(N):
+                    c = T[i][j][k]
+                    if c != 0:
+                        key = (min(j, k), max(j, k))
+                        terms[key] = terms.get(key, 0) + c
+            quad.append(tuple((key, c) for key, c in sorted(terms.items()) if c != 0))
+        lin = tuple(tuple((j, c) for j, c in enumerate(row) if c != 0) for row in linear) \
+            if linear is not None else tuple(() for _ in range(N))
+        cst = tuple(const) if const is not None else tuple(0 for _ in range(N))
+        if len(lin) != N or len(cst) != N:
+            raise InputError("field: linear part and constant must have the dimension of the tensor")
+        return cls(N, tuple(quad), lin, cst, label)
+
+    @property
+    def homogeneous(self) -> bool:
+        """True when f is a homogeneous quadratic (no linear or constant part)."""
+        return all(not row for row in self.linear) and all(c == 0 for c in self.const)
+
+    def _converted(self, ar):
+        """Coefficients in ``ar``: f-terms, Jacobian linear forms, linear part, constants."""
+        hit = self._cache.get(ar.name)
+        if hit is not None:
+            return hit
+        conv = ar.convert
+        fterms = [[(j, k, conv(c)) for (j, k), c in terms] for terms in self.quad]
+        jac = [[{} for _ in range(self.dim)] for _ in range(self.dim)]
+        for i, terms in enumerate(self.quad):
+            for (j, k), c in terms:  # d/dx_j (c x_j x_k) = c x_k, and symmetrically
+                jac[i][j][k] = jac[i][j].get(k, 0) + c
+                jac[i][k][j] = jac[i][k].get(j, 0) + c
+        jterms = [[[(k, conv(c)) for k, c in sorted(d.items()) if c != 0] for d in row] for row in jac]
+        lin = [[(j, conv(c)) for j, c in row] for row in self.linear]
+        cst = [conv(c) for c in self.const]
+        out = (fterms, jterms, lin, cst)
+        self._cache[ar.name] = out
+        return out
+
+    def evaluate(self, ar, x):
+        """f(x) as a list of elements of ``ar``."""
+        fterms, _, lin, cst = self._converted(ar)
+        out = []
+        for i in range(self.dim):
+            s = cst[i]
+            for j, k, c in fterms[i]:
+                s = s + c * x[j] * x[k]
+            for j, c in lin[i]:
+                s = s + c * x[j]
+            out.append(s)
+        return out
+
+    def jacobian(self, ar, x):
+        """f'(x) as a list of rows of elements of ``ar``."""
+        _, jterms, lin, _ = self._converted(ar)
+        rows = []
+        for i in range(self.dim):
+            row = []
+            for j in range(self.dim):
+                s = ar.zero
+                for k, c in jterms[i][j]:
+                    s = s + c * x[k]
+                row.append(s)
+            for j, c in lin[i]:
+                row[j] = row[j] + c
+            rows.append(row)
+        return rows

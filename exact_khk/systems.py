@@ -1,0 +1,309 @@
+"""The Lie–Poisson family of Petrera & Suris, in the conventions of MATH.md.
+
+Phase space Q^{2n}, x = (u, v) with u = x[0:n], v = x[n:2n] (0-based).
+
+* cyclic Hankel matrix ``X(w)[i][j] = w[(i+j) % n]``;
+* Lie–Poisson tensor ``J(x) = [[0, X(u)], [-X(u), 0]]``;
+* cyclic shift ``P[i][(i+1) % n] = 1`` and ``A = P ⊕ P``;
+* admissible Hessian ``Hs = [[X(a), X(b)], [X(b), X(c)]]``, ``H0 = xᵀ Hs x / 2``;
+* commuting Hamiltonians ``H_i`` with Hessian ``A^i Hs``;
+* vector field ``f(x) = J(x) M x`` for a Hessian ``M``: ``M = Hs`` (the field f),
+  ``M = B Hs`` (associated field g for an involution B), ``M = A Hs``
+  (non-associated control; ``(2I + A) Hs`` for n = 2, where A is itself an
+  involution).
+
+Involutions are named by sign patterns ``s = (s_0, ..., s_{n-1})``: ``s_j`` is
+the eigenvalue of B on the ω^j-eigenspace of P (ω = e^{2πi/n}); as a string,
+``'-++'`` is B_0 for n = 3.
+
+>>> sys3 = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
+>>> sys3.n
+3
+>>> [str(v) for v in involution_circulant(3, "-++")]
+['1/3', '-2/3', '-2/3']
+>>> involution_circulant(4, "+-++")
+Traceback (most recent call last):
+...
+exact_khk.errors.NotRationalError: signs '+-++' split the class {j : gcd(j, 4) = 1} = {1, 3} (signs -, +): this involution is not rational; it needs cyclotomic arithmetic
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field
+from fractions import Fraction
+from math import gcd
+
+from .errors import InputError, NotRationalError
+from .parsing import format_signs, parse_signs, parse_vector
+from .quadratic import QuadraticField
+
+# --- small exact matrix helpers (Fractions, lists of rows) ------------------
+
+
+def hankel(w):
+    """Cyclic Hankel matrix X(w)[i][j] = w[(i+j) mod n]."""
+    n = len(w)
+    return [[w[(i + j) % n] for j in range(n)] for i in range(n)]
+
+
+def circulant_power_matrix(coeffs):
+    """Σ_k coeffs[k] P^k as an n×n matrix, P[i][(i+1) % n] = 1."""
+    n = len(coeffs)
+    return [[coeffs[(j - i) % n] for j in range(n)] for i in range(n)]
+
+
+def block_diag2(M):
+    """M ⊕ M."""
+    n = len(M)
+    Z = [Fraction(0)] * n
+    return [list(r) + Z for r in M] + [Z + list(r) for r in M]
+
+
+def mat_mul(A, B):
+    cols = list(zip(*B))
+    return [[sum((a * b for a, b in zip(r, c)), Fraction(0)) for c in cols] for r in A]
+
+
+def mat_add(A, B, alpha=1, beta=1):
+    return [[alpha * a + beta * b for a, b in zip(ra, rb)] for ra, rb in zip(A, B)]
+
+
+def eye(N):
+    return [[Fraction(int(i == j)) for j in range(N)] for i in range(N)]
+
+
+# --- involutions by sign pattern ------------------------------------------
+
+
+def _mobius(m: int) -> int:
+    result, p = 1, 2
+    while p * p <= m:
+        if m % p == 0:
+            m //= p
+            if m % p == 0:
+                return 0
+            result = -result
+        p += 1
+    return -result if m > 1 else result
+
+
+def ramanujan_sum(q: int, k: int) -> int:
+    """c_q(k) = Σ_{1<=j<=q, gcd(j,q)=1} ω_q^{jk} = Σ_{m | gcd(q,k)} μ(q/m) m."""
+    g = gcd(q, k)
+    return sum(_mobius(q // m) * m for m in range(1, g + 1) if g % m == 0)
+
+
+def divisor_classes(n: int) -> dict[int, list[int]]:
+    """{d: [j : gcd(j, n) = d]} for the divisors d of n (j = 0 is in class n)."""
+    classes: dict[int, list[int]] = {}
+    for j in range(n):
+        classes.setdefault(gcd(j, n), []).append(j)
+    return dict(sorted(classes.items()))
+
+
+def rational_sign_patterns(n: int) -> list[str]:
+    """All sign patterns whose involution has rational entries (2^{#divisors})."""
+    classes = list(divisor_classes(n).values())
+    out = []
+    for mask in range(2 ** len(classes)):
+        s = [0] * n
+        for bit, cls in enumerate(classes):
+            for j in cls:
+                s[j] = -1 if (mask >> bit) & 1 else 1
+        out.append(format_signs(s))
+    return sorted(out)
+
+
+def involution_circulant(n: int, signs) -> tuple[Fraction, ...]:
+    """Coefficients α_k of B = Σ_k α_k P^k for a rational sign pattern.
+
+    α_k = (1/n) Σ_j s_j ω^{-jk} = (1/n) Σ_{d|n} s_d c_{n/d}(k) (Ramanujan sums);
+    raises :class:`NotRationalError` if ``signs`` is not constant on the classes
+    {j : gcd(j, n) = d}.
+    """
+    s = parse_signs(signs, n)
+    total = [Fraction(0)] * n
+    for d, cls in divisor_classes(n).items():
+        vals = {s[j] for j in cls}
+        if len(vals) > 1:
+            shown = ", ".join(format_signs([s[j]]) for j in cls)
+            raise NotRationalError(
+                f"signs {format_signs(s)!r} split the class {{j : gcd(j, {n}) = {d}}} = "
+                f"{{{', '.join(map(str, cls))}}} (signs {shown}): this involution is not rational; "
+                f"it needs cyclotomic arithmetic")
+        sd = vals.pop()
+        for k in range(n):
+            total[k] += sd * ramanujan_sum(n // d, k)
+    return tuple(t / n for t in total)
+
+
+# --- the system -------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class LiePoissonSystem:
+    """A member of the family, given by its admissible Hessian blocks a, b, c ∈ Q^n."""
+
+    a: tuple
+    b: tuple
+    c: tuple
+    _fields: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self):
+        n = len(self.a)
+        if n < 2:
+            raise InputError(f"n: the family needs n >= 2, got n = {n}")
+        for name in ("a", "b", "c"):
+            object.__setattr__(self, name, parse_vector(getattr(self, name), name, length=n))
+
+    @classmethod
+    def from_vectors(cls, a, b, c):
+        """From three vectors (strings like ``'1/2,-3,0'`` or sequences of rationals)."""
+        a = parse_vector(a, "a")
+        if len(a) < 2:
+            raise InputError(f"n: the family needs n >= 2, got n = {len(a)}")
+        return cls(a, parse_vector(b, "b", len(a)), parse_vector(c, "c", len(a)))
+
+    @classmethod
+    def random(cls, n: int, seed: int, bound: int = 3):
+        """Small random integer Hessian blocks in [-bound, bound], reproducible from ``seed``."""
+        if not isinstance(n, int) or n < 2:
+            raise InputError(f"n: the family needs n >= 2, got {n!r}")
+        rng = random.Random(seed)
+        draw = lambda: tuple(Fraction(rng.randint(-bound, bound)) for _ in range(n))  # noqa: E731
+        return cls(draw(), draw(), draw())
+
+    @property
+    def n(self) -> int:
+        return len(self.a)
+
+    @property
+    def dim(self) -> int:
+        return 2 * self.n
+
+    def describe(self) -> str:
+        fmt = lambda v: "(" + ", ".join(str(t) for t in v) + ")"  # noqa: E731
+        return f"Lie–Poisson system n={self.n}: a={fmt(self.a)}, b={fmt(self.b)}, c={fmt(self.c)}"
+
+    # matrices ------------------------------------------------------------
+    @property
+    def hessian(self):
+        """Hs = [[X(a), X(b)], [X(b), X(c)]]."""
+        Xa, Xb, Xc = hankel(self.a), hankel(self.b), hankel(self.c)
+        return [ra + rb for ra, rb in zip(Xa, Xb)] + [rb + rc for rb, rc in zip(Xb, Xc)]
+
+    @property
+    def shift(self):
+        """A = P ⊕ P with P[i][(i+1) % n] = 1."""
+        e1 = [Fraction(0)] * self.n
+        e1[1 % self.n] += 1
+        return block_diag2(circulant_power_matrix(e1))
+
+    def J(self, x):
+        """Lie–Poisson tensor J(x) = [[0, X(u)], [-X(u), 0]] (entries from x)."""
+        n = self.n
+        if len(x) != 2 * n:
+            raise InputError(f"x: expected {2 * n} coordinates, got {len(x)}")
+        zero = x[0] * 0
+        Xu = hankel(list(x[:n]))
+        return ([[zero] * n + list(r) for r in Xu] + [[-t for t in r] + [zero] * n for r in Xu])
+
+    def hamiltonian_hessian(self, i: int = 0):
+        """Hessian A^i Hs of the commuting Hamiltonian H_i."""
+        M = self.hessian
+        for _ in range(i % self.n):
+            M = mat_mul(self.shift, M)
+        return M
+
+    def involution(self, signs):
+        """B = Bc ⊕ Bc for a rational sign pattern (see :func:`involution_circulant`)."""
+        return block_diag2(circulant_power_matrix(involution_circulant(self.n, signs)))
+
+    def hamiltonian(self, ar, x, i: int = 0):
+        """H_i(x) = xᵀ A^i Hs x / 2, evaluated in arithmetic ``ar``."""
+        M = self.hamiltonian_hessian(i)
+        s = ar.zero
+        for r in range(self.dim):
+            for cidx in range(self.dim):
+                if M[r][cidx] != 0:
+                    s = s + ar.convert(M[r][cidx]) * x[r] * x[cidx]
+        return s / ar.convert(2)
+
+    # fields --------------------------------------------------------------
+    def field_from_hessian(self, M, label="f") -> "LiePoissonField":
+        """The field f(x) = J(x) M x for any 2n×2n matrix M (no admissibility check)."""
+        n, N = self.n, self.dim
+        if len(M) != N or any(len(r) != N for r in M):
+            raise InputError(f"hessian: expected a {N}x{N} matrix")
+        # f_i = Σ_k x_k (J(e_k) M x)_i; (J(e_k) M)[i][l] = M[n + (k-i)%n][l] (i < n),
+        # and -M[(k-i')%n][l] for i = n + i'.
+        T = [[[0] * N for _ in range(N)] for _ in range(N)]
+        for k in range(n):
+            for i in range(n):
+                for l in range(N):
+                    T[i][k][l] = M[n + (k - i) % n][l]
+                    T[n + i][k][l] = -M[(k - i) % n][l]
+        base = QuadraticField.from_tensor(T, label=label)
+        return LiePoissonField(base.dim, base.quad, base.linear, base.const, label,
+                               system=self, hessian=tuple(tuple(r) for r in M))
+
+    def field(self, kind: str = "f", signs=None, power: int = 0) -> "LiePoissonField":
+        """A named field: ``'f'`` (Hessian A^power Hs), ``'g'`` (B Hs for the
+        involution with sign pattern ``signs``, default B_0 = '-+…+'), or
+        ``'control'`` (A Hs for n >= 3, (2I + A) Hs for n = 2)."""
+        key = (kind, None if signs is None else format_signs(parse_signs(signs, self.n)), power)
+        if key in self._fields:
+            return self._fields[key]
+        if kind == "f":
+            fld = self.field_from_hessian(self.hamiltonian_hessian(power),
+                                          "f" if power == 0 else f"f_{power}")
+        elif kind == "g":
+            s = format_signs(parse_signs(signs if signs is not None else b0_signs(self.n), self.n))
+            B = self.involution(s)
+            fld = self.field_from_hessian(mat_mul(B, self.hessian), f"g[{s}]")
+            object.__setattr__(fld, "signs", s)
+        elif kind == "control":
+            C = self.shift if self.n >= 3 else mat_add(eye(self.dim), self.shift, 2, 1)
+            fld = self.field_from_hessian(mat_mul(C, self.hessian), "control")
+        else:
+            raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
+        self._fields[key] = fld
+        return fld
+
+
+# The built-in default system (used by ``exact-khk certify`` with no arguments):
+# n = 3, a = (1, 0, 2), b = (0, 1, 0), c = (3, 1, 1); x0 = (1, 2, -1, 1/2, 0, 1);
+# eps = 1/10.  Chosen as small integers with every block nonzero; its orbits are
+# regular (no singular step) for at least 200 steps, as the tests check.
+DEFAULT_VECTORS = ("1,0,2", "0,1,0", "3,1,1")
+DEFAULT_X0 = ("1", "2", "-1", "1/2", "0", "1")
+DEFAULT_EPS = Fraction(1, 10)
+
+
+def default_system() -> "LiePoissonSystem":
+    """The built-in default system (n = 3); see ``DEFAULT_VECTORS``."""
+    return LiePoissonSystem.from_vectors(*DEFAULT_VECTORS)
+
+
+def random_point(n: int, seed: int, bound: int = 3) -> tuple:
+    """A reproducible small-integer point of Q^{2n} (not all zero)."""
+    rng = random.Random(f"x0-{seed}")
+    while True:
+        x = tuple(Fraction(rng.randint(-bound, bound)) for _ in range(2 * n))
+        if any(x):
+            return x
+
+
+def b0_signs(n: int) -> str:
+    """The sign pattern of B_0 = I - (2/n)(𝟙 ⊕ 𝟙): '-' then n-1 '+'."""
+    return "-" + "+" * (n - 1)
+
+
+@dataclass(frozen=True, eq=False)
+class LiePoissonField(QuadraticField):
+    """f(x) = J(x) M x for a system's tensor J and a constant matrix M (the Hessian)."""
+
+    system: LiePoissonSystem = None
+    hessian: tuple = ()
+    signs: str | None = None

@@ -1,0 +1,80 @@
+"""The ``exact-khk orbit`` command."""
+
+import json
+
+import pytest
+
+from exact_khk import KahanMap, LiePoissonSystem
+from exact_khk.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_orbit_json_matches_library(capsys):
+    code, out, _ = run(capsys, "orbit", "--n", "3", "--a", "1,0,2", "--b", "0,1,0", "--c", "3,1,1",
+                       "--x0", "1,2,-1,1/2,0,1", "--eps", "1/10", "--steps", "4", "--field", "g",
+                       "--signs", "-++", "--arith", "gmpy2", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert len(data["orbit"]) == 5 and all(len(p) == 6 for p in data["orbit"])
+    sys3 = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
+    phi = KahanMap(sys3.field("g", "-++"), "1/10", "fraction")
+    assert data["orbit"] == [[phi.arith.format(t) for t in p] for p in phi.orbit(["1", "2", "-1", "1/2", "0", "1"], 4)]
+    assert data["orbit"][0] == ["1", "2", "-1", "1/2", "0", "1"]
+
+
+def test_orbit_default_readable(capsys):
+    code, out, _ = run(capsys, "orbit", "--steps", "3")
+    assert code == 0
+    assert "Lie–Poisson system n=3" in out and "exact" in out
+    assert len([l for l in out.splitlines() if l.strip()[:1].isdigit()]) == 4
+
+
+def test_orbit_float_json_has_all_digits(capsys):
+    code, out, _ = run(capsys, "orbit", "--steps", "2", "--arith", "mp:200", "--json")
+    assert code == 0
+    val = json.loads(out)["orbit"][2][0]
+    assert len(val.replace("-", "").replace(".", "")) >= 55  # 200 bits ≈ 60 digits
+
+
+def test_seed_draws_system_and_point(capsys):
+    code, out, _ = run(capsys, "orbit", "--n", "4", "--seed", "3", "--steps", "2", "--json")
+    assert code == 0
+    data = json.loads(out)
+    assert data["system"]["n"] == 4 and len(data["orbit"][0]) == 8
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["orbit", "--a", "1,2", "--b", "1", "--c", "1,1", "--x0", "1,1,1,1"], "--b: expected 2 entries"),
+    (["orbit", "--a", "1,2", "--b", "1,1", "--c", "1,1", "--x0", "1,1,1,x"], "--x0[3]"),
+    (["orbit", "--a", "1", "--b", "1", "--c", "1", "--x0", "1,1"], "n >= 2"),
+    (["orbit", "--n", "1", "--seed", "2"], "n >= 2"),
+    (["orbit", "--eps", "0"], "--eps"),
+    (["orbit", "--eps", "1/0"], "--eps"),
+    (["orbit", "--arith", "quad"], "unknown arithmetic"),
+    (["orbit", "--steps", "many"], "--steps"),
+    (["orbit", "--field", "g", "--signs", "+-+"], "not rational"),
+])
+def test_malformed_input_exit_2(capsys, argv, fragment):
+    if argv[-1] == "+-+":  # n = 3: '+-+' splits the class {1, 2}
+        pass
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert fragment in err and len(err.strip().splitlines()) == 1
+    assert out == ""
+
+
+def test_singular_step_exit_3(capsys):
+    # a point and ε with det(I − ε f'(x)) = 0 (see test_core._rational_singular_eps)
+    from .test_core import _rational_singular_eps
+
+    s = LiePoissonSystem.from_vectors("1,2", "0,1", "-1,3")
+    eps = _rational_singular_eps(s, ["1", "0", "2", "1"])
+    code, out, err = run(capsys, "orbit", "--a", "1,2", "--b", "0,1", "--c", "-1,3", "--x0", "1,0,2,1",
+                         "--eps", str(eps), "--steps", "3")
+    assert code == 3
+    assert "step 1" in err and str(eps) in err and len(err.strip().splitlines()) == 1
