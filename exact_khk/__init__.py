@@ -14,7 +14,7 @@ True
 
 from .arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
 from .errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
-                     SingularStepError)
+                     SingularStepError, UndecidedError)
 from .kahan import KahanMap, kahan_step, map_jacobian, orbit
 from .parsing import parse_rational, parse_signs, parse_vector
 from .quadratic import QuadraticField
@@ -25,7 +25,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",
-    "ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "SingularStepError",
+    "ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "SingularStepError", "UndecidedError",
     "KahanMap", "kahan_step", "map_jacobian", "orbit",
     "parse_rational", "parse_signs", "parse_vector",
     "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",

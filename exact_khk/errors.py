@@ -46,6 +46,11 @@ class SingularStepError(ExactKHKError, ArithmeticError):
                                  detail=self.detail)
 
 
+class UndecidedError(ExactKHKError, ArithmeticError):
+    """Ball (interval) arithmetic cannot decide a question at this precision,
+    e.g. no pivot is certainly nonzero.  Never a wrong answer: "undecided"."""
+
+
 class NearSingularWarning(UserWarning):
     """A floating step was taken with an ill-conditioned matrix I - eps f'(x).
 

@@ -113,11 +113,13 @@ class KahanMap:
             except SingularMatrix:
                 raise SingularStepError([ar.format(t) for t in x], ar.format(eps)) from None
         if not ar.exact:
+            # cond is None when the context's solver gives no estimate (balls
+            # carry their own error bounds instead).
             bad = any(not ar.is_finite(t) for row in X for t in row)
-            if bad or cond is None or cond != cond or cond * ar.unit_roundoff >= 1:
+            if bad or (cond is not None and (cond != cond or cond * ar.unit_roundoff >= 1)):
                 raise SingularStepError([ar.format(t) for t in x], ar.format(eps),
                                         condition=float("inf") if bad or cond != cond else cond)
-            if cond >= 2.0 ** (ar.prec / 2):
+            if cond is not None and cond >= 2.0 ** (ar.prec / 2):
                 warnings.warn(NearSingularWarning(
                     f"Kahan step at eps = {ar.format(eps)} is ill-conditioned: "
                     f"condition estimate {cond:.3g} of I - eps*f'(x) in {ar.name} "
