@@ -48,6 +48,12 @@ class Arith:
     name = "?"
     exact = True
     prec = None
+    #: exact rationals (Q) with ``to_fraction``/``convert`` round trips
+    rational = False
+    #: an :class:`IntegerKernel` for fraction-free solves (rational contexts only)
+    integers = None
+    #: binary floating point with ``from_man_exp``: the DFT (structured) step applies
+    fourier = False
 
     def __call__(self, value):
         return self.convert(value)
@@ -110,14 +116,76 @@ def _as_fraction(value) -> Fraction:
     raise TypeError(f"cannot convert {value!r} ({type(value).__name__}) to an exact rational")
 
 
+class IntegerKernel:
+    """Integer linear algebra behind a rational arithmetic: denominators are
+    cleared once and systems are solved over Z (fraction-free).
+
+    ``split(v)`` → (integers, common denominator); ``tensor(rows)`` stores a
+    constant integer matrix (sparse rows here); ``contract(W, w)`` → W·w as a
+    flat list; ``solve(M, B)`` → rows of rationals (:func:`~exact_khk.linalg.bareiss_solve`).
+    Subclassed for python-flint, whose ``fmpz_mat`` does all three in C.
+    """
+
+    def __init__(self, name, make, num, den, gcd):
+        self.name, self.make, self.num, self.den, self.gcd = name, make, num, den, gcd
+
+    def split(self, v):
+        d = self.den(v[0])
+        for t in v[1:]:
+            q = self.den(t)
+            if q != 1:
+                d = d * q // self.gcd(d, q)
+        return [self.num(t) * (d // self.den(t)) for t in v], d
+
+    def tensor(self, rows):
+        return [[(k, c) for k, c in enumerate(row) if c] for row in rows]
+
+    def contract(self, W, w):
+        zero = w[0] * 0
+        return [sum((c * w[k] for k, c in row), zero) for row in W]
+
+    def solve(self, M, B):
+        from .linalg import bareiss_solve
+
+        Y, d = bareiss_solve(M, B)
+        return [[self.make(y, d) for y in row] for row in Y]
+
+
+class FlintKernel(IntegerKernel):
+    """:class:`IntegerKernel` on python-flint ``fmpz_mat`` (solve: ``fmpz_mat.solve``)."""
+
+    def __init__(self, flint):
+        self.flint = flint
+        super().__init__("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, lambda a, b: a.gcd(b))
+
+    def tensor(self, rows):
+        return self.flint.fmpz_mat(rows)
+
+    def contract(self, W, w):
+        return (W * self.flint.fmpz_mat(len(w), 1, w)).entries()
+
+    def solve(self, M, B):
+        X = self.flint.fmpz_mat(M).solve(self.flint.fmpz_mat(B))
+        m, flat = X.ncols(), X.entries()
+        return [flat[i * m:(i + 1) * m] for i in range(X.nrows())]
+
+
 class RationalArith(Arith):
-    """Exact arithmetic in Q through a backend rational type ``make(p, q)``."""
+    """Exact arithmetic in Q through a backend rational type ``make(p, q)``.
+
+    ``integers`` (an :class:`IntegerKernel` or None) is the fraction-free
+    integer linear algebra used by the dense Kahan step and by
+    :func:`~exact_khk.linalg.solve`; ``fraction`` has none and stays the
+    plain-elimination reference.
+    """
 
     exact = True
+    rational = True
 
-    def __init__(self, name, make, num, den, native_solve=None):
+    def __init__(self, name, make, num, den, native_solve=None, integers=None):
         self.name, self._make, self._num, self._den = name, make, num, den
         self.zero, self.one = make(0, 1), make(1, 1)
+        self.integers = integers
         if native_solve is not None:
             self.native_solve = native_solve
 
@@ -143,7 +211,9 @@ def _fraction_arith():
 def _gmpy2_arith():
     import gmpy2
 
-    return RationalArith("gmpy2", gmpy2.mpq, lambda e: e.numerator, lambda e: e.denominator)
+    num, den = (lambda e: e.numerator), (lambda e: e.denominator)
+    return RationalArith("gmpy2", gmpy2.mpq, num, den,
+                         integers=IntegerKernel("gmpy2", gmpy2.mpq, num, den, gmpy2.gcd))
 
 
 def _flint_arith():
@@ -155,7 +225,8 @@ def _flint_arith():
         flat = X.entries()
         return [flat[i * m:(i + 1) * m] for i in range(X.nrows())]
 
-    return RationalArith("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, native_solve=solve)
+    return RationalArith("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, native_solve=solve,
+                         integers=FlintKernel(flint))
 
 
 class MPArith(Arith):
@@ -166,6 +237,7 @@ class MPArith(Arith):
     """
 
     exact = False
+    fourier = True
 
     def __init__(self, prec: int):
         if prec < 2:
@@ -192,6 +264,10 @@ class MPArith(Arith):
     def is_finite(self, e) -> bool:
         return bool(self.ctx.isfinite(e))
 
+    def from_man_exp(self, man, exp):
+        """man·2^exp (integers) correctly rounded to this precision."""
+        return self.ctx.make_mpf(libmp.from_man_exp(int(man), int(exp), self.prec, libmp.round_nearest))
+
     def to_fraction(self, e) -> Fraction:
         """The exact rational value of a (finite) binary float."""
         if not self.is_finite(e):
@@ -206,13 +282,19 @@ class FloatArith(Arith):
 
     name = "float"
     exact = False
+    fourier = True
     prec = 53
     zero, one = 0.0, 1.0
 
     def convert(self, value):
         if isinstance(value, float):
             return value
-        return float(_as_fraction(value))  # correctly rounded
+        q = _as_fraction(value)
+        try:
+            return float(q)  # correctly rounded
+        except OverflowError:
+            raise InputError(f"arith float: {q if len(str(q)) < 40 else str(q)[:40] + '...'} "
+                             f"is too large for float64 (use mp:P)") from None
 
     def format(self, e) -> str:
         return repr(float(e))
@@ -222,6 +304,13 @@ class FloatArith(Arith):
 
     def is_finite(self, e) -> bool:
         return math.isfinite(e)
+
+    def from_man_exp(self, man, exp):
+        """man·2^exp (integers), correctly rounded outside the subnormal range; ±inf on overflow."""
+        try:
+            return math.ldexp(float(int(man)), int(exp))
+        except OverflowError:
+            return math.copysign(math.inf, int(man))
 
     def to_fraction(self, e) -> Fraction:
         return Fraction(e)

@@ -10,8 +10,10 @@ flow):
 
 The step is undefined where det(I − ε f'(x)) = 0.  Exact arithmetics detect
 this exactly and raise :class:`~exact_khk.errors.SingularStepError`.
-Floating arithmetics (``float``, ``mp:P``) compute a 1-norm condition estimate
-κ of I − ε f'(x) at every step and
+Floating arithmetics (``float``, ``mp:P``) compute a condition estimate κ of
+I − ε f'(x) at every step (the 1-norm estimate |M|₁|M⁻¹|₁ on the dense path;
+on the structured path max_j |M_j|₁ · max_j |M_j⁻¹|₁ over the n 2×2 Fourier
+blocks M_j, within a factor 2 of the 2-norm condition number) and
 
 * raise :class:`SingularStepError` (with κ) when a pivot is exactly zero, a
   result is not finite, or κ·2^-p ≥ 1 (no correct bit can be guaranteed);
@@ -26,6 +28,22 @@ Floating arithmetics (``float``, ``mp:P``) compute a 1-norm condition estimate
 ['72745/57239', '34155/57239', '27780/57239', '-34910/57239', '19745/57239', '-18505/57239']
 >>> [str(t) for t in phi.inverse(y)]
 ['1', '0', '0', '0', '1', '0']
+
+Methods (``method=``): ``'dense'`` solves the 2n×2n system (rational
+arithmetics with an integer kernel clear denominators once and solve over Z:
+python-flint ``fmpz_mat.solve``, or Bareiss elimination for gmpy2; ``fraction``
+is the plain-elimination reference); ``'structured'`` solves it as a 2×2
+system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
+by the DFT for ``float``/``mp:P``); ``'auto'`` (default) takes the structured
+path for Lie–Poisson fields whose Hessian blocks are cyclic Hankel when
+python-flint is installed, the arithmetic is ``flint``, ``float`` or ``mp:P``
+(``gmpy2`` and ``fraction`` may ask for it explicitly), and n ≥
+:data:`STRUCTURED_MIN_N` (the measured crossover, docs/benchmarks.md);
+otherwise dense.
+
+>>> dense, fast = (KahanMap(sys3.field("f"), "1/10", "flint", method=m) for m in ("dense", "structured"))
+>>> fast.step(y) == dense.step(y)
+True
 """
 
 from __future__ import annotations
@@ -33,10 +51,20 @@ from __future__ import annotations
 import math
 import warnings
 
+from . import circulant
 from .arith import get_arith
 from .errors import InputError, NearSingularWarning, SingularStepError
 from .linalg import SingularMatrix, solve
 from .parsing import parse_rational
+
+METHODS = ("auto", "dense", "structured")
+
+#: smallest n for which ``method='auto'`` takes the structured path, for exact
+#: and floating arithmetics.  Measured crossovers (docs/benchmarks.md): along
+#: exact orbits the dense fmpz_mat solve keeps up until n ≈ 16–32 (both
+#: solvers' cost is then dominated by p-adic lifting, which the 2×2 form does
+#: not shrink); the DFT step wins from n = 3.
+STRUCTURED_MIN_N = {"exact": 24, "floating": 3}
 
 
 def as_point(ar, x, dim: int, name: str = "x"):
@@ -68,15 +96,21 @@ class KahanMap:
 
     ``eps`` is an exact rational (``'1/10'``, Fraction, int) or an element of
     the arithmetic; ``arith`` a name (see :func:`exact_khk.arith.get_arith`) or
-    context, default the fastest exact one.
+    context, default the fastest exact one; ``method`` one of :data:`METHODS`
+    (see the module docstring).  ``structure`` is the
+    :class:`~exact_khk.circulant.CirculantStructure` in use, or None (dense).
     """
 
-    def __init__(self, field, eps, arith=None):
+    method, structure = "dense", None  # for maps built without __init__
+
+    def __init__(self, field, eps, arith=None, method="auto"):
         self.field = field
         self.arith = ar = get_arith(arith)
+        self.method = method
+        self.structure = _choose_structure(field, ar, method)
         if _is_element(ar, eps):
             self.eps = eps
-            self.eps_exact = ar.to_fraction(eps) if ar.exact else None
+            self.eps_exact = ar.to_fraction(eps) if ar.rational else None
         else:
             self.eps_exact = parse_rational(eps, "eps")
             self.eps = ar.convert(self.eps_exact)
@@ -94,7 +128,8 @@ class KahanMap:
         """The same map with another step size (e.g. ``-eps`` for the inverse)."""
         out = KahanMap.__new__(KahanMap)
         out.field, out.arith, out.eps = self.field, self.arith, eps
-        out.eps_exact = self.arith.to_fraction(eps) if self.arith.exact else None
+        out.method, out.structure = self.method, self.structure
+        out.eps_exact = self.arith.to_fraction(eps) if self.arith.rational else None
         return out
 
     def system_matrix(self, x, sign=1):
@@ -111,25 +146,73 @@ class KahanMap:
             try:
                 X, cond = solve(ar, M, B)
             except SingularMatrix:
-                raise SingularStepError([ar.format(t) for t in x], ar.format(eps)) from None
+                raise self._singular(x, eps) from None
         if not ar.exact:
-            # cond is None when the context's solver gives no estimate (balls
-            # carry their own error bounds instead).
-            bad = any(not ar.is_finite(t) for row in X for t in row)
-            if bad or (cond is not None and (cond != cond or cond * ar.unit_roundoff >= 1)):
-                raise SingularStepError([ar.format(t) for t in x], ar.format(eps),
-                                        condition=float("inf") if bad or cond != cond else cond)
-            if cond is not None and cond >= 2.0 ** (ar.prec / 2):
-                warnings.warn(NearSingularWarning(
-                    f"Kahan step at eps = {ar.format(eps)} is ill-conditioned: "
-                    f"condition estimate {cond:.3g} of I - eps*f'(x) in {ar.name} "
-                    f"(about {math.log2(cond):.0f} of {ar.prec} bits at risk)", cond), stacklevel=3)
+            self._check_condition([t for row in X for t in row], cond, x, eps)
         return X
+
+    def _check_condition(self, values, cond, x, eps):
+        """The floating policy of the module docstring: raise or warn on κ."""
+        ar = self.arith
+        # cond is None when the context's solver gives no estimate (balls
+        # carry their own error bounds instead).
+        bad = values is None or any(not ar.is_finite(t) for t in values)
+        # compare in log2: 2.0 ** -prec underflows (and 2.0 ** (prec / 2)
+        # overflows) a float for the large precisions of mp:P
+        lost = math.inf if cond is not None and (cond != cond or math.isinf(cond)) else (
+            math.log2(cond) if cond else 0.0)
+        if bad or (cond is not None and lost >= ar.prec):
+            raise SingularStepError([ar.format(t) for t in x], ar.format(eps),
+                                    condition=float("inf") if bad or math.isinf(lost) else cond)
+        if cond is not None and lost >= ar.prec / 2:
+            warnings.warn(NearSingularWarning(
+                f"Kahan step at eps = {ar.format(eps)} is ill-conditioned: "
+                f"condition estimate {cond:.3g} of I - eps*f'(x) in {ar.name} "
+                f"(about {lost:.0f} of {ar.prec} bits at risk)", cond), stacklevel=4)
+
+    def _singular(self, x, eps):
+        ar = self.arith
+        return SingularStepError([ar.format(t) for t in x], ar.format(eps))
+
+    def _structured_step(self, x):
+        """The 2×2-over-circulants step (exact in Q[t]/(tⁿ−1), or by the DFT)."""
+        ar, eps = self.arith, self.eps
+        if ar.exact:
+            try:
+                return circulant.exact_step(self.structure, x, eps, ar)
+            except SingularMatrix:
+                raise self._singular(x, eps) from None
+        z, cond, _ = circulant.numeric_step(self.structure, x, eps, ar)
+        self._check_condition(z, cond, x, eps)
+        return z
+
+    def _integer_step(self, x):
+        """Dense exact step over Z: q·den·dx·(I − εf'(x)) = W·w in one contraction,
+        then one fraction-free solve (python-flint ``fmpz_mat.solve`` or Bareiss)."""
+        ar, eps = self.arith, self.eps
+        K = ar.integers
+        W, den = self.field.integer_jacobian(K)
+        xi, dx = K.split(x)
+        p, c = K.num(eps), K.den(eps) * den
+        N = len(x)
+        flat = K.contract(W, [-p * t for t in xi] + [-p * dx, c * dx])
+        try:
+            X = K.solve([flat[i * N:(i + 1) * N] for i in range(N)], [[c * t] for t in xi])
+        except (SingularMatrix, ZeroDivisionError):
+            raise self._singular(x, eps) from None
+        return tuple(row[0] for row in X)
 
     def step(self, x):
         """Φ_f(x, ε)."""
-        x = self.point(x)
+        with self.arith.local():  # e.g. the working precision of ball:P
+            return self._step(self.point(x))
+
+    def _step(self, x):
         ar, eps = self.arith, self.eps
+        if self.structure is not None:
+            return self._structured_step(x)
+        if self.field.homogeneous and ar.integers is not None:
+            return self._integer_step(x)
         M = self.system_matrix(x)
         if self.field.homogeneous:
             X = self._solve(M, [[t] for t in x], x, eps)
@@ -162,9 +245,30 @@ class KahanMap:
 
     def jacobian(self, x):
         """dΦ_f(x) = (I − ε f'(x))^{-1} (I + ε f'(Φ_f(x)))."""
-        x = self.point(x)
-        y = self.step(x)
-        return self._solve(self.system_matrix(x), self.system_matrix(y, sign=-1), x, self.eps)
+        with self.arith.local():
+            x = self.point(x)
+            y = self._step(x)
+            return self._solve(self.system_matrix(x), self.system_matrix(y, sign=-1), x, self.eps)
+
+
+def _choose_structure(field, ar, method):
+    """The circulant structure the step will use, or None for the dense path."""
+    if method not in METHODS:
+        raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
+    if method == "dense":
+        return None
+    usable = circulant.flint is not None and (ar.rational or ar.fourier)
+    st = circulant.circulant_structure(field) if usable else None
+    if method == "structured":
+        if st is None:
+            raise InputError("method: 'structured' needs python-flint, a Lie–Poisson field whose "
+                             "Hessian blocks are cyclic Hankel, and a rational, float or mp:P arithmetic")
+        return st
+    if st is None or (ar.exact and ar.name != "flint"):
+        return None
+    if st.n < STRUCTURED_MIN_N["exact" if ar.exact else "floating"]:
+        return None
+    return st
 
 
 def kahan_step(field, x, eps, arith=None):

@@ -23,7 +23,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
+from math import lcm
 
+from .arith import _as_fraction
 from .errors import InputError
 
 
@@ -118,3 +120,34 @@ class QuadraticField:
                 row[j] = row[j] + c
             rows.append(row)
         return rows
+
+    def integer_jacobian(self, kernel):
+        """``(W, den)`` with vec(den·(I − ε f'(x)))-style contraction data, in ``kernel``'s form.
+
+        Row ``i*dim + j`` of ``W`` is ``[den·∂²f_i/∂x_j∂x_k for k] + [den·L_ij, δ_ij]``
+        (integers, ``den`` the common denominator of the Jacobian's coefficients), so
+        for x = xi/dx and ε = p/q the integer matrix
+        ``q·den·dx·(I − ε f'(x)) = W · [−p·xi, −p·dx, q·den·dx]`` is one contraction
+        (see :class:`exact_khk.arith.IntegerKernel`).  Cached per kernel.
+        """
+        key = ("intjac", kernel.name)
+        hit = self._cache.get(key)
+        if hit is not None:
+            return hit
+        N = self.dim
+        jac = [[[Fraction(0)] * N for _ in range(N)] for _ in range(N)]
+        for i, terms in enumerate(self.quad):
+            for (j, k), c in terms:
+                jac[i][j][k] += _as_fraction(c)
+                jac[i][k][j] += _as_fraction(c)
+        lin = [[Fraction(0)] * N for _ in range(N)]
+        for i, row in enumerate(self.linear):
+            for j, c in row:
+                lin[i][j] += _as_fraction(c)
+        den = lcm(1, *(t.denominator for plane in jac for row in plane for t in row),
+                  *(t.denominator for row in lin for t in row))
+        rows = [[int(t * den) for t in jac[i][j]] + [int(lin[i][j] * den), int(i == j)]
+                for i in range(N) for j in range(N)]
+        hit = (kernel.tensor(rows), den)
+        self._cache[key] = hit
+        return hit

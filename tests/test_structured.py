@@ -1,0 +1,215 @@
+"""The structured step (2×2 systems over circulants) against the dense step.
+
+Exact: compared with ``==`` to the plain Fraction elimination (the reference).
+Floating: the DFT step runs in python-flint ball arithmetic, so the ball radius
+r is a rigorous bound on |mid − Φ(x)|; the returned value is mid rounded to
+nearest, within u·|z| more (u = 2^-p).  We assert |z − Φ(x)| ≤ r + u·|z| with
+Φ(x) computed exactly, and that r ≤ u·max|z| (the error is rounding-sized).
+"""
+
+import random
+import warnings
+from fractions import Fraction
+
+import pytest
+import sympy as sp
+
+from exact_khk import (InputError, KahanMap, LiePoissonSystem, NearSingularWarning, QuadraticField,
+                       SingularStepError, get_arith, rational_sign_patterns)
+from exact_khk.circulant import (circulant_structure, exact_htilde, exact_step, numeric_step,
+                                 structure_from_system)
+from exact_khk.invariants import Htilde
+from exact_khk.kahan import STRUCTURED_MIN_N
+
+from .conftest import EXACT
+
+
+def _fields(n):
+    s = LiePoissonSystem.random(n, seed=100 + n)
+    out = [s.field("f"), s.field("f", power=1), s.field("control")]
+    out += [s.field("g", sg) for sg in rational_sign_patterns(n)[:3]]
+    return out
+
+
+def _point(rng, n, den=5):
+    return [Fraction(rng.randint(-4, 4), rng.randint(1, den)) for _ in range(2 * n)]
+
+
+@pytest.mark.parametrize("n", range(2, 9))
+def test_structured_equals_dense_exact(n):
+    rng = random.Random(n)
+    for fld in _fields(n):
+        assert circulant_structure(fld) is not None
+        x = _point(rng, n)
+        eps = Fraction(rng.randint(1, 9), rng.randint(2, 20))
+        ref = KahanMap(fld, eps, "fraction", method="dense").orbit(x, 2)
+        for arith in EXACT:
+            got = KahanMap(fld, eps, arith, method="structured").orbit(x, 2)
+            ar = get_arith(arith)
+            assert [[ar.to_fraction(t) for t in p] for p in got] == [list(p) for p in ref], (n, fld.label)
+
+
+def test_structure_from_vectors_matches_field():
+    for n in range(2, 7):
+        s = LiePoissonSystem.random(n, seed=n)
+        for kind, signs, power in [("f", None, 0), ("f", None, n + 1), ("control", None, 0),
+                                   *(("g", sg, 0) for sg in rational_sign_patterns(n))]:
+            assert structure_from_system(s, kind, signs, power) == \
+                circulant_structure(s.field(kind, signs, power)), (n, kind, signs, power)
+
+
+def test_htilde_structured_equals_dense():
+    rng = random.Random(2)
+    ar = get_arith("flint")
+    for n in range(2, 8):
+        for fld in _fields(n)[:4]:
+            x = [ar(t) for t in _point(rng, n)]
+            eps = ar(Fraction(1, rng.randint(3, 12)))
+            assert exact_htilde(circulant_structure(fld), x, eps, ar) == Htilde(fld, x, eps, ar)
+
+
+def test_htilde_structured_is_conserved():
+    s = LiePoissonSystem.random(6, seed=4)
+    phi = KahanMap(s.field("f"), "1/9", "flint", method="structured")
+    st = phi.structure
+    pts = phi.orbit([1, 0, 2, -1, 0, 1, 1, 1, 0, 2, 0, -1], 3)
+    values = {exact_htilde(st, p, phi.eps, phi.arith) for p in pts}
+    assert len(values) == 1
+    # negative control: H̃ of the control field's map (a different Hessian) is not conserved
+    ctrl = KahanMap(s.field("control"), "1/9", "flint").orbit(pts[0], 2)
+    assert len({exact_htilde(st, p, phi.eps, phi.arith) for p in ctrl}) > 1
+
+
+def _singular_setup():
+    """n = 4, Σu = 0: the t = 1 block of f'(x) is triangular with eigenvalue λ = (Σc)(Σv) = 2,
+    so ε = 1/2 makes det(I − εf'(x)) vanish at the root t = 1 of t⁴ − 1."""
+    s = LiePoissonSystem.from_vectors("1,2,0,-1", "0,1,1,3", "1,0,2,-1")
+    x = [Fraction(t) for t in (1, -1, 2, -2, 1, 0, 0, 0)]
+    return s, x, Fraction(1, 2)
+
+
+def test_singular_structured_step_is_exactly_the_dense_singularity():
+    s, x, eps = _singular_setup()
+    ar = get_arith("fraction")
+    Jf = sp.Matrix(s.field("f").jacobian(ar, x)).applyfunc(sp.Rational)
+    assert (sp.eye(8) - sp.Rational(eps) * Jf).det() == 0  # independent check with SymPy
+    for arith in EXACT:
+        with pytest.raises(SingularStepError) as info:
+            KahanMap(s.field("f"), eps, arith, method="structured").orbit(x, 2)
+        err = info.value
+        assert err.step == 1 and err.eps == "1/2" and err.x == ["1", "-1", "2", "-2", "1", "0", "0", "0"]
+    # negative control: a nearby ε is regular, and structured == dense there
+    near = KahanMap(s.field("f"), eps + Fraction(1, 1000), "flint", method="structured").step(x)
+    assert near == KahanMap(s.field("f"), eps + Fraction(1, 1000), "flint", method="dense").step(x)
+
+
+@pytest.mark.parametrize("name", ["float", "mp:64", "mp:200"])
+def test_dft_step_within_rigorous_bound(name):
+    ar = get_arith(name)
+    rng = random.Random(7)
+    u = ar.unit_roundoff
+    for n in (2, 3, 5, 8, 32):
+        s = LiePoissonSystem.random(n, seed=n)
+        for kind in ("f", "g", "control"):
+            st = structure_from_system(s, kind)
+            x = _point(rng, n, den=8)
+            eps = Fraction(1, 10)
+            exact = exact_step(st, x, eps, get_arith("fraction"))
+            z, cond, rad = numeric_step(st, [ar(t) for t in x], ar(eps), ar)
+            zmax = max(abs(ar.to_fraction(t)) for t in z)
+            assert 1 <= cond < 1e6 and rad <= u * zmax
+            # ar(eps) is a binary number, not 1/10: the reference is the exact step at that ε
+            exact = exact_step(st, [ar.to_fraction(ar(t)) for t in x], ar.to_fraction(ar(eps)),
+                               get_arith("fraction"))
+            err = max(abs(ar.to_fraction(a) - b) for a, b in zip(z, exact))
+            assert err <= rad + u * zmax, (name, n, kind, float(err), rad)
+            # negative control: the exact step at a slightly different ε is far outside the bound
+            other = exact_step(st, x, eps * (1 + Fraction(1, 2 ** 20)), get_arith("fraction"))
+            assert max(abs(ar.to_fraction(a) - b) for a, b in zip(z, other)) > rad + u * zmax
+
+
+def test_dft_step_through_kahanmap_matches_dense_float():
+    """The auto-chosen DFT step and the dense float LU agree within the dense step's
+    first-order bound (3N·ρ·κ₁·u·|z|, ρ ≤ 4 here), since the DFT step is within rounding."""
+    s = LiePoissonSystem.random(6, seed=1)
+    fld = s.field("g")
+    x = _point(random.Random(1), 6)
+    fast = KahanMap(fld, "1/10", "float")
+    assert fast.structure is not None
+    dense = KahanMap(fld, "1/10", "float", method="dense")
+    z1, z2 = fast.step(x), dense.step(x)
+    M = KahanMap(fld, "1/10", "fraction").system_matrix([Fraction(t) for t in x])
+    from exact_khk.linalg import identity, norm1, solve
+    fr = get_arith("fraction")
+    Minv, _ = solve(fr, M, identity(fr, 12))
+    kappa = norm1(fr, M) * norm1(fr, Minv)
+    zmax = max(abs(t) for t in z1)
+    assert max(abs(a - b) for a, b in zip(z1, z2)) <= 3 * 12 * 4 * kappa * 2.0 ** -53 * zmax
+
+
+def test_structured_float_condition_policy():
+    s, x, eps = _singular_setup()
+    fld = s.field("f")
+    # ε = 1/2 is a binary number: the Fourier block at t = 1 is exactly singular
+    for name in ("float", "mp:80"):
+        with pytest.raises(SingularStepError) as info:
+            KahanMap(fld, eps, name, method="structured").step(x)
+        assert info.value.condition == float("inf")
+    # a hair away: warning with κ ≈ 2^30 (≥ 2^(53/2)), not an error
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        KahanMap(fld, eps * (1 + Fraction(1, 2 ** 30)), "float", method="structured").step(x)
+    near = [w for w in rec if issubclass(w.category, NearSingularWarning)]
+    assert near and 2.0 ** 26 < near[0].message.condition < 2.0 ** 40
+    # negative control: well away from the singularity, no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        KahanMap(fld, eps * Fraction(3, 4), "float", method="structured").step(x)
+
+
+def test_auto_choice_and_fallbacks():
+    big, small = LiePoissonSystem.random(STRUCTURED_MIN_N["exact"], 1), LiePoissonSystem.random(2, 1)
+    assert KahanMap(big.field("g"), "1/3", "flint").structure is not None
+    assert KahanMap(big.field("g"), "1/3", "fraction").structure is None  # the reference stays dense
+    assert KahanMap(small.field("f"), "1/3", "flint").structure is None
+    assert KahanMap(small.field("f"), "1/3", "float").structure is None
+    assert KahanMap(LiePoissonSystem.random(3, 1).field("f"), "1/3", "mp:100").structure is not None
+    # a generic quadratic field, and a Hessian whose blocks are not cyclic Hankel: dense
+    generic = QuadraticField.from_tensor([[[0, 1], [0, 0]], [[1, 0], [0, 0]]])
+    assert KahanMap(generic, "1/3", "flint").structure is None
+    rng = random.Random(0)
+    M = [[Fraction(rng.randint(-2, 2)) for _ in range(6)] for _ in range(6)]
+    odd = LiePoissonSystem.random(3, 1).field_from_hessian(M)
+    assert circulant_structure(odd) is None
+    phi = KahanMap(odd, "1/3", "flint")
+    assert phi.structure is None
+    x = [1, 0, 2, -1, 1, 1]
+    assert [phi.arith.to_fraction(t) for t in phi.step(x)] == list(KahanMap(odd, "1/3", "fraction").step(x))
+    with pytest.raises(InputError, match="method"):
+        KahanMap(odd, "1/3", "flint", method="structured")
+    with pytest.raises(InputError, match="method"):
+        KahanMap(small.field("f"), "1/3", "flint", method="fast")
+
+
+def test_structured_step_at_n_256():
+    """Exact step at n = 256 (the structure from the vectors: building the dense field
+    would need (2n)³ tensor entries), checked against MATH.md's equivalent form
+    Φ(x) = (I + εf'(Φ(x))) x, an equation the solver never used."""
+    from exact_khk.circulant import circulant_ring, kahan_system, reflect
+
+    n = 256
+    s = LiePoissonSystem.random(n, seed=3)
+    st = structure_from_system(s, "f")
+    ar = get_arith("flint")
+    rng = random.Random(3)
+    x = [ar(Fraction(rng.randint(-2, 2), 256)) for _ in range(2 * n)]
+    e = ar(Fraction(1, 10))
+    z = exact_step(st, x, e, ar)
+    R = circulant_ring(n)
+    # (I − (−ε) f'(z)) applied to x̂, as products in R
+    (a11, a12, a21, a22), _ = kahan_system(R.hankel_polys(st), R.poly(reflect(z[:n])),
+                                           R.poly(reflect(z[n:])), -e, R.mul)
+    xu, xv = R.poly(reflect(x[:n])), R.poly(reflect(x[n:]))
+    assert R.mul(a11, xu) + R.mul(a12, xv) == R.poly(reflect(z[:n]))
+    assert R.mul(a21, xu) + R.mul(a22, xv) == R.poly(reflect(z[n:]))
+    assert z != tuple(x)  # negative control: the step moved the point
