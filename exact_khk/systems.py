@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from math import gcd
 
+from .cyclo import cyclotomic_field
 from .errors import InputError, NotRationalError
 from .parsing import format_signs, parse_signs, parse_vector
 from .quadratic import QuadraticField
@@ -138,6 +139,34 @@ def involution_circulant(n: int, signs) -> tuple[Fraction, ...]:
     return tuple(t / n for t in total)
 
 
+def nontrivial_sign_patterns(n: int) -> list[str]:
+    """All 2^n − 2 sign patterns of involutions B ≠ ±I (rational or not)."""
+    out = [format_signs([1 - 2 * ((m >> j) & 1) for j in range(n)]) for m in range(2 ** n)]
+    return sorted(p for p in out if p not in ("+" * n, "-" * n))
+
+
+def is_rational_pattern(n: int, signs) -> bool:
+    """True when the involution of ``signs`` has rational entries."""
+    s = parse_signs(signs, n)
+    return all(len({s[j] for j in cls}) == 1 for cls in divisor_classes(n).values())
+
+
+def involution_circulant_cyclotomic(n: int, signs) -> tuple:
+    """Coefficients α_k = (1/n) Σ_j s_j ω^{-jk} of B = Σ_k α_k P^k in Q(ω), ω = ζ_n,
+    for *every* sign pattern, as :class:`~exact_khk.cyclo.CycloNumber` (any
+    ``cyclo:N`` with n | N, or ``gf:P`` with P ≡ 1 mod n, converts them).
+
+    >>> [str(t) for t in involution_circulant_cyclotomic(3, "+-+")]
+    ['1/3', '2/3 + 2/3*z', '-2/3*z']
+    >>> involution_circulant_cyclotomic(3, "-++") == involution_circulant(3, "-++")
+    True
+    """
+    s = parse_signs(signs, n)
+    K = cyclotomic_field(n)
+    return tuple(sum((s[j] * K.zeta_power(-j * k) for j in range(n)), K.zero) / n
+                 for k in range(n))
+
+
 # --- the system -------------------------------------------------------------
 
 
@@ -216,9 +245,15 @@ class LiePoissonSystem:
             M = mat_mul(self.shift, M)
         return M
 
-    def involution(self, signs):
-        """B = Bc ⊕ Bc for a rational sign pattern (see :func:`involution_circulant`)."""
-        return block_diag2(circulant_power_matrix(involution_circulant(self.n, signs)))
+    def involution(self, signs, cyclotomic: bool = False):
+        """B = Bc ⊕ Bc for a rational sign pattern (see :func:`involution_circulant`);
+        with ``cyclotomic=True`` any pattern, non-rational ones with entries in Q(ω)
+        (see :func:`involution_circulant_cyclotomic`)."""
+        if cyclotomic and not is_rational_pattern(self.n, signs):
+            alpha = involution_circulant_cyclotomic(self.n, signs)
+        else:
+            alpha = involution_circulant(self.n, signs)
+        return block_diag2(circulant_power_matrix(alpha))
 
     def hamiltonian(self, ar, x, i: int = 0):
         """H_i(x) = xᵀ A^i Hs x / 2, evaluated in arithmetic ``ar``."""
@@ -248,11 +283,18 @@ class LiePoissonSystem:
         return LiePoissonField(base.dim, base.quad, base.linear, base.const, label,
                                system=self, hessian=tuple(tuple(r) for r in M))
 
-    def field(self, kind: str = "f", signs=None, power: int = 0) -> "LiePoissonField":
+    def field(self, kind: str = "f", signs=None, power: int = 0,
+              cyclotomic: bool = False) -> "LiePoissonField":
         """A named field: ``'f'`` (Hessian A^power Hs), ``'g'`` (B Hs for the
         involution with sign pattern ``signs``, default B_0 = '-+…+'), or
-        ``'control'`` (A Hs for n >= 3, (2I + A) Hs for n = 2)."""
-        key = (kind, None if signs is None else format_signs(parse_signs(signs, self.n)), power)
+        ``'control'`` (A Hs for n >= 3, (2I + A) Hs for n = 2).
+
+        A non-rational pattern raises :class:`NotRationalError` unless
+        ``cyclotomic=True``: then the field's coefficients lie in Q(ω) and it is
+        usable in ``cyclo:N`` (n | N) and ``gf:P`` (P ≡ 1 mod n) only."""
+        cyc = bool(cyclotomic) and kind == "g" and signs is not None \
+            and not is_rational_pattern(self.n, signs)
+        key = (kind, None if signs is None else format_signs(parse_signs(signs, self.n)), power, cyc)
         if key in self._fields:
             return self._fields[key]
         if kind == "f":
@@ -260,7 +302,7 @@ class LiePoissonSystem:
                                           "f" if power == 0 else f"f_{power}")
         elif kind == "g":
             s = format_signs(parse_signs(signs if signs is not None else b0_signs(self.n), self.n))
-            B = self.involution(s)
+            B = self.involution(s, cyclotomic=cyc)
             fld = self.field_from_hessian(mat_mul(B, self.hessian), f"g[{s}]")
             object.__setattr__(fld, "signs", s)
         elif kind == "control":

@@ -1,0 +1,356 @@
+"""Exact arithmetic beyond Q: cyclotomic fields ``cyclo:N`` and prime fields ``gf:P``.
+
+``cyclo:N`` is Q(ζ_N), ζ_N = e^{2πi/N}: elements are rational polynomials in
+``z`` = ζ_N reduced modulo the N-th cyclotomic polynomial Φ_N (python-flint
+``fmpq_poly``), wrapped in :class:`CycloNumber` so that they work with the
+generic algorithms (``+ - * /``, ``==``, ``hash``).  The involutions of the
+Lie–Poisson family that are not rational have entries in Q(ω), ω = ζ_n
+(:func:`exact_khk.systems.involution_circulant_cyclotomic`); ``cyclo:N``
+converts them for every N that is a multiple of n (ζ_n = z^{N/n}).
+
+``gf:P`` is the prime field F_P (python-flint ``nmod``, P prime, checked).
+It converts a rational p/q only when P does not divide q (otherwise a
+:class:`BadReductionError`), and an element of Q(ζ_m) only when
+P ≡ 1 (mod m), through the fixed embedding ζ_m ↦ g^{(P-1)/m} with g the
+least primitive root mod P (compatible for all m: it is the reduction of
+``cyclo:N`` modulo a prime above P).
+
+>>> from fractions import Fraction
+>>> from exact_khk import get_arith
+>>> K = get_arith("cyclo:3")
+>>> z = K.gen
+>>> K.format(z * z)                     # ζ² = −1 − ζ
+'-1 - z'
+>>> K.format(K(Fraction(1, 3)) - 2 * z / 3)
+'1/3 - 2/3*z'
+>>> (1 / (1 - z)) * (1 - z) == 1
+True
+>>> F = get_arith("gf:7")
+>>> F.format(F(Fraction(1, 3)))          # 3 * 5 = 15 = 1 (mod 7)
+'5'
+>>> F.format(F(z))                       # ζ_3 ↦ 3^{(7-1)/3} = 2 (mod 7)
+'2'
+>>> get_arith("gf:5")(z)
+Traceback (most recent call last):
+...
+exact_khk.errors.InputError: arith gf:5: ζ_3 (needed by an involution over Q(ω), ω = e^(2πi/3)) does not exist mod 5: choose a prime P ≡ 1 (mod 3)
+"""
+
+from __future__ import annotations
+
+import cmath
+from fractions import Fraction
+from functools import lru_cache
+
+import flint
+
+from .arith import Arith, _as_fraction, register_arith
+from .errors import InputError, NotRationalError
+
+__all__ = ["CyclotomicField", "CycloNumber", "CycloArith", "GFArith", "BadReductionError",
+           "cyclotomic_field", "DEFAULT_PRIME"]
+
+
+#: a prime P ≡ 1 (mod 720720) below 2^62: ω = e^{2πi/n} exists in F_P for every n ≤ 16
+DEFAULT_PRIME = 4611686018420360881
+
+
+class BadReductionError(InputError):
+    """A rational whose denominator is divisible by P was sent to ``gf:P``."""
+
+
+def _fmpq(value) -> flint.fmpq:
+    q = _as_fraction(value)
+    return flint.fmpq(q.numerator, q.denominator)
+
+
+class CyclotomicField:
+    """Q(ζ_N) as fmpq_poly modulo Φ_N; use :func:`cyclotomic_field` (cached)."""
+
+    def __init__(self, N: int):
+        self.N = N
+        self.modulus = flint.fmpq_poly(flint.fmpz_poly.cyclotomic(N).coeffs())
+        self.degree = self.modulus.degree()
+        self.gen = self.element(flint.fmpq_poly([0, 1]))
+        self.zero = self.element(flint.fmpq_poly([0]))
+
+    def element(self, poly) -> "CycloNumber":
+        return CycloNumber(self, poly % self.modulus)
+
+    def zeta_power(self, k: int) -> "CycloNumber":
+        """ζ_N^k (k any integer)."""
+        return self.element(flint.fmpq_poly([0] * (k % self.N) + [1]))
+
+    def embed(self, e: "CycloNumber") -> "CycloNumber":
+        """``e`` ∈ Q(ζ_m), m | N, as an element of this field (ζ_m = ζ_N^{N/m})."""
+        m = e.K.N
+        if self.N % m:
+            raise InputError(f"arith cyclo:{self.N}: cannot represent ζ_{m} "
+                             f"(an element of Q(ζ_{m})): use cyclo:N with N a multiple of {m}")
+        if m == self.N:
+            return e
+        step = self.N // m
+        coeffs = [0] * (step * e.p.degree() + 1) if not e.p.is_zero() else []
+        for k, c in enumerate(e.p.coeffs()):
+            coeffs[k * step] = c
+        return self.element(flint.fmpq_poly(coeffs))
+
+    def __repr__(self):
+        return f"Q(ζ_{self.N})"
+
+
+@lru_cache(maxsize=None)
+def cyclotomic_field(N: int) -> CyclotomicField:
+    """The field Q(ζ_N) (one object per N)."""
+    if not isinstance(N, int) or N < 1:
+        raise InputError(f"arith: cyclo:N needs an integer N >= 1, got {N!r}")
+    return CyclotomicField(N)
+
+
+class CycloNumber:
+    """An element of Q(ζ_N): ``p`` (fmpq_poly, degree < φ(N)) evaluated at ζ_N.
+
+    Mixes with int, Fraction and fmpq.  It is rational exactly when ``p`` is
+    constant; then ``numerator``/``denominator`` exist, otherwise reading them
+    raises :class:`NotRationalError` (so the rational arithmetics refuse it).
+    """
+
+    __slots__ = ("K", "p")
+
+    def __init__(self, K: CyclotomicField, p):
+        self.K, self.p = K, p
+
+    def _pair(self, other):
+        """(K, a, b): this element and ``other`` as polynomials in a common field K
+        (the larger of two fields when one contains the other), or None."""
+        if type(other) is CycloNumber:
+            if other.K is self.K:
+                return self.K, self.p, other.p
+            if self.K.N % other.K.N == 0:
+                return self.K, self.p, self.K.embed(other).p
+            if other.K.N % self.K.N == 0:
+                return other.K, other.K.embed(self).p, other.p
+            raise TypeError(f"cannot mix elements of Q(ζ_{self.K.N}) and Q(ζ_{other.K.N})")
+        if isinstance(other, (int, Fraction, flint.fmpq, flint.fmpz)):
+            return self.K, self.p, flint.fmpq_poly([_fmpq(other)])
+        return None
+
+    def __add__(self, other):
+        t = self._pair(other)
+        return NotImplemented if t is None else CycloNumber(t[0], t[1] + t[2])
+
+    __radd__ = __add__
+
+    def __sub__(self, other):
+        t = self._pair(other)
+        return NotImplemented if t is None else CycloNumber(t[0], t[1] - t[2])
+
+    def __rsub__(self, other):
+        t = self._pair(other)
+        return NotImplemented if t is None else CycloNumber(t[0], t[2] - t[1])
+
+    def __mul__(self, other):
+        t = self._pair(other)
+        if t is None:
+            return NotImplemented
+        K, a, b = t
+        if a.degree() <= 0 or b.degree() <= 0:
+            return CycloNumber(K, a * b)
+        return CycloNumber(K, (a * b) % K.modulus)
+
+    __rmul__ = __mul__
+
+    def __neg__(self):
+        return CycloNumber(self.K, -self.p)
+
+    def __pos__(self):
+        return self
+
+    @staticmethod
+    def _inv(K, p):
+        if p.is_zero():
+            raise ZeroDivisionError(f"division by zero in Q(ζ_{K.N})")
+        if p.degree() == 0:
+            return flint.fmpq_poly([1 / p.coeffs()[0]])
+        g, s, _ = p.xgcd(K.modulus)  # g = s p + t Φ_N, g a nonzero constant
+        return s / g
+
+    @classmethod
+    def _div(cls, K, a, b):
+        return cls(K, a) * cls(K, cls._inv(K, b))
+
+    def __truediv__(self, other):
+        t = self._pair(other)
+        return NotImplemented if t is None else self._div(t[0], t[1], t[2])
+
+    def __rtruediv__(self, other):
+        t = self._pair(other)
+        return NotImplemented if t is None else self._div(t[0], t[2], t[1])
+
+    def __pow__(self, k: int):
+        if not isinstance(k, int):
+            return NotImplemented
+        base = self if k >= 0 else 1 / self
+        out = CycloNumber(self.K, flint.fmpq_poly([1]))
+        for _ in range(abs(k)):
+            out = out * base
+        return out
+
+    def __eq__(self, other):
+        t = self._pair(other)
+        return NotImplemented if t is None else t[1] == t[2]
+
+    def __ne__(self, other):
+        eq = self.__eq__(other)
+        return eq if eq is NotImplemented else not eq
+
+    def __hash__(self):
+        if self.p.degree() <= 0:
+            return hash(self.to_fraction())  # equal to an equal Fraction/int
+        return hash((self.K.N, tuple(str(c) for c in self.p.coeffs())))
+
+    def __bool__(self):
+        return not self.p.is_zero()
+
+    def is_rational(self) -> bool:
+        return self.p.degree() <= 0
+
+    def to_fraction(self) -> Fraction:
+        """The rational value; :class:`NotRationalError` if not rational."""
+        if not self.is_rational():
+            raise NotRationalError(f"{self} is an element of Q(ζ_{self.K.N}) that is not rational: "
+                                   f"this needs cyclotomic arithmetic (cyclo:N) or gf:P")
+        if self.p.is_zero():
+            return Fraction(0)
+        c = self.p.coeffs()[0]
+        return Fraction(int(c.p), int(c.q))
+
+    @property
+    def numerator(self):
+        return self.to_fraction().numerator
+
+    @property
+    def denominator(self):
+        return self.to_fraction().denominator
+
+    def __str__(self):
+        return format_poly(self.p)
+
+    def __repr__(self):
+        return f"CycloNumber({self.K.N}, '{self}')"
+
+
+def format_poly(p, var: str = "z") -> str:
+    """'1/3 - 2/3*z + z^2' (constant term first)."""
+    parts = []
+    for k, c in enumerate(p.coeffs()):
+        if c == 0:
+            continue
+        mono = "" if k == 0 else (var if k == 1 else f"{var}^{k}")
+        mag = abs(c)
+        body = str(mag) if not mono else (mono if mag == 1 else f"{mag}*{mono}")
+        parts.append(("-" if c < 0 else "+", body))
+    if not parts:
+        return "0"
+    head = ("-" if parts[0][0] == "-" else "") + parts[0][1]
+    return head + "".join(f" {s} {b}" for s, b in parts[1:])
+
+
+class CycloArith(Arith):
+    """Exact arithmetic in Q(ζ_N) (name ``cyclo:N``); ``gen`` is ζ_N, printed ``z``.
+
+    Division by zero raises ZeroDivisionError; no ``to_fraction`` (TypeError)."""
+
+    exact = True
+
+    def __init__(self, N: int):
+        self.K = cyclotomic_field(N)
+        self.N = N
+        self.name = f"cyclo:{N}"
+        self.zero, self.one = self.K.zero, self.K.zeta_power(0)
+        self.gen = self.K.gen
+        self.evidence = f"exact in Q(zeta_{N})"
+
+    def convert(self, value):
+        if isinstance(value, CycloNumber):
+            return self.K.embed(value)
+        return CycloNumber(self.K, flint.fmpq_poly([_fmpq(value)]))
+
+    def is_zero(self, e):
+        return e.p.is_zero()
+
+    def format(self, e) -> str:
+        return format_poly(e.p)
+
+    def magnitude(self, e) -> float:
+        """|e| as a float, with ζ_N = e^{2πi/N} (display only; pivoting is exact)."""
+        return abs(sum(float(c) * cmath.exp(2j * cmath.pi * k / self.N) for k, c in enumerate(e.p.coeffs())))
+
+
+# --- prime fields -------------------------------------------------------------
+
+
+@lru_cache(maxsize=None)
+def _primitive_root(P: int) -> int:
+    """The least generator of (Z/P)^*."""
+    if P == 2:
+        return 1
+    qs = [int(q) for q, _ in flint.fmpz(P - 1).factor()]
+    g = 2
+    while any(pow(g, (P - 1) // q, P) == 1 for q in qs):
+        g += 1
+    return g
+
+
+class GFArith(Arith):
+    """The prime field F_P (name ``gf:P``), elements ``flint.nmod``.
+
+    Exact: singular steps mod P are detected exactly (native ``nmod_mat`` solve)."""
+
+    exact = True
+
+    def __init__(self, P: int):
+        if P < 2 or P >= 2 ** 64 or not flint.fmpz(P).is_prime():
+            raise InputError(f"arith: gf:{P}: P must be a prime below 2^64")
+        self.P = P
+        self.name = f"gf:{P}"
+        self.zero, self.one = flint.nmod(0, P), flint.nmod(1, P)
+        # A nonzero residual mod P refutes a claim at a point; zero residuals
+        # mod P do not prove the rational claim (P may divide the residual).
+        self.evidence = f"modular: exact in F_{P} (zero mod P is evidence, not proof)"
+
+    def root_of_unity(self, m: int):
+        """ζ_m in F_P under the fixed embedding; InputError unless P ≡ 1 (mod m)."""
+        if (self.P - 1) % m:
+            raise InputError(f"arith {self.name}: ζ_{m} (needed by an involution over Q(ω), "
+                             f"ω = e^(2πi/{m})) does not exist mod {self.P}: "
+                             f"choose a prime P ≡ 1 (mod {m})")
+        return flint.nmod(pow(_primitive_root(self.P), (self.P - 1) // m, self.P), self.P)
+
+    def convert(self, value):
+        if isinstance(value, flint.nmod) and value.modulus() == self.P:
+            return value
+        if isinstance(value, CycloNumber):
+            r, out = self.root_of_unity(value.K.N), self.zero
+            for c in reversed(value.p.coeffs()):
+                out = out * r + self.convert(c)
+            return out
+        q = _as_fraction(value)
+        if q.denominator % self.P == 0:
+            raise BadReductionError(f"arith {self.name}: {q} has a denominator divisible by {self.P} "
+                                    f"(bad reduction); choose another prime")
+        return flint.nmod(q.numerator, self.P) / q.denominator
+
+    def format(self, e) -> str:
+        return str(int(e))
+
+    def magnitude(self, e) -> float:  # no order on F_P; never used for exact pivoting
+        return float(int(e) != 0)
+
+    def native_solve(self, M, B):
+        X = flint.nmod_mat(M, self.P).solve(flint.nmod_mat(B, self.P))
+        return [[X[i, j] for j in range(X.ncols())] for i in range(X.nrows())]
+
+
+register_arith("cyclo", CycloArith)
+register_arith("gf", GFArith)
