@@ -13,6 +13,7 @@ True
 """
 
 from .arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
+from . import ball  # noqa: F401  (registers the ball:P arithmetic)
 from . import cyclo  # noqa: F401  (registers the cyclo:N and gf:P arithmetics)
 from .errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
                      SingularStepError, UndecidedError)

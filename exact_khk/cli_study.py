@@ -1,0 +1,188 @@
+"""``exact-khk scale`` and ``exact-khk hard``: precision-scaling studies and hard cases.
+
+Thin views over :mod:`exact_khk.scaling` and :mod:`exact_khk.hard`.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import pathlib
+import sys
+
+from .cli import add_system_options, library_versions, system_from_args
+from .errors import InputError
+from . import hard, scaling
+
+
+def register(sub):
+    p = sub.add_parser("scale", help="compare floating and ball orbits with the exact orbit, step by step",
+                       description="Iterate the orbit of Phi_f in several arithmetics and compare every step "
+                       "with the exact orbit: relative error, H~/K~ drift, commutation and reversibility "
+                       "residuals, time per step; fitted bits lost per step; work-precision plots.")
+    add_system_options(p, steps_default=50)
+    p.add_argument("--ariths", default=",".join(scaling.DEFAULT_ARITHS),
+                   help="comma-separated floating/ball arithmetics (default: %(default)s)")
+    p.add_argument("--digits", type=int, help="also find the smallest mp:P and ball:P keeping D correct "
+                   "digits over K steps, and fit bits = D*log2(10) + c*K + const")
+    p.add_argument("--out", help="directory for scaling.csv, scaling.json, work_precision.png, "
+                   "error_vs_step.png (and enclosure.json with --digits)")
+    p.add_argument("--no-plots", action="store_true", help="with --out: skip the PNG figures")
+    p.add_argument("--no-diagnostics", action="store_true",
+                   help="only the orbit error (skip H~/K~ drift and the residuals)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_scale)
+
+    h = sub.add_parser("hard", help="run the catalogue of hard cases (near-singular steps, ...)",
+                       description="Run each hard case in exact arithmetic and in floating and ball "
+                       "arithmetics; print what each returned, whether the trouble was flagged, and "
+                       "the precision needed.")
+    h.add_argument("--ariths", default=",".join(hard.DEFAULT_ARITHS),
+                   help="comma-separated floating/ball arithmetics (default: %(default)s)")
+    h.add_argument("--digits", type=int, default=10,
+                   help="correct digits for the 'bits needed' columns (default 10)")
+    h.add_argument("--long-steps", type=int, default=1000, help="steps of the long-orbit case (default 1000)")
+    h.add_argument("--only", help="run only the cases whose name contains this text")
+    h.add_argument("--no-precision", action="store_true", help="skip the precision-needed searches")
+    h.add_argument("--markdown", action="store_true", help="print the table as GitHub markdown")
+    h.add_argument("--out", help="directory for hard_cases.json and hard_cases.md")
+    h.add_argument("--quiet", action="store_true", help="no progress bar")
+    h.set_defaults(func=cmd_hard)
+
+
+def _ariths(text):
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    if not names:
+        raise InputError("--ariths: give at least one arithmetic")
+    from .arith import get_arith
+
+    out = []
+    for name in names:
+        ar = get_arith(name)
+        if ar.exact:
+            raise InputError(f"--ariths: {name!r} is exact; the exact orbit is always the reference, "
+                             "list floating or ball arithmetics")
+        out.append(ar)
+    return out
+
+
+def _fmt(v, spec=".1f"):
+    return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
+
+
+def cmd_scale(args):
+    system, x0, eps = system_from_args(args)
+    if args.arith is not None:
+        raise InputError("--arith: scale compares several arithmetics; use --ariths")
+    if args.steps < 1:
+        raise InputError("--steps: scale needs at least one step")
+    if args.digits is not None and args.digits < 1:
+        raise InputError(f"--digits: expected a positive integer, got {args.digits}")
+    ariths = _ariths(args.ariths)
+    study = scaling.scaling_study(system, x0, eps, args.steps, ariths,
+                                  diagnostics=not args.no_diagnostics, progress=not args.quiet)
+    print(system.describe())
+    print(f"eps = {eps}, K = {args.steps} steps; reference: exact orbit (flint, "
+          f"{study.exact_seconds_per_step * 1e3:.3g} ms/step, last point {study.exact_final_height_bits} bits)")
+    print("errors are relative, computed exactly against the exact orbit (balls: midpoint error; "
+          "radius = certified bound); log10 values; rates are least-squares slopes in bits/step")
+    head = (f"{'arith':<10} {'status':<10} {'steps':>5} {'err@K':>8} {'bits left':>9} {'lost/step':>9} "
+            f"{'rad/step':>8} {'H~ drift':>8} {'comm':>8} {'rev':>8} {'ms/step':>8}")
+    print(head)
+    for run in study.runs:
+        last = run.rows[-1] if run.rows else None
+        drift = None if last is None else last.h_drift_log10
+        if drift is None and len(run.rows) > 1:
+            drift = run.rows[-2].h_drift_log10
+        comm = next((r.commutation_log10 for r in reversed(run.rows) if r.commutation_log10 is not None), None)
+        rev = next((r.reversibility_log10 for r in reversed(run.rows) if r.reversibility_log10 is not None), None)
+        ms = None if run.seconds_per_step is None else run.seconds_per_step * 1e3
+        print(f"{run.arith:<10} {run.status:<10} {run.steps_done:>5} {_fmt(run.final_error_log10):>8} "
+              f"{_fmt(run.bits_left):>9} {_fmt(run.loss_rate, '.3f'):>9} {_fmt(run.radius_rate, '.2f'):>8} "
+              f"{_fmt(drift):>8} {_fmt(comm):>8} {_fmt(rev):>8} {_fmt(ms, '.3f'):>8}")
+        if run.message:
+            print(f"  {run.arith}: {run.message}")
+        if run.useless_step is not None:
+            print(f"  {run.arith}: enclosure useless (radius >= |x|) from step {run.useless_step}")
+        if run.encloses is False:
+            print(f"  {run.arith}: ENCLOSURE MISSES THE EXACT VALUE (a bug; please report)")
+    doc = scaling.study_json(study)
+    doc["versions"] = library_versions()
+    if args.digits is not None:
+        doc["digits"] = _digits_report(system, x0, eps, args, study)
+    if args.out:
+        paths = scaling.write_study(study, args.out, plots=not args.no_plots)
+        out = pathlib.Path(args.out)
+        (out / "scaling.json").write_text(json.dumps(doc, indent=1) + "\n")
+        if args.digits is not None and doc["digits"].get("enclosure") is not None:
+            p = out / "enclosure.json"
+            p.write_text(json.dumps(doc["digits"]["enclosure"], indent=1) + "\n")
+            paths.append(p)
+        print("wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def _digits_report(system, x0, eps, args, study):
+    D, K = args.digits, args.steps
+    print(f"\nprecision needed for {D} correct digits at every step 0..K (K = {K}):")
+    rep = {"digits": D, "steps": K}
+    for kind, how in (("mp", "mp:P orbit error <= 10^-D, confirmed against the exact orbit"),
+                      ("ball", "ball:P radius <= 10^-D * |x| and the ball contains the exact point "
+                               "(certified)")):
+        rule = scaling.precision_rule(system, x0, eps, K, D, kind)
+        bits = {r.steps: r.bits for r in rule.results}
+        print(f"  {kind:<4}: {bits[K]} bits ({how}); by K: "
+              + ", ".join(f"K={k}: {b}" for k, b in bits.items()))
+        print(f"        fitted rule: bits = D*log2(10) + c*K + const with c = {rule.c:.3f} bits/step, "
+              f"const = {rule.const:.1f}")
+        rep[kind] = {"bits": bits[K], "bits_by_steps": {str(k): b for k, b in bits.items()},
+                     "c": rule.c, "const": rule.const, "criterion": how}
+    P = rep["ball"]["bits"]
+    pts = scaling.orbit_enclosure(system, x0, eps, K, P)
+    ar = scaling.get_arith(f"ball:{P}")
+    rep["enclosure"] = {"arith": ar.name, "digits": D, "certified": True,
+                        "orbit": [[ar.format(t, digits=D + 3) for t in p] for p in pts]}
+    print(f"  certified enclosure of the whole orbit to {D} digits: ball:{P}"
+          + (" (written to enclosure.json)" if args.out else ""))
+    return rep
+
+
+def cmd_hard(args):
+    ariths = _ariths(args.ariths)
+    if args.digits < 1:
+        raise InputError(f"--digits: expected a positive integer, got {args.digits}")
+    if args.long_steps < 1:
+        raise InputError(f"--long-steps: expected a positive integer, got {args.long_steps}")
+    cases = hard.catalogue(long_steps=args.long_steps)
+    if args.only:
+        cases = [c for c in cases if args.only.lower() in c.name.lower()]
+        if not cases:
+            raise InputError(f"--only: no case name contains {args.only!r}")
+    results = hard.run_catalogue(cases, ariths, args.digits, precision=not args.no_precision,
+                                 progress=not args.quiet)
+    table = hard.markdown_table(results)
+    legend = ("cells: ok / WARN (NearSingularWarning, κ = condition estimate, @step) / SINGULAR "
+              "(SingularStepError) / UNDECIDED (ball pivot not certain); err = relative error of the "
+              "last point vs the exact orbit (balls: midpoint), rad = certified ball radius; "
+              "**UNFLAGGED** = a wrong number returned without a flag")
+    if args.markdown:
+        print(table)
+        print("\n" + legend)
+    else:
+        for r in results:
+            print(f"{r.case.name}: {r.case.description}")
+            print(f"  exact: {r.exact_status}" + ("" if r.exact_step is None else f" at step {r.exact_step}"))
+            for o in r.outcomes:
+                print(f"  {o.arith:<9} {hard.cell(o)}")
+            if r.bits_needed is not None:
+                print(f"  precision for {r.digits} digits: mp {r.bits_needed} bits, ball {r.ball_bits_needed} bits")
+        print(legend)
+    if args.out:
+        out = pathlib.Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        doc = {"cases": [hard.result_json(r) for r in results], "legend": legend,
+               "versions": library_versions()}
+        (out / "hard_cases.json").write_text(json.dumps(doc, indent=1) + "\n")
+        (out / "hard_cases.md").write_text(table + "\n\n" + legend + "\n")
+        print(f"wrote {out / 'hard_cases.json'}, {out / 'hard_cases.md'}", file=sys.stderr)
+    return 0

@@ -1,0 +1,618 @@
+"""Precision-scaling studies: how much of a drift is rounding, how fast it grows,
+and what precision buys at what cost.
+
+:func:`run_orbit` iterates one orbit in one arithmetic and compares it step by
+step with the exact orbit; :func:`scaling_study` does that for a list of
+arithmetics; :func:`precision_needed` finds the smallest precision keeping D
+correct digits over K steps and :func:`precision_rule` fits
+bits ≈ D·log2(10) + c·K + const.
+
+How every number is obtained (also stored in ``ScalingStudy.method``):
+
+* the reference is the **exact** orbit (python-flint ``fmpq``);
+* a floating value (``float``, ``mp:P``) is a dyadic rational: it is converted
+  exactly and |approx − exact| is computed in exact rational arithmetic; a
+  ball contributes its midpoint exactly and its radius exactly;
+* errors are normwise relative: max_i |x̂_i − x_i| / max_i |x_i|, reported as
+  log10 (``None`` when the error is exactly 0);
+* H̃/K̃ drift: H̃(x̂_k) evaluated **in the arithmetic** at the computed point,
+  minus the exact H̃(x_0), relative to |H̃(x_0)| (for balls: |mid − exact| + rad,
+  an upper bound); K̃ uses the associated field g of B_0;
+* commutation residual: |Φ_f(Φ_g(x̂)) − Φ_g(Φ_f(x̂))| / |x̂|, reversibility
+  residual: |Φ_f(Φ_f(x̂), −ε) − x̂| / |x̂|, both computed in the arithmetic (the
+  exact values are 0), evaluated exactly; balls: |mid| + rad;
+* time per step: wall-clock time of the orbit step alone (``time.perf_counter``).
+
+>>> from exact_khk.systems import default_system, DEFAULT_X0
+>>> s = default_system()
+>>> st = scaling_study(s, DEFAULT_X0, "1/10", 5, ["float", "mp:113", "ball:113"], progress=False)
+>>> [r.arith for r in st.runs]
+['float', 'mp:113', 'ball:113']
+>>> st.runs[0].final_error_log10 > st.runs[1].final_error_log10   # 113 bits beat 53
+True
+>>> st.runs[2].encloses                                           # certified enclosures
+True
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from dataclasses import asdict, dataclass, field
+from fractions import Fraction
+
+import flint
+
+from .arith import get_arith
+from .ball import BallArith, ball_mid, ball_rad, contains_exact
+from .errors import InputError, NearSingularWarning, SingularStepError, UndecidedError
+from .invariants import Htilde, PoleError
+from .kahan import KahanMap
+from .parsing import parse_rational, parse_vector
+from .systems import b0_signs
+
+# mp:4096 is left out until kahan.py's warning threshold 2.0 ** (prec / 2) stops
+# overflowing for prec > 2046 (reported); ball:4096 covers the high end.
+DEFAULT_ARITHS = ("float", "mp:53", "mp:64", "mp:113", "mp:256", "mp:1024", "mp:4096",
+                  "ball:64", "ball:256", "ball:1024", "ball:4096")
+LOG10_2 = math.log10(2)
+
+METHOD = {
+    "reference": "exact orbit in python-flint fmpq",
+    "error": "normwise relative max_i|x_i - exact_i| / max_i|exact_i|, computed exactly from the "
+             "binary value (balls: midpoint); log10; None = exactly 0",
+    "radius": "balls: max_i rad_i / max_i|exact_i| (certified bound on the error), log10",
+    "h_drift": "|H~(x_k) - H~(x_0)| / |H~(x_0)|: H~(x_k) evaluated in the arithmetic at the computed "
+               "point, H~(x_0) exact; balls: |mid - exact| + rad; log10",
+    "k_drift": "as h_drift for K~ (Hessian B_0 Hs)",
+    "commutation": "|Phi_f(Phi_g(x_k)) - Phi_g(Phi_f(x_k))| / |x_k| in the arithmetic, g = field of "
+                   "B_0; evaluated exactly (balls: |mid| + rad); log10",
+    "reversibility": "|Phi_f(Phi_f(x_k), -eps) - x_k| / |x_k| in the arithmetic; log10",
+    "seconds": "wall-clock time of the orbit step alone (time.perf_counter)",
+    "encloses": "balls: every point, H~ and K~ enclosure contains the exact value and every "
+                "residual enclosure contains 0 (decided in exact rational arithmetic)",
+}
+
+
+# --- exact helpers -------------------------------------------------------------
+
+
+def to_fmpq(ar, e) -> flint.fmpq:
+    """The exact rational value of an element (a ball's midpoint)."""
+    if isinstance(ar, BallArith):
+        return ball_mid(e)
+    if isinstance(e, flint.fmpq):
+        return e
+    q = ar.to_fraction(e)
+    return flint.fmpq(q.numerator, q.denominator)
+
+
+def log10q(q) -> float | None:
+    """log10 |q| of an exact rational (any size), None for 0."""
+    q = abs(flint.fmpq(q))
+    if q == 0:
+        return None
+    return math.log10(int(q.p)) - math.log10(int(q.q))
+
+
+def _norm(qs):
+    return max(abs(q) for q in qs)
+
+
+def _err_bound(ar, e, exact):
+    """An exact rational bound of |e − exact| (balls: |mid − exact| + rad)."""
+    d = abs(to_fmpq(ar, e) - exact)
+    return d + ball_rad(e) if isinstance(ar, BallArith) else d
+
+
+def _rel(num, den):
+    return log10q(num / den) if den != 0 else None
+
+
+# --- records -------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StepRow:
+    """One orbit point in one arithmetic, compared with the exact point (see METHOD)."""
+
+    arith: str
+    step: int
+    error_log10: float | None
+    radius_log10: float | None = None
+    h_drift_log10: float | None = None
+    k_drift_log10: float | None = None
+    commutation_log10: float | None = None
+    reversibility_log10: float | None = None
+    encloses: bool | None = None
+    condition: float | None = None
+    seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class ArithRun:
+    """An orbit in one arithmetic: per-step rows and a summary.
+
+    ``status``: ``'ok'``, ``'warned'`` (NearSingularWarning at some step),
+    ``'singular'`` (SingularStepError) or ``'undecided'`` (UndecidedError, balls);
+    ``failed_step`` is the step that raised; ``steps_done`` counts the steps that
+    returned a point (one more than the compared rows when the exact orbit
+    stopped first: the step the exact map refuses was still attempted).  ``bits_left``: correct bits of the
+    last point (min(prec, −log2 error)); ``loss_rate``: least-squares slope of
+    log2(error) against the step number (bits lost per step); for balls
+    ``radius_rate`` is the same for the radius and ``useless_step`` the first step
+    whose radius is ≥ the norm of the point (no correct digit left).
+    """
+
+    arith: str
+    prec: int | None
+    status: str
+    steps_done: int
+    failed_step: int | None
+    message: str
+    seconds_per_step: float | None
+    final_error_log10: float | None
+    bits_left: float | None
+    loss_rate: float | None
+    radius_rate: float | None
+    useless_step: int | None
+    encloses: bool | None
+    max_condition: float | None
+    rows: tuple = field(repr=False, default=())
+
+    def summary(self) -> dict:
+        d = asdict(self)
+        d.pop("rows")
+        return d
+
+
+@dataclass(frozen=True)
+class ScalingStudy:
+    """Result of :func:`scaling_study`: the runs, the exact timing and how numbers were obtained."""
+
+    system: object
+    x0: tuple
+    eps: Fraction
+    steps: int
+    exact_seconds_per_step: float
+    exact_final_height_bits: int
+    runs: tuple
+    method: dict
+
+    def rows(self):
+        return [r for run in self.runs for r in run.rows]
+
+
+# --- one orbit -----------------------------------------------------------------
+
+
+def exact_prefix(fld, x0, eps, steps):
+    """(points, seconds per step, error): the exact orbit (python-flint ``fmpq``) up
+    to the first undefined step; ``error`` is that step's SingularStepError or None."""
+    phi = KahanMap(fld, eps, "flint")
+    pts, err = [phi.point(x0, "x0")], None
+    t = time.perf_counter()
+    for k in range(1, steps + 1):
+        try:
+            pts.append(phi.step(pts[-1]))
+        except SingularStepError as exc:
+            err = exc.at_step(k)
+            break
+    return pts, (time.perf_counter() - t) / max(len(pts) - 1, 1), err
+
+
+def exact_orbit(fld, x0, eps, steps):
+    """(points, seconds per step) of the exact orbit; raises SingularStepError."""
+    pts, sec, err = exact_prefix(fld, x0, eps, steps)
+    if err is not None:
+        raise err
+    return pts, sec
+
+
+def _slope(ks, ys):
+    """Least-squares slope of ys against ks (None with fewer than two points)."""
+    pts = [(k, y) for k, y in zip(ks, ys) if y is not None]
+    if len(pts) < 2:
+        return None
+    mk = sum(k for k, _ in pts) / len(pts)
+    my = sum(y for _, y in pts) / len(pts)
+    den = sum((k - mk) ** 2 for k, _ in pts)
+    return sum((k - mk) * (y - my) for k, y in pts) / den if den else None
+
+
+def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progress=None) -> ArithRun:
+    """Iterate ``steps`` Kahan steps of ``system.field('f')`` in ``arith``
+    and compare every point with the exact orbit ``exact`` (computed if None).
+
+    Never raises for a singular or undecided step: the run stops there and its
+    ``status`` says why.  Near-singular warnings are caught and recorded (the
+    largest condition estimate is kept).  Balls run inside ``ar.local()``.
+    """
+    ar = get_arith(arith)
+    eps = parse_rational(eps, "eps")
+    fld = system.field("f")
+    x0 = parse_vector(list(x0), "x0", fld.dim)
+    if exact is None:
+        exact, _ = exact_orbit(fld, x0, eps, steps)
+    exact = exact[: steps + 1]
+    phi = KahanMap(fld, eps, ar)
+    g = system.field("g", signs=b0_signs(system.n)) if diagnostics else None
+    phi_g = KahanMap(g, eps, ar) if diagnostics else None
+    ball = isinstance(ar, BallArith)
+    flint_ar = get_arith("flint")
+    if diagnostics:
+        h0 = Htilde(fld, exact[0], eps, flint_ar)
+        k0 = Htilde(g, exact[0], eps, flint_ar)
+    rows, times, status, failed, message, conds = [], [], "ok", None, "", []
+    with ar.local():
+        x = phi.point(x0, "x0")
+        for k in range(steps + 1):
+            if k >= len(exact):  # the exact orbit stopped (singular): nothing to compare
+                break
+            ex = exact[k]
+            exn = _norm(ex)
+            err = _rel(max(abs(to_fmpq(ar, xi) - ei) for xi, ei in zip(x, ex)), exn)
+            rad = _rel(max(ball_rad(xi) for xi in x), exn) if ball else None
+            encl = all(contains_exact(xi, ei) for xi, ei in zip(x, ex)) if ball else None
+            y, dt, cond = None, 0.0, None
+            if k < steps:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always", NearSingularWarning)
+                    t = time.perf_counter()
+                    try:
+                        y = phi.step(x)
+                    except SingularStepError as exc:
+                        status, failed, message = "singular", k + 1, str(exc.at_step(k + 1))
+                        cond = exc.condition
+                    except UndecidedError as exc:
+                        status, failed, message = "undecided", k + 1, f"step {k + 1}: {exc}"
+                    dt = time.perf_counter() - t
+                for w in caught:
+                    if issubclass(w.category, NearSingularWarning):
+                        cond = max(cond or 0.0, w.message.condition)
+                        if status == "ok":
+                            status, message = "warned", f"step {k + 1}: {w.message}"
+                    else:  # pragma: no cover - unrelated warnings pass through
+                        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+                if cond is not None:
+                    conds.append(cond)
+            extra = {}
+            if diagnostics and (y is not None or k == steps):
+                with warnings.catch_warnings():  # diagnostics only: the orbit step recorded its own
+                    warnings.simplefilter("ignore", NearSingularWarning)
+                    extra = _diagnostics(ar, fld, g, phi, phi_g, x, y, eps, h0, k0, ball)
+                if ball:
+                    encl = encl and extra.pop("encl")
+            rows.append(StepRow(ar.name, k, err, rad, encloses=encl, condition=cond,
+                                seconds=dt, **extra))
+            if y is None:
+                break
+            times.append(dt)
+            x = y
+            if progress is not None:
+                progress(1)
+    ks = [r.step for r in rows]
+    log2 = lambda v: None if v is None else v / LOG10_2  # noqa: E731
+    final = rows[-1].error_log10 if rows else None
+    prec = ar.prec
+    bits_left = None if final is None else min(float(prec), -final / LOG10_2)
+    if final is None and rows:
+        bits_left = float(prec) if prec else None
+    useless = next((r.step for r in rows if r.radius_log10 is not None and r.radius_log10 >= 0), None)
+    encloses = all(r.encloses for r in rows) if ball else None
+    return ArithRun(ar.name, prec, status, len(times), failed, message,
+                    sum(times) / len(times) if times else None,
+                    final, bits_left,
+                    _slope(ks, [log2(r.error_log10) for r in rows]),
+                    _slope(ks, [log2(r.radius_log10) for r in rows]) if ball else None,
+                    useless, encloses, max(conds) if conds else None, tuple(rows))
+
+
+def _diagnostics(ar, fld, g, phi, phi_g, x, y, eps, h0, k0, ball):
+    """Invariant drifts and residuals at x (y = Φ_f(x), computed if None); see METHOD."""
+    out = {}
+    xn = _norm([to_fmpq(ar, t) for t in x])
+    zero = flint.fmpq(0)
+    encl = True
+    try:
+        h = Htilde(fld, x, eps, ar)
+        kk = Htilde(g, x, eps, ar)
+        out["h_drift_log10"] = _rel(_err_bound(ar, h, h0), abs(h0))
+        out["k_drift_log10"] = _rel(_err_bound(ar, kk, k0), abs(k0))
+        if ball:
+            encl = contains_exact(h, h0) and contains_exact(kk, k0)
+    except (SingularStepError, PoleError, UndecidedError):
+        pass
+    try:
+        y = phi.step(x) if y is None else y
+        fg = phi.step(phi_g.step(x))
+        gf = phi_g.step(y)
+        res = [a - b for a, b in zip(fg, gf)]
+        out["commutation_log10"] = _rel(max(_err_bound(ar, r, zero) for r in res), xn)
+        back = phi.with_eps(-phi.eps).step(y)
+        res2 = [a - b for a, b in zip(back, x)]
+        out["reversibility_log10"] = _rel(max(_err_bound(ar, r, zero) for r in res2), xn)
+        if ball:
+            encl = encl and all(contains_exact(r, zero) for r in res + res2)
+    except (SingularStepError, PoleError, UndecidedError):
+        pass
+    if ball:
+        out["encl"] = encl
+    return out
+
+
+# --- the study -----------------------------------------------------------------
+
+
+def _tqdm(total, progress, desc):
+    if not progress:
+        return None
+    from tqdm import tqdm
+    import sys
+
+    return tqdm(total=total, desc=desc, file=sys.stderr, leave=False)
+
+
+def scaling_study(system, x0, eps, steps, ariths=DEFAULT_ARITHS, diagnostics=True,
+                  progress=True) -> ScalingStudy:
+    """Iterate the orbit of Φ_f in every arithmetic of ``ariths`` and compare each
+    step with the exact orbit (see the module docstring for how).
+
+    A singular exact orbit raises :class:`SingularStepError` (there is no reference).
+    """
+    if not isinstance(steps, int) or steps < 1:
+        raise InputError(f"steps: expected a positive integer, got {steps!r}")
+    ariths = [get_arith(a) for a in ariths]
+    if not ariths:
+        raise InputError("ariths: give at least one arithmetic")
+    eps = parse_rational(eps, "eps")
+    fld = system.field("f")
+    x0 = parse_vector(list(x0), "x0", fld.dim)
+    exact, t_exact = exact_orbit(fld, x0, eps, steps)
+    bar = _tqdm(steps * len(ariths), progress, "scale")
+    runs = []
+    try:
+        for ar in ariths:
+            if bar is not None:
+                bar.set_postfix_str(ar.name)
+            runs.append(run_orbit(system, x0, eps, steps, ar, exact, diagnostics,
+                                  progress=bar.update if bar is not None else None))
+    finally:
+        if bar is not None:
+            bar.close()
+    last = exact[-1]
+    height = max(max(int(t.p).bit_length(), int(t.q).bit_length()) for t in last)
+    return ScalingStudy(system, tuple(x0), eps, steps, t_exact, height, tuple(runs), dict(METHOD))
+
+
+# --- precision needed ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PrecisionResult:
+    """Smallest precision P (bits) with D correct digits over K steps.
+
+    ``kind`` ``'mp'``: every point of the ``mp:P`` orbit has relative error
+    ≤ 10^-D, confirmed against the exact orbit; ``'ball'``: every ``ball:P``
+    enclosure has relative radius ≤ 10^-D and contains the exact point (a
+    certified enclosure of the whole orbit to D digits).  ``bits`` passes and
+    ``bits - 1`` fails (both evaluated); ``tried`` lists (P, passed).
+    """
+
+    kind: str
+    digits: int
+    steps: int
+    bits: int
+    tried: tuple
+    worst_log10: float | None
+
+
+def _passes(system, x0, eps, steps, digits, kind, P, exact):
+    run = run_orbit(system, x0, eps, steps, f"{kind}:{P}", exact, diagnostics=False)
+    if run.status in ("singular", "undecided") or run.steps_done < steps:
+        return False, None
+    key = "radius_log10" if kind == "ball" else "error_log10"
+    vals = [getattr(r, key) for r in run.rows]
+    worst = max((v for v in vals if v is not None), default=None)
+    ok = worst is None or worst <= -digits
+    if kind == "ball":
+        ok = ok and run.encloses
+    return ok, worst
+
+
+def precision_needed(system, x0, eps, steps, digits, kind="mp", exact=None) -> PrecisionResult:
+    """The smallest P such that ``kind:P`` keeps ``digits`` correct digits at every
+    step 0..``steps`` (doubling from ⌈D·log2 10⌉, then bisection).
+
+    >>> from exact_khk.systems import default_system, DEFAULT_X0
+    >>> r = precision_needed(default_system(), DEFAULT_X0, "1/10", 10, 20)
+    >>> r.bits >= 67 and r.worst_log10 <= -20
+    True
+    """
+    if kind not in ("mp", "ball"):
+        raise InputError(f"kind: expected 'mp' or 'ball', got {kind!r}")
+    if not isinstance(digits, int) or digits < 1:
+        raise InputError(f"digits: expected a positive integer, got {digits!r}")
+    eps = parse_rational(eps, "eps")
+    fld = system.field("f")
+    x0 = parse_vector(list(x0), "x0", fld.dim)
+    if exact is None:
+        exact, _ = exact_orbit(fld, x0, eps, steps)
+    tried = {}
+
+    def test(P):
+        if P not in tried:
+            tried[P] = _passes(system, x0, eps, steps, digits, kind, P, exact)
+        return tried[P][0]
+
+    lo, hi = 1, max(2, math.ceil(digits / LOG10_2))
+    while not test(hi):
+        lo, hi = hi, 2 * hi
+        if hi > 1 << 20:
+            raise InputError(f"digits: {digits} digits over {steps} steps need more than 2^20 bits")
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if test(mid):
+            hi = mid
+        else:
+            lo = mid
+    if lo >= 2:
+        test(lo)
+    return PrecisionResult(kind, digits, steps, hi, tuple(sorted((p, r[0]) for p, r in tried.items())),
+                           tried[hi][1])
+
+
+@dataclass(frozen=True)
+class PrecisionRule:
+    """bits ≈ D·log2(10) + c·K + const, fitted by least squares over ``results``."""
+
+    kind: str
+    digits: int
+    c: float
+    const: float
+    results: tuple
+
+    def predict(self, digits, steps) -> float:
+        return digits / LOG10_2 + self.c * steps + self.const
+
+
+def precision_rule(system, x0, eps, steps, digits, kind="mp", step_counts=None) -> PrecisionRule:
+    """Fit the rule over K in ``step_counts`` (default K/4, K/2, 3K/4, K).
+
+    >>> from exact_khk.systems import default_system, DEFAULT_X0
+    >>> rule = precision_rule(default_system(), DEFAULT_X0, "1/10", 8, 10)
+    >>> math.isfinite(rule.c) and rule.predict(10, 8) > 33
+    True
+    """
+    eps = parse_rational(eps, "eps")
+    Ks = sorted({max(1, steps * i // 4) for i in range(1, 5)} if step_counts is None else set(step_counts))
+    if len(Ks) < 2:
+        raise InputError("steps: need at least two distinct step counts to fit c (use K >= 2)")
+    fld = system.field("f")
+    exact, _ = exact_orbit(fld, parse_vector(list(x0), "x0", fld.dim), eps, max(Ks))
+    res = tuple(precision_needed(system, x0, eps, K, digits, kind, exact) for K in Ks)
+    ys = [r.bits - digits / LOG10_2 for r in res]
+    c = _slope(Ks, ys)
+    const = sum(ys) / len(ys) - c * sum(Ks) / len(Ks)
+    return PrecisionRule(kind, digits, c, const, res)
+
+
+# --- outputs -------------------------------------------------------------------------
+
+
+def jsonable(obj):
+    """``obj`` with non-finite floats written as strings ('inf', 'nan'): strict JSON."""
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return str(obj)
+    if isinstance(obj, dict):
+        return {k: jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    return obj
+
+
+def study_json(study: ScalingStudy) -> dict:
+    """The study as a JSON-ready dict (summaries, per-step rows, method)."""
+    s = study.system
+    return jsonable({"system": {"n": s.n, "a": [str(t) for t in s.a], "b": [str(t) for t in s.b],
+                       "c": [str(t) for t in s.c]},
+            "x0": [str(t) for t in study.x0], "eps": str(study.eps), "steps": study.steps,
+            "exact": {"arith": "flint", "seconds_per_step": study.exact_seconds_per_step,
+                      "final_height_bits": study.exact_final_height_bits},
+            "method": study.method, "runs": [r.summary() for r in study.runs],
+            "rows": [asdict(r) for r in study.rows()]})
+
+
+def write_study(study: ScalingStudy, out_dir, plots=True) -> list:
+    """Write ``scaling.csv``, ``scaling.json`` and (``plots``) ``work_precision.png`` and
+    ``error_vs_step.png`` into ``out_dir``; returns the paths written."""
+    import csv
+    import json
+    import pathlib
+
+    out = pathlib.Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "scaling.csv", out / "scaling.json"]
+    names = list(StepRow.__dataclass_fields__)
+    with open(paths[0], "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(names)
+        for r in study.rows():
+            w.writerow(["" if getattr(r, k) is None else getattr(r, k) for k in names])
+    paths[1].write_text(json.dumps(study_json(study), indent=1) + "\n")
+    if plots:
+        paths += plot_study(study, out)
+    return paths
+
+
+def plot_study(study: ScalingStudy, out_dir) -> list:
+    """The work-precision diagram and the error-against-step plot (matplotlib, Agg)."""
+    import pathlib
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = pathlib.Path(out_dir)
+    title = f"n={study.system.n}, eps={study.eps}, K={study.steps} steps"
+    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+    stopped = 0
+    for run in study.runs:
+        ball = run.arith.startswith("ball")
+        last = run.rows[-1] if run.rows else None
+        y = (last.radius_log10 if ball else run.final_error_log10) if last else None
+        if run.seconds_per_step is None:  # not a single step was taken
+            continue
+        color = "tab:orange" if ball else "tab:blue"
+        if run.steps_done < study.steps or y is None:  # no point at step K: no correct digit left
+            ax.plot(run.seconds_per_step, 0, "x", color=color)
+            ax.annotate(f"{run.arith} {run.status} @{run.failed_step}", (run.seconds_per_step, 0),
+                        textcoords="offset points", xytext=(4, -10 - 9 * stopped), fontsize=6)
+            stopped += 1
+            continue
+        ax.plot(run.seconds_per_step, y, "s" if ball else "o", color=color)
+        ax.annotate(run.arith, (run.seconds_per_step, y), textcoords="offset points",
+                    xytext=(5, 3), fontsize=7)
+    ax.axvline(study.exact_seconds_per_step, color="gray", ls="--", lw=1)
+    ax.annotate("exact (flint), error 0", (study.exact_seconds_per_step, 0.5),
+                xycoords=("data", "axes fraction"), rotation=90, fontsize=7, color="gray",
+                xytext=(-9, 0), textcoords="offset points", va="center")
+    ax.set_xscale("log")
+    ax.set_xlabel("time per step [s]")
+    ax.set_ylabel("log10 relative error at the last step")
+    ax.set_title("work-precision: ● floating error (vs exact), ■ ball radius (certified),\n"
+                 "× stopped before step K (no correct digit)", fontsize=8)
+    fig.suptitle(title, fontsize=8, y=0.995)
+    fig.tight_layout()
+    wp = out / "work_precision.png"
+    fig.savefig(wp)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+    for run in study.runs:
+        pts = [(r.step, r.error_log10) for r in run.rows if r.error_log10 is not None]
+        if pts:
+            line, = ax.plot(*zip(*pts), lw=1, label=run.arith + (" midpoint" if run.radius_rate is not None else ""))
+        rad = [(r.step, r.radius_log10) for r in run.rows if r.radius_log10 is not None]
+        if rad:
+            ax.plot(*zip(*rad), lw=1, ls="--", color=line.get_color() if pts else None,
+                    label=run.arith + " radius")
+    ax.set_xlabel("step k")
+    ax.set_ylabel("log10 relative error vs exact orbit (balls: dashed = radius)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=6, ncol=2)
+    fig.tight_layout()
+    es = out / "error_vs_step.png"
+    fig.savefig(es)
+    plt.close(fig)
+    return [wp, es]
+
+
+def orbit_enclosure(system, x0, eps, steps, prec):
+    """The ``ball:prec`` orbit: a list of tuples of arb balls, each certified to contain
+    the exact orbit point (raises UndecidedError / SingularStepError like a step)."""
+    ar = get_arith(f"ball:{prec}")
+    phi = KahanMap(system.field("f"), eps, ar)
+    with ar.local():
+        return phi.orbit(x0, steps)

@@ -1,0 +1,168 @@
+"""Precision-scaling studies: errors against the exact orbit, fitted rates, precision needed."""
+
+import json
+import math
+from fractions import Fraction
+
+import flint
+import pytest
+
+from exact_khk import KahanMap, SingularStepError
+from exact_khk.cli import main
+from exact_khk.scaling import (DEFAULT_ARITHS, LOG10_2, exact_orbit, precision_needed,
+                               precision_rule, run_orbit, scaling_study, write_study)
+from exact_khk.systems import DEFAULT_X0, LiePoissonSystem, default_system
+
+K = 5
+EPS = Fraction(1, 10)
+
+
+@pytest.fixture(scope="module")
+def study():
+    return scaling_study(default_system(), DEFAULT_X0, EPS, K, ["float", "mp:53", "mp:113", "mp:256",
+                                                                "ball:64", "ball:256"], progress=False)
+
+
+def _ninf(M):
+    return max(sum(abs(float(v)) for v in row) for row in M)
+
+
+def first_order_bound_log10(prec):
+    """A first-order rounding-error bound for K steps at ``prec`` bits, from exact data.
+
+    Step k solves M_k x_{k+1} = x_k with partial pivoting: backward stable, so its
+    relative error is <= c N kappa_k u (Higham, ASNA Thm 9.4/7.2; c = 4 covers the
+    growth factor of 6x6 elimination and the normwise form); an error already in x_k
+    is carried by dPhi(x_k).  So |err_K| <= sum_k c N kappa_k u |x_{k+1}| prod_{j>k} |dPhi(x_j)|,
+    everything computed exactly (flint) and relative to |x_K|.
+    """
+    phi = KahanMap(default_system().field("f"), EPS, "flint")
+    pts = phi.orbit(DEFAULT_X0, K)
+    N, u = len(pts[0]), 2.0 ** -prec
+    kappa = [_ninf(phi.system_matrix(x)) * _ninf(flint.fmpq_mat(phi.system_matrix(x)).inv().tolist())
+             for x in pts[:-1]]
+    jac = [_ninf(phi.jacobian(x)) for x in pts]
+    norm = [max(abs(float(t)) for t in x) for x in pts]
+    total = sum(4 * N * kappa[k] * u * norm[k + 1] * math.prod(jac[k + 1:K]) for k in range(K))
+    return math.log10(total / norm[K])
+
+
+def test_errors_decrease_with_precision(study):
+    runs = {r.arith: r for r in study.runs}
+    errs = [runs[a].final_error_log10 for a in ("mp:53", "mp:113", "mp:256")]
+    assert errs[0] > errs[1] > errs[2]
+    for a in ("float", "mp:53", "mp:113", "mp:256"):
+        assert runs[a].status == "ok" and runs[a].steps_done == K
+        assert runs[a].final_error_log10 <= first_order_bound_log10(runs[a].prec)
+    # float and mp:53 are both IEEE double rounding on the same algorithm
+    assert runs["float"].final_error_log10 == runs["mp:53"].final_error_log10
+
+
+def test_ball_runs_enclose_and_rates_are_positive(study):
+    for run in study.runs:
+        if run.arith.startswith("ball"):
+            assert run.encloses is True
+            # wrapping: the certified radius grows; the fitted growth rate is positive and finite
+            assert math.isfinite(run.radius_rate) and run.radius_rate > 0
+            r = run.rows[-1]
+            assert r.error_log10 <= r.radius_log10            # the midpoint error is within the radius
+            assert r.h_drift_log10 is not None and r.commutation_log10 is not None
+        else:
+            assert run.encloses is None and math.isfinite(run.loss_rate)
+
+
+def test_diagnostics_are_rounding_sized(study):
+    # H~ drift, commutation and reversibility residuals are exactly 0 for the exact
+    # maps: in mp:P they are rounding errors, far below 2^-(P/2) for this tame orbit
+    for run in study.runs:
+        if run.arith.startswith("mp") or run.arith == "float":
+            half = -(run.prec / 2) * LOG10_2
+            for r in run.rows[:-1]:
+                assert r.h_drift_log10 < half and r.k_drift_log10 < half
+                assert r.commutation_log10 < half and r.reversibility_log10 < half
+
+
+def test_enclosure_check_can_fail():
+    # negative control: a wrong "exact" reference (last point moved far outside the
+    # ball) must make the certified enclosure check fail
+    s = default_system()
+    exact, _ = exact_orbit(s.field("f"), DEFAULT_X0, EPS, 3)
+    wrong = exact[:-1] + [tuple(t + flint.fmpq(1, 10 ** 9) for t in exact[-1])]
+    good = run_orbit(s, DEFAULT_X0, EPS, 3, "ball:128", exact, diagnostics=False)
+    bad = run_orbit(s, DEFAULT_X0, EPS, 3, "ball:128", wrong, diagnostics=False)
+    assert good.encloses is True and bad.encloses is False
+
+
+def test_undecided_ball_stops_with_status():
+    # ball:24 cannot keep a certain pivot for long on this orbit: "undecided", no number
+    run = run_orbit(default_system(), DEFAULT_X0, EPS, 40, "ball:24", diagnostics=False)
+    assert run.status == "undecided" and run.failed_step is not None
+    assert run.steps_done == run.failed_step - 1 and "no pivot" in run.message
+    assert run.encloses is True
+
+
+def test_singular_reference_raises():
+    s2 = LiePoissonSystem.from_vectors("1,2", "0,1", "3,1")
+    with pytest.raises(SingularStepError):
+        scaling_study(s2, ["-2", "-2", "-2", "1"], "-1/6", 2, ["float"], progress=False)
+
+
+def test_precision_needed_is_minimal_and_confirmed():
+    s, D = default_system(), 10
+    r = precision_needed(s, DEFAULT_X0, EPS, K, D)
+    tried = dict(r.tried)
+    assert tried[r.bits] is True and tried[r.bits - 1] is False
+    assert r.bits >= math.ceil(D / LOG10_2) - 1 and r.worst_log10 <= -D
+    # independent confirmation against the exact orbit
+    ok = run_orbit(s, DEFAULT_X0, EPS, K, f"mp:{r.bits}", diagnostics=False)
+    assert max(x.error_log10 for x in ok.rows if x.error_log10 is not None) <= -D
+    below = run_orbit(s, DEFAULT_X0, EPS, K, f"mp:{r.bits - 1}", diagnostics=False)
+    assert max(x.error_log10 for x in below.rows if x.error_log10 is not None) > -D
+
+
+def test_precision_rule_fit():
+    rule = precision_rule(default_system(), DEFAULT_X0, EPS, 8, 10, kind="ball")
+    assert math.isfinite(rule.c) and rule.c > 0          # ball radii grow: more bits per step
+    for r in rule.results:
+        assert r.kind == "ball" and abs(rule.predict(10, r.steps) - r.bits) < 12
+
+
+def test_write_study(tmp_path, study):
+    paths = write_study(study, tmp_path)
+    names = sorted(p.name for p in paths)
+    assert names == ["error_vs_step.png", "scaling.csv", "scaling.json", "work_precision.png"]
+    lines = (tmp_path / "scaling.csv").read_text().splitlines()
+    assert len(lines) == 1 + sum(len(r.rows) for r in study.runs)
+    doc = json.loads((tmp_path / "scaling.json").read_text())
+    assert [r["arith"] for r in doc["runs"]] == [r.arith for r in study.runs] and "error" in doc["method"]
+    assert (tmp_path / "work_precision.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_cli_scale(tmp_path, capsys):
+    rc = main(["scale", "--steps", "3", "--ariths", "float,ball:64", "--digits", "8", "--quiet",
+               "--out", str(tmp_path), "--no-plots"])
+    out = capsys.readouterr().out
+    assert rc == 0 and "bits left" in out and "fitted rule" in out
+    enc = json.loads((tmp_path / "enclosure.json").read_text())
+    assert enc["certified"] is True and len(enc["orbit"]) == 4
+
+
+@pytest.mark.parametrize("argv, msg", [
+    (["scale", "--ariths", "flint"], "--ariths"),
+    (["scale", "--ariths", "nope:3"], "arith"),
+    (["scale", "--arith", "float"], "--arith"),
+    (["scale", "--digits", "0"], "--digits"),
+    (["scale", "--steps", "0"], "--steps"),
+])
+def test_cli_scale_bad_input(argv, msg, capsys):
+    assert main(argv + ["--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert msg in err and err.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_default_study_long():
+    st = scaling_study(default_system(), DEFAULT_X0, EPS, 200, DEFAULT_ARITHS, progress=False)
+    mp = [r for r in st.runs if r.arith.startswith("mp")]
+    assert all(a.final_error_log10 > b.final_error_log10 for a, b in zip(mp, mp[1:]))
+    assert all(r.encloses for r in st.runs if r.arith.startswith("ball"))
