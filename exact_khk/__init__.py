@@ -12,24 +12,27 @@ Quick start (exact rational orbit of the Lie–Poisson family, n = 3):
 True
 """
 
+__version__ = "0.1.0"
+
 from .arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
-from . import ball  # noqa: F401  (registers the ball:P arithmetic)
-from . import cyclo  # noqa: F401  (registers the cyclo:N and gf:P arithmetics)
+from . import ball  # noqa: E402,F401  (registers the ball:P arithmetic)
+from . import cyclo  # noqa: E402,F401  (registers the cyclo:N and gf:P arithmetics)
 from .errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
-                     SingularStepError, UndecidedError)
+                     PoleError, SingularStepError, UndecidedError)
 from .kahan import KahanMap, kahan_step, map_jacobian, orbit
 from .parsing import parse_rational, parse_signs, parse_vector
 from .quadratic import QuadraticField
 from .systems import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
                       rational_sign_patterns)
-
-__version__ = "0.1.0"
+from .invariants import Htilde
+from .certify import Certificate, Check, certify
 
 __all__ = [
     "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",
-    "ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "SingularStepError", "UndecidedError",
+    "ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "PoleError",
+    "SingularStepError", "UndecidedError",
     "KahanMap", "kahan_step", "map_jacobian", "orbit",
     "parse_rational", "parse_signs", "parse_vector",
     "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",
-    "rational_sign_patterns", "__version__",
+    "rational_sign_patterns", "Htilde", "Certificate", "Check", "certify", "__version__",
 ]

@@ -2,7 +2,7 @@
 
 Exit status: 0 success; 1 a certification failed (``certify``); 2 malformed
 input (one-line message); 3 a singular Kahan step (one-line message naming the
-step, x and eps).
+step, x and eps) or an integral evaluated at its pole.
 
 Each command lives in a module with ``register(subparsers)``; the module list
 is :data:`COMMAND_MODULES`.
@@ -18,13 +18,13 @@ from fractions import Fraction
 
 from . import __version__
 from .arith import arith_names, get_arith
-from .errors import InputError, SingularStepError
+from .errors import InputError, PoleError, SingularStepError
 from .kahan import KahanMap
 from .parsing import parse_rational, parse_vector
 from .systems import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem, b0_signs,
                       random_point)
 
-COMMAND_MODULES = ["exact_khk.cli", "exact_khk.cli_study"]
+COMMAND_MODULES = ["exact_khk.cli", "exact_khk.cli_certify", "exact_khk.cli_study"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -142,7 +142,9 @@ def cmd_orbit(args):
     if args.signs is not None and args.field != "g":
         raise InputError("--signs applies only to --field g")
     signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
-    fld = system.field(args.field, signs=signs)
+    from .certify import expresses_omega  # a non-rational involution needs ω in the arithmetic
+
+    fld = system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
     phi = KahanMap(fld, eps, ar)
     pts = phi.orbit(x0, args.steps)
     if args.json:
@@ -153,8 +155,12 @@ def cmd_orbit(args):
                     "versions": library_versions()}, "-")
         return 0
     print(system.describe())
-    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} "
-          f"({'exact' if ar.exact else f'{ar.prec}-bit floating point'})")
+    kind = "exact" if ar.exact else f"{ar.prec}-bit floating point"
+    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind})")
+    if not (ar.rational or not ar.exact):  # Q(zeta), F_p: no real approximation to show
+        for k, p in enumerate(pts):
+            print(f"{k:>4}  (" + ", ".join(ar.format(t) for t in p) + ")")
+        return 0
     if ar.exact:
         print("coordinates are the exact rationals rounded to 8 significant digits for display; "
               "'bits' is the largest numerator/denominator bit length (--json prints them exactly)")
@@ -222,6 +228,9 @@ def main(argv=None) -> int:
         return 2
     except SingularStepError as exc:
         print(f"exact-khk: singular step: {exc}", file=sys.stderr)
+        return 3
+    except PoleError as exc:
+        print(f"exact-khk: undefined: {exc}", file=sys.stderr)
         return 3
     except BrokenPipeError:
         return 0

@@ -46,6 +46,12 @@ class SingularStepError(ExactKHKError, ArithmeticError):
                                  detail=self.detail)
 
 
+class PoleError(ExactKHKError, ArithmeticError):
+    """A rational function evaluated at a pole: an integral such as H̃ where
+    I − ε²(M J(x))² is singular, or h(x, x̃) where J((x+x̃)/2) is singular.
+    Not a singular Kahan step."""
+
+
 class UndecidedError(ExactKHKError, ArithmeticError):
     """Ball (interval) arithmetic cannot decide a question at this precision,
     e.g. no pivot is certainly nonzero.  Never a wrong answer: "undecided"."""

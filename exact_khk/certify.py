@@ -1,0 +1,615 @@
+"""Certification of the paper's theorems on orbits, as records (never printed here).
+
+:func:`certify` iterates Φ_f and every associated Φ_g[s] from a point and checks,
+in one arithmetic, at every orbit point (MATH.md for the formulas):
+
+* **integrals** — H̃ and each K̃[s] by the closed form (tH 4) equal their
+  definition h(x, Φ(x)); each is conserved by Φ_f and by every Φ_g[s];
+* **commutation** Φ_f∘Φ_g[s] = Φ_g[s]∘Φ_f; **reversibility** Φ(Φ(x, ε), −ε) = x;
+* **Poisson** — Π = J − ε² J Hs J Hs J equals (1 − ε²q_0)J − ε²Σ_{l≥1} q_l A^l J,
+  satisfies the Jacobi identity, and dΦ Π dΦᵀ = Π∘Φ for Φ_f and every Φ_g[s];
+  ∇K̃ = B∇H̃ and ∇q_l = A^l ∇q_0;
+* **involution** {H̃, K̃[s]} = 0 for J and for Π (gradients exact, by dual numbers);
+* **rank** of the gradients of the integrals the arithmetic can express, and of
+  A^i ∇H̃ (i < n);
+* **negative controls**, which must come out False: commutation with the
+  non-associated control field, H̃ under the control map, H̃ for a
+  non-admissible Hessian, and H̃ at a point perturbed by 2^-60 (relative).
+
+Each check is a :class:`Check`; the whole is a :class:`Certificate`, valid iff
+every claim holds and every control fails.  Exact arithmetics decide with
+``ar.is_zero`` and report the exact residual via ``ar.format``; floating ones
+only measure the largest |difference| (``holds`` is then ``None``: undecided).
+A context can declare ``evidence`` (e.g. ``"probabilistic"``) and ``decides``
+(its ``is_zero`` is rigorous although it is not exact, as for balls).  Points
+where one side of an identity is undefined (a singular step of another map, a
+pole) are skipped and listed in the check's ``detail``; a check with no point
+left is undecided.
+
+>>> cert = certify(steps=3, signs=["-++"])
+>>> cert.valid, cert.arith
+(True, 'flint')
+>>> [c.holds for c in cert.checks if c.name.startswith("control:")]
+[False, False, False, False]
+>>> cert.check("commutation Phi_f o Phi_g[-++]").residual
+'0'
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field, replace
+from fractions import Fraction
+
+from .arith import get_arith
+from .dual import jacobian
+from .errors import InputError, SingularStepError, UndecidedError
+from .invariants import (Htilde, Pi, Pi_from_q, PoleError, grad_Htilde, htilde_definition,
+                         q_coefficients, shift_index)
+from .kahan import KahanMap
+from .linalg import matmul, matvec, transpose
+from .parsing import format_signs, parse_rational, parse_signs, parse_vector
+from .systems import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
+                      involution_circulant_cyclotomic, is_rational_pattern,
+                      nontrivial_sign_patterns, rational_sign_patterns)
+
+#: relative size of the perturbation of the last coordinate of x0 in the
+#: "perturbed point" control, for exact arithmetics (floating ones use one ulp)
+PERTURBATION = Fraction(1, 2 ** 60)
+
+
+@dataclass(frozen=True)
+class Check:
+    """One certified statement.
+
+    ``expected`` is True for a claim and False for a negative control;
+    ``holds`` is True/False, or None when undecided; ``residual`` is the exact
+    first nonzero residual ('0' if none) for exact evidence, else the measured
+    largest |difference|; ``detail`` says where it was evaluated or failed.
+    """
+
+    name: str
+    claim: str
+    expected: bool
+    holds: bool | None
+    residual: str
+    arith: str
+    seconds: float
+    evidence: str = "exact in Q"
+    detail: str = ""
+
+    @property
+    def passed(self) -> bool:
+        """A claim that holds, or a control that fails (decided either way)."""
+        return self.holds is not None and self.holds == self.expected
+
+    def to_json(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """All checks on one orbit: the system, x0, ε, steps, arithmetic, versions."""
+
+    system: object
+    x0: tuple
+    eps: Fraction
+    steps: int
+    arith: str
+    signs: tuple
+    checks: tuple
+    versions: dict = field(default_factory=dict)
+    seconds: float = 0.0
+    height_bits: int | None = None
+
+    @property
+    def valid(self) -> bool:
+        """True iff every claim holds and every control fails."""
+        return bool(self.checks) and all(c.passed for c in self.checks)
+
+    def check(self, name: str) -> Check:
+        """The check called ``name``."""
+        for c in self.checks:
+            if c.name == name:
+                return c
+        raise KeyError(name)
+
+    def verdict(self) -> str:
+        """One line: VALID / INVALID / NOT CERTIFIED, and why."""
+        claims = [c for c in self.checks if c.expected]
+        controls = [c for c in self.checks if not c.expected]
+        where = f"{self.arith} arithmetic, n = {self.system.n}, {self.steps} steps, {self.seconds:.2f} s"
+        if self.valid:
+            return (f"VALID: all {len(claims)} claims hold and all {len(controls)} negative controls "
+                    f"fail ({where})")
+        bad = [c.name for c in self.checks if c.holds is not None and not c.passed]
+        open_ = [c.name for c in self.checks if c.holds is None]
+        if bad:
+            return f"INVALID: {len(bad)} check(s) came out wrong: {'; '.join(bad)} ({where})"
+        return f"NOT CERTIFIED: {len(open_)} check(s) undecided, e.g. {open_[0]!r} ({where})"
+
+    def table(self) -> str:
+        """A readable table: check, expected, holds, abbreviated residual, time; the claim below."""
+        w = max(len(c.name) for c in self.checks)
+        kinds = [c.evidence for c in self.checks]
+        common = max(set(kinds), key=kinds.count)
+        lines = [f"{'check':<{w}}  {'expect':<6}  {'holds':<9}  {'residual':<24}  {'time':>7}"]
+        for c in self.checks:
+            holds = {True: "true", False: "false", None: "undecided"}[c.holds]
+            mark = "" if c.passed else "  <-- " + ("UNDECIDED" if c.holds is None else "WRONG")
+            lines.append(f"{c.name:<{w}}  {str(c.expected).lower():<6}  {holds:<9}  "
+                         f"{abbreviate(c.residual):<24}  {c.seconds:>6.3f}s{mark}")
+            lines.append(f"    {c.claim}" + (f" [{c.detail}]" if c.detail else "")
+                         + (f" (evidence: {c.evidence})" if c.evidence != common else ""))
+        lines.append(f"evidence, unless stated: {common}")
+        return "\n".join(lines)
+
+    def to_json(self) -> dict:
+        from .cli import system_json
+
+        return {"system": system_json(self.system), "x0": [str(t) for t in self.x0],
+                "eps": str(self.eps), "steps": self.steps, "arith": self.arith,
+                "signs": list(self.signs), "valid": self.valid, "verdict": self.verdict(),
+                "seconds": self.seconds, "height_bits": self.height_bits, "versions": self.versions,
+                "checks": [c.to_json() for c in self.checks]}
+
+
+def abbreviate(text: str, width: int = 24) -> str:
+    """``text`` cut to ``width`` characters, saying how long it was."""
+    if len(text) <= width:
+        return text
+    tail = f"…({len(text)} ch)"
+    return text[:width - len(tail)] + tail
+
+
+# --- deciding equalities over a context ----------------------------------------
+
+
+def evidence_of(ar) -> str:
+    """The kind of evidence a check in ``ar`` gives: the context's own word
+    (e.g. "exact in Q(zeta_3)", "modular: …", "certified enclosure …"), else
+    "exact in Q" for exact contexts and "numeric (measured error)" for floating ones."""
+    return getattr(ar, "evidence", "exact in Q" if ar.exact else "numeric (measured error)")
+
+
+def _flatten(v):
+    if isinstance(v, (list, tuple)):
+        for t in v:
+            yield from _flatten(t)
+    else:
+        yield v
+
+
+def compare(ar, items, skip_undefined=True):
+    """Decide ``lhs == rhs`` for every ``(k, thunk)`` in ``items``, ``thunk() -> (lhs, rhs)``
+    (scalars or nested lists of the same shape; ``rhs = None`` means zero).
+
+    Returns ``(holds, residual, detail)``.  Exact (or rigorous) contexts stop at
+    the first nonzero difference and report it exactly; floating contexts
+    measure the largest |difference| and leave ``holds`` undecided.  A point
+    where a side is undefined (singular step, pole) is skipped and listed in
+    ``detail`` (``skip_undefined=False``: the error propagates); if no point
+    is left, the check is undecided.
+    """
+    decides = getattr(ar, "decides", ar.exact)
+    holds, worst, done, skipped, why = True, 0.0, [], [], ""
+    for k, thunk in items:
+        try:
+            lhs, rhs = thunk()
+        except (SingularStepError, PoleError) as exc:
+            if not skip_undefined:
+                raise
+            skipped.append(k)
+            why = why or str(exc)
+            continue
+        done.append(k)
+        left = list(_flatten(lhs))
+        right = [ar.zero] * len(left) if rhs is None else list(_flatten(rhs))
+        if len(left) != len(right):
+            raise ValueError(f"compare: shapes differ at x_{k}")
+        for a, b in zip(left, right):
+            d = a - b
+            if not decides:
+                worst = max(worst, ar.magnitude(d))
+                continue
+            z = ar.is_zero(d)
+            if z is False:
+                return False, ar.format(d), f"first nonzero residual at x_{k}"
+            if z is None:
+                holds = None
+    if not done:
+        return None, "n/a", f"undefined at every point: {why}"
+    span = f"{len(done)} orbit points" if len(done) != 1 else f"x_{done[0]}"
+    note = f"; skipped k = {skipped}, where undefined (first: {why})" if skipped else ""
+    if not decides:
+        return None, f"{worst:.3g}", f"max |difference| over {span} (measured, not decided){note}"
+    return holds, "0", f"checked at {span}{note}"
+
+
+def rank(ar, rows):
+    """Exact rank of a list of rows over ``ar`` (None if a pivot is undecided)."""
+    M = [list(r) for r in rows]
+    r = 0
+    for col in range(len(M[0]) if M else 0):
+        piv = None
+        for i in range(r, len(M)):
+            z = ar.is_zero(M[i][col])
+            if z is None:
+                return None
+            if z is False:
+                piv = i
+                break
+        if piv is None:
+            continue
+        M[r], M[piv] = M[piv], M[r]
+        for i in range(r + 1, len(M)):
+            m = M[i][col] / M[r][col]
+            M[i] = [a - m * b for a, b in zip(M[i], M[r])]
+        r += 1
+    return r
+
+
+def run_check(name, claim, ar, fn, expected=True) -> Check:
+    """Time ``fn() -> (holds, residual, detail)`` and wrap it in a :class:`Check`;
+    a singular step or an undecidable pivot makes it undecided."""
+    t0 = time.perf_counter()
+    try:
+        holds, residual, detail = fn()
+    except (SingularStepError, UndecidedError, PoleError) as exc:
+        holds, residual, detail = None, "n/a", f"not evaluable: {exc}"
+    return Check(name, claim, expected, holds, residual, ar.name, time.perf_counter() - t0,
+                 evidence_of(ar), detail)
+
+
+# --- item generators (lazy, so a failing control stops early) -------------------
+
+
+def lazy_orbit(phi, x0, steps):
+    """x0, Φ(x0), … (steps + 1 points), computed on demand."""
+    x = phi.point(x0, "x0")
+    yield x
+    for k in range(1, steps + 1):
+        try:
+            x = phi.step(x)
+        except SingularStepError as exc:
+            raise exc.at_step(k) from None
+        yield x
+
+
+def conserved_items(integral, pts):
+    """(k, I(x_k) vs I(x_0)) for k >= 1."""
+    pts = iter(pts)
+    v0 = integral(next(pts))
+    for k, x in enumerate(pts, 1):
+        yield k, lambda x=x: (integral(x), v0)
+
+
+def commute_items(phi, psi, pts):
+    """(k, Φ(Ψ(x_k)) vs Ψ(x_{k+1})) along an orbit x_k of Φ (Ψ(x_k) computed once)."""
+    ys = {}
+
+    def y(k):
+        if k not in ys:
+            ys[k] = psi.step(pts[k])
+        return ys[k]
+
+    for k in range(len(pts) - 1):
+        yield k, lambda k=k: (phi.step(y(k)), y(k + 1))
+
+
+def commute_points_items(phi, psi, pts):
+    """(k, Φ(Ψ(x_k)) vs Ψ(Φ(x_k))) at the given points (for maps with unrelated orbits)."""
+    for k, x in enumerate(pts):
+        yield k, lambda x=x: (phi.step(psi.step(x)), psi.step(phi.step(x)))
+
+
+def reversible_items(phi_inv, pts):
+    """(k, Φ(x_{k+1}, −ε) vs x_k)."""
+    for k in range(len(pts) - 1):
+        yield k, lambda k=k: (phi_inv.step(pts[k + 1]), pts[k])
+
+
+def poisson_map_items(phi, Pi_at, pts, ks):
+    """(k, dΦ(x_k) Π(x_k) dΦ(x_k)ᵀ vs Π(x_{k+1})) for k in ``ks``."""
+    def sides(k):
+        D = phi.jacobian(pts[k])
+        return matmul(matmul(D, Pi_at(k)), transpose(D)), Pi_at(k + 1)
+
+    for k in ks:
+        yield k, lambda k=k: sides(k)
+
+
+def bracket(u, P, v):
+    """{F, G}_P = ∇Fᵀ P ∇G."""
+    Pv = matvec(P, v)
+    return sum((a * b for a, b in zip(u, Pv)), u[0] * 0)
+
+
+def jacobiator(ar, system, x, eps):
+    """All cyclic sums Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k."""
+    N = system.dim
+    vals, grads = jacobian(ar, lambda d, xd: [t for row in Pi(system, xd, eps, d) for t in row], list(x))
+    P = [vals[i * N:(i + 1) * N] for i in range(N)]
+    dP = lambda j, k: grads[j * N + k]  # noqa: E731  (∂_m Π_jk for m = 0..N-1)
+    out = []
+    for i in range(N):
+        for j in range(i + 1, N):
+            for k in range(j + 1, N):
+                out.append(sum((P[i][m] * dP(j, k)[m] + P[j][m] * dP(k, i)[m] + P[k][m] * dP(i, j)[m]
+                                for m in range(N)), ar.zero))
+    return out
+
+
+# --- the certificate ------------------------------------------------------------
+
+
+def default_signs(n: int, arith=None) -> list[str]:
+    """The involutions certified by default: every rational one except ±I (for n = 2:
+    '+-' = A and '-+' = −A) or, when ``arith`` contains ω = e^{2πi/n} (``cyclo:N`` with
+    n | N, ``gf:P`` with P ≡ 1 mod n), every one except ±I."""
+    if arith is not None and n >= 3 and expresses_omega(get_arith(arith), n):
+        return nontrivial_sign_patterns(n)
+    return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
+
+
+def expresses_omega(ar, n: int) -> bool:
+    """Whether ``ar`` can hold the entries of the non-rational involutions of size n."""
+    probe = "+-" + "+" * (n - 2)  # s_1 != s_{n-1}: not rational for n >= 3
+    try:
+        for t in involution_circulant_cyclotomic(n, probe):
+            ar.convert(t)
+    except (TypeError, ValueError, ArithmeticError):  # InputError is a ValueError
+        return False
+    return True
+
+
+def expressible_rank(n: int, signs) -> int:
+    """Dimension of the span of I and the involutions ``signs`` (= rank of their sign vectors)."""
+    ar = get_arith("fraction")
+    rows = [[Fraction(1)] * n] + [[Fraction(v) for v in parse_signs(s, n)] for s in signs]
+    return rank(ar, rows)
+
+
+def non_admissible_hessian(system):
+    """Hs with its (0, 0) entry raised by 1: the block X(a) is no longer cyclic Hankel."""
+    M = [list(r) for r in system.hessian]
+    M[0][0] += 1
+    return M
+
+
+class _Orbit:
+    """A Kahan map, its orbit and memoised quantities along it."""
+
+    def __init__(self, field, eps, ar, x0, steps):
+        self.phi = KahanMap(field, eps, ar)
+        self.phi_inv = KahanMap(field, -eps, ar)
+        self.pts = self.phi.orbit(x0, steps)
+        self._memo = {}
+
+    def memo(self, key, fn):
+        if key not in self._memo:
+            self._memo[key] = fn()
+        return self._memo[key]
+
+
+def _poisson_points(steps, poisson_points):
+    if poisson_points is None or poisson_points >= steps:
+        return list(range(steps))
+    return sorted({round(i * (steps - 1) / max(poisson_points - 1, 1)) for i in range(poisson_points)})
+
+
+def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=None,
+            poisson_points=None, progress=None, identities=None, prove=False) -> Certificate:
+    """Certify the theorems on the orbit of ``x0`` (defaults: the built-in system,
+    ``DEFAULT_X0``, ``DEFAULT_EPS``) in ``arith`` (default: fastest exact).
+
+    ``signs``: involutions for the associated fields (default:
+    :func:`default_signs` — the rational ones except ±I, or all but ±I when the
+    arithmetic contains ω = e^{2πi/n}).  ``poisson_points``: evaluate the Poisson-map checks at this many
+    evenly spread orbit points (default: all).  ``progress(name)`` is called
+    before each check.  A singular step of Φ_f or Φ_g raises
+    :class:`SingularStepError`.
+
+    Further evidence, appended as checks of their own kind: ``identities`` (a
+    ``gf:P`` name) adds the Schwartz–Zippel identity checks of
+    :func:`exact_khk.identities.liouville_identities` for every involution
+    (probabilistic, with a stated failure bound); ``prove=True`` adds the
+    symbolic proofs of :func:`exact_khk.proofs.prove_all` (n = 2 only).
+    """
+    t_start = time.perf_counter()
+    system = default_system() if system is None else system
+    n = system.n
+    ar = get_arith(arith)
+    x0 = parse_vector(DEFAULT_X0 if x0 is None else x0, "x0", system.dim)
+    eps = parse_rational(DEFAULT_EPS if eps is None else eps, "eps")
+    if eps == 0:
+        raise InputError("eps: the step size must be nonzero")
+    if not isinstance(steps, int) or steps < 1:
+        raise InputError(f"steps: expected a positive integer, got {steps!r}")
+    if poisson_points is not None and (not isinstance(poisson_points, int) or poisson_points < 1):
+        raise InputError(f"poisson_points: expected a positive integer, got {poisson_points!r}")
+    signs = default_signs(n, ar) if signs is None else [format_signs(parse_signs(s, n)) for s in signs]
+    signs = list(dict.fromkeys(signs))
+    if any(s in ("+" * n, "-" * n) for s in signs):
+        raise InputError("signs: ±I are not involutions of interest (K~ = ±H~); leave them out")
+    cyclotomic = [s for s in signs if not is_rational_pattern(n, s)]
+    if cyclotomic and not expresses_omega(ar, n):
+        raise InputError(f"signs: {cyclotomic[0]!r} is not a rational involution; it needs an arithmetic "
+                         f"containing omega = e^(2 pi i/{n}), e.g. --arith cyclo:{n}")
+    if prove and n != 2:
+        raise InputError(f"prove: symbolic proofs are available for n = 2 only (got n = {n})")
+    with ar.local():  # e.g. the working precision of a ball arithmetic
+        checks, heights = _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress)
+    if identities is not None:
+        from .identities import liouville_identities
+
+        if progress is not None:
+            progress("identities (Schwartz–Zippel)")
+        checks += [replace(r, name=f"identity: {r.name}")
+                   for r in liouville_identities(system, identities, trials=2, seed=0)]
+    if prove:
+        from .proofs import prove_all
+
+        if progress is not None:
+            progress("symbolic proofs")
+        checks += prove_all(system)
+    from .cli import library_versions
+
+    return Certificate(system, tuple(x0), eps, steps, ar.name, tuple(signs), tuple(checks),
+                       library_versions(), time.perf_counter() - t_start, heights)
+
+
+def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
+    """The checks of :func:`certify` (arguments already validated) and the orbit height."""
+    n = system.n
+    fields = {"f": system.field("f")} | {s: system.field("g", s, cyclotomic=True) for s in signs}
+    orbits = {key: _Orbit(fld, eps, ar, x0, steps) for key, fld in fields.items()}
+    integral = {"f": "H~"} | {s: f"K~[{s}]" for s in signs}
+    mapname = {"f": "Phi_f"} | {s: f"Phi_g[{s}]" for s in signs}
+    F = orbits["f"]
+    npts = steps + 1
+    checks = []
+
+    def add(name, claim, fn, expected=True):
+        if progress is not None:
+            progress(name)
+        checks.append(run_check(name, claim, ar, fn, expected))
+
+    def add_eq(name, claim, ks, sides, expected=True):  # sides(k) -> (lhs, rhs) at point k
+        add(name, claim, lambda: compare(ar, ((k, lambda k=k: sides(k)) for k in ks)), expected)
+
+    def value(key, orb, k):  # integral `key` at point k of orbit `orb`
+        return orb.memo(("I", key, k), lambda: Htilde(fields[key], orb.pts[k], eps, ar))
+
+    def grad(key, k):  # gradient of integral `key` at point k of the f-orbit
+        return F.memo(("grad", key, k), lambda: grad_Htilde(fields[key], F.pts[k], eps, ar))
+
+    def Pi_at(orb):
+        return lambda k: orb.memo(("Pi", k), lambda: Pi(system, orb.pts[k], eps, ar))
+
+    def q_grads(k):  # ∇q_l at point k of the f-orbit, l = 0..n-1
+        return jacobian(ar, lambda d, xd: q_coefficients(system, xd, d), F.pts[k])[1]
+
+    # 1. integrals: closed form = definition; conservation by every map
+    for key, orb in orbits.items():
+        add_eq(f"integral {integral[key]} (closed form = definition)",
+               f"{integral[key]}(x) by (tH 4) equals h(x, {mapname[key]}(x)) = (2 eps)^-1 x^T J((x+x~)/2)^-1 x~ "
+               f"at the {steps} points of the {mapname[key]} orbit",
+               range(steps), lambda k, key=key, orb=orb: (
+                   value(key, orb, k), htilde_definition(fields[key], orb.pts[k], eps, ar, orb.pts[k + 1])))
+    for ikey in orbits:
+        for mkey, orb in orbits.items():
+            add_eq(f"integral {integral[ikey]} conserved by {mapname[mkey]}",
+                   f"{integral[ikey]}(x_k) = {integral[ikey]}(x_0) for k = 1..{steps} along the {mapname[mkey]} orbit",
+                   range(1, npts), lambda k, ikey=ikey, orb=orb: (value(ikey, orb, k), value(ikey, orb, 0)))
+    # 2. commutation, 3. reversibility
+    for s in signs:
+        add(f"commutation Phi_f o Phi_g[{s}]",
+            f"Phi_f(Phi_g[{s}](x)) = Phi_g[{s}](Phi_f(x)) at the {steps} points x_k of the Phi_f orbit",
+            lambda s=s: compare(ar, commute_items(F.phi, orbits[s].phi, F.pts)))
+    for key, orb in orbits.items():
+        add(f"reversibility {mapname[key]}",
+            f"{mapname[key]}({mapname[key]}(x, eps), -eps) = x at the {steps} points of its orbit",
+            lambda orb=orb: compare(ar, reversible_items(orb.phi_inv, orb.pts)))
+    # 4. Poisson structure
+    ks = _poisson_points(steps, poisson_points)
+    subset = "every point" if len(ks) == steps else f"{len(ks)} of the {steps} points (k = {ks})"
+    add_eq("Poisson tensor Pi formula",
+           f"Pi = J - eps^2 J Hs J Hs J equals (1 - eps^2 q_0) J - eps^2 sum_(l>=1) q_l A^l J at the {npts} "
+           f"points of the Phi_f orbit",
+           range(npts), lambda k: (Pi_at(F)(k), Pi_from_q(system, F.pts[k], eps, ar)))
+    add_eq("Poisson tensor Pi Jacobi identity",
+           f"the cyclic sums of Pi_im d_m Pi_jk vanish at {subset} of the Phi_f orbit",
+           ks, lambda k: (jacobiator(ar, system, F.pts[k], eps), None))
+    for key, orb in orbits.items():
+        add(f"Poisson map {mapname[key]}",
+            f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) for {mapname[key]} at {subset} of its orbit",
+            lambda orb=orb: compare(ar, poisson_map_items(orb.phi, Pi_at(orb), orb.pts, ks)))
+    # 5. gradients and involution
+    add_eq("gradients of q_l: grad q_l = A^l grad q_0",
+           f"the exact gradients (dual numbers) of q_l = tr((A^T)^l (J Hs)^2)/(2n) satisfy grad q_l = "
+           f"A^l grad q_0 at the {npts} points of the Phi_f orbit",
+           range(npts), lambda k: (lambda g: (g[1:], [[g[0][i] for i in shift_index(n, l)]
+                                                      for l in range(1, n)]))(q_grads(k)))
+    for s in signs:
+        B = [[ar.convert(t) for t in row] for row in system.involution(s, cyclotomic=True)]
+        add_eq(f"integral gradients grad K~[{s}] = B grad H~",
+               f"grad K~[{s}] = B grad H~ (exact gradients) at the {npts} points of the Phi_f orbit",
+               range(npts), lambda k, s=s, B=B: (grad(s, k), matvec(B, grad("f", k))))
+        add_eq(f"involution {{H~,K~[{s}]}}_J",
+               f"grad H~^T J grad K~[{s}] = 0 at the {npts} points of the Phi_f orbit",
+               range(npts), lambda k, s=s: (bracket(grad("f", k), system.J(list(F.pts[k])), grad(s, k)), None))
+        add_eq(f"involution {{H~,K~[{s}]}}_Pi",
+               f"grad H~^T Pi grad K~[{s}] = 0 at the {npts} points of the Phi_f orbit",
+               range(npts), lambda k, s=s: (bracket(grad("f", k), Pi_at(F)(k), grad(s, k)), None))
+    # 6. independence
+    r_expr = expressible_rank(n, signs)
+    n_rational = len(divisor_classes(n))
+    over = (f"all n = {n} integrals are expressible in {ar.name}" if expresses_omega(ar, n) or n_rational == n
+            else f"over Q only {n_rational} of the n = {n} integrals are expressible (the others need Q(omega))")
+
+    def rank_fn(rows_at, expected):
+        def fn():
+            ranks = [rank(ar, rows_at(k)) if getattr(ar, "decides", ar.exact) else None for k in range(npts)]
+            if None in ranks:
+                return None, "n/a", "rank not decidable in this arithmetic"
+            bad = [k for k, r in enumerate(ranks) if r != expected]
+            if bad:
+                return False, f"rank {ranks[bad[0]]}", f"rank {ranks[bad[0]]} != {expected} at step {bad[0]}"
+            return True, f"rank {expected}", f"rank {expected} at all {npts} points"
+        return fn
+
+    add(f"rank of integral gradients ({', '.join(integral.values())})",
+        f"the gradients of the {len(integral)} integrals expressible here have rank {r_expr} "
+        f"(the dimension of their span) at every Phi_f orbit point; {over}",
+        rank_fn(lambda k: [grad(key, k) for key in orbits], r_expr))
+    add("rank of integral gradients A^i grad H~ (i < n)",
+        f"the gradients A^i grad H~ (i = 0..{n - 1}) of the n integrals H~_i have full rank n = {n} "
+        f"at every Phi_f orbit point",
+        rank_fn(lambda k: [[grad("f", k)[s] for s in shift_index(n, i)] for i in range(n)], n))
+    # 7. negative controls
+    ctrl = system.field("control")
+    phi_c = KahanMap(ctrl, eps, ar)
+    add("control: commutation with non-associated field",
+        f"[control, must fail] Phi_f commutes with the Kahan map of the control field "
+        f"({'A Hs' if n >= 3 else '(2I + A) Hs'}) at the points of the Phi_f orbit",
+        lambda: compare(ar, commute_points_items(F.phi, phi_c, F.pts)), expected=False)
+    add("control: integral H~ conserved by Phi_control",
+        "[control, must fail] H~ is conserved along the orbit of the control map",
+        lambda: compare(ar, conserved_items(lambda x: Htilde(fields["f"], x, eps, ar),
+                                            lazy_orbit(phi_c, x0, steps))), expected=False)
+    bad_field = system.field_from_hessian(non_admissible_hessian(system), "non-admissible")
+    add("control: integral H~ conserved for a non-admissible Hessian",
+        "[control, must fail] with Hs[0][0] raised by 1 (block X(a) not cyclic Hankel), the closed "
+        "form H~ is conserved by the Kahan map of J(x) Hs' x",
+        lambda: compare(ar, conserved_items(lambda x: Htilde(bad_field, x, eps, ar),
+                                            lazy_orbit(KahanMap(bad_field, eps, ar), x0, steps))),
+        expected=False)
+    rel = ar.convert(PERTURBATION if ar.exact else Fraction(2, 2 ** ar.prec))
+    how = "2^-60 relative" if ar.exact else "one ulp"
+    add("control: integral H~ at a perturbed point",
+        f"[control, must fail] H~ at x0 with its last coordinate perturbed by {how} equals "
+        f"H~(x_{steps}) on the orbit",
+        lambda: compare(ar, [(0, lambda: (Htilde(fields["f"], _perturb(ar, F.pts[0], rel), eps, ar),
+                                          value("f", F, steps)))]), expected=False)
+    return checks, orbit_height(ar, [p for orb in orbits.values() for p in orb.pts])
+
+
+def orbit_height(ar, pts):
+    """Largest bit length of a numerator or denominator on the points (None unless
+    the arithmetic is exact and rational)."""
+    from .cli import height_bits
+
+    if not ar.exact:
+        return None
+    try:
+        return max(height_bits(ar, t) for p in pts for t in p)
+    except TypeError:
+        return None
+
+
+def _perturb(ar, x, rel):
+    """x with its last coordinate multiplied by (1 + rel) (set to rel if it is 0)."""
+    last = x[-1]
+    new = rel if ar.is_zero(last) is True else last + last * rel
+    return tuple(x[:-1]) + (new,)
