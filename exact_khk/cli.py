@@ -24,7 +24,7 @@ from .parsing import parse_rational, parse_vector
 from .systems import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem, b0_signs,
                       random_point)
 
-COMMAND_MODULES = ["exact_khk.cli", "exact_khk.cli_certify", "exact_khk.cli_study"]
+COMMAND_MODULES = ["exact_khk.cli", "exact_khk.cli_certify", "exact_khk.cli_study", "exact_khk.cli_liouville"]
 
 
 class _Parser(argparse.ArgumentParser):

@@ -1,0 +1,262 @@
+"""cyclo:N — exact arithmetic in Q(ζ_N), involutions over Q(ω), Liouville integrability."""
+
+from fractions import Fraction
+
+import pytest
+
+from exact_khk import InputError, KahanMap, LiePoissonSystem, NotRationalError, get_arith
+from .conftest import EXACT
+from exact_khk.cyclo import CycloNumber, cyclotomic_field
+from exact_khk.invariants import grad_Htilde
+from exact_khk.identities import (integral_patterns, involution_patterns,
+                                  liouville_at_points)
+from exact_khk.invariants import Htilde
+from exact_khk.systems import (DEFAULT_X0, default_system, involution_circulant,
+                               involution_circulant_cyclotomic, rational_sign_patterns, random_point)
+
+# --- the field ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("N", [1, 2, 3, 4, 5, 6, 8, 12])
+def test_zeta_is_a_primitive_root_of_unity(N):
+    K = get_arith(f"cyclo:{N}")
+    z = K.gen
+    assert z ** N == 1
+    assert all(z ** k != 1 for k in range(1, N))
+    assert sum((z ** k for k in range(N)), K.zero) == (1 if N == 1 else 0)
+
+
+def test_field_arithmetic_and_printing():
+    K = get_arith("cyclo:3")
+    z = K.gen
+    assert K.format(z * z) == "-1 - z" and K.format(K(Fraction(1, 3)) - 2 * z / 3) == "1/3 - 2/3*z"
+    assert K.format(K.zero) == "0" and K.format(-z) == "-z" and str(z ** 2 * 3) == "-3 - 3*z"
+    a = (2 - z) / 7
+    assert a * (1 / a) == 1 and (a / a) == K.one and a - a == 0
+    assert K(Fraction(3, 4)) == Fraction(3, 4) and hash(K(Fraction(3, 4))) == hash(Fraction(3, 4))
+    assert len({K(2), K(2) + 0 * z, 2 * K.one}) == 1
+    i = get_arith("cyclo:4").gen
+    assert i * i == -1 and 1 / i == -i
+    with pytest.raises(ZeroDivisionError):
+        a / K.zero
+    with pytest.raises(ZeroDivisionError):
+        1 / (z - z)
+    with pytest.raises(TypeError):
+        K.to_fraction(z)
+    assert K.exact and K.is_zero(K.zero) and not K.is_zero(z)
+
+
+def test_embedding_between_cyclotomic_fields():
+    z3, K6 = get_arith("cyclo:3").gen, get_arith("cyclo:6")
+    assert K6(z3) == K6.gen ** 2                   # ζ_3 = ζ_6²
+    assert K6(z3) * K6.gen == K6.gen ** 3 == -1
+    assert z3 * K6.gen == K6.gen * z3 == -1 and z3 == K6.gen ** 2 and 1 / z3 - K6.gen ** 4 == 0
+    with pytest.raises(TypeError, match="cannot mix"):
+        z3 + get_arith("cyclo:4").gen
+    with pytest.raises(InputError, match="multiple of 3"):
+        get_arith("cyclo:4")(z3)
+    with pytest.raises(InputError, match="N >= 1"):
+        get_arith("cyclo:0")
+
+
+def test_non_rational_numbers_are_refused_by_rational_arithmetics():
+    z = get_arith("cyclo:5").gen
+    for name in ("fraction", "flint", "gmpy2", "float", "mp:64"):
+        with pytest.raises(NotRationalError, match="not rational"):
+            get_arith(name)(z + 1)
+        assert get_arith(name)(z - z + Fraction(1, 2)) == get_arith(name)(Fraction(1, 2))
+
+
+# --- involutions over Q(ω) ------------------------------------------------------------
+
+
+@pytest.mark.parametrize("n", range(2, 9))
+def test_every_sign_pattern_gives_an_involution_with_its_eigenvalues(n):
+    K = cyclotomic_field(n)
+    w = K.zeta_power(1)
+    rational = set(rational_sign_patterns(n))
+    for s in involution_patterns(n) + ["+" * n, "-" * n]:
+        alpha = involution_circulant_cyclotomic(n, s)
+        B = [[alpha[(j - i) % n] for j in range(n)] for i in range(n)]   # Σ α_k P^k
+        B2 = [[sum((B[i][k] * B[k][j] for k in range(n)), K.zero) for j in range(n)]
+              for i in range(n)]
+        assert all(B2[i][j] == int(i == j) for i in range(n) for j in range(n)), s
+        for j, sj in enumerate(1 if c == "+" else -1 for c in s):   # B v_j = s_j v_j
+            v = [w ** (j * k) for k in range(n)]
+            assert all(sum((B[r][k] * v[k] for k in range(n)), 0 * w) == sj * v[r] for r in range(n)), (s, j)
+        if s in rational:
+            assert alpha == involution_circulant(n, s)
+        else:
+            assert any(not a.is_rational() for a in alpha)
+
+
+def test_non_rational_field_needs_the_cyclotomic_flag():
+    s = LiePoissonSystem.random(5, 1)
+    with pytest.raises(NotRationalError):
+        s.field("g", "-+-++")
+    g = s.field("g", "-+-++", cyclotomic=True)
+    assert any(isinstance(t, CycloNumber) for row in g.hessian for t in row)
+    assert s.field("g", "-++++", cyclotomic=True) is s.field("g", "-++++")   # rational: unchanged
+    with pytest.raises(NotRationalError):
+        KahanMap(g, "1/10", "flint").step(random_point(5, 1))
+
+
+# --- exact regressions against an independent solver (SymPy's algebraic fields) -------
+
+
+def _sympy_step(system, signs, x, eps, N):
+    """Φ_g(x) by SymPy: B = Σ_j s_j Π_j built from its definition, g'(x) = J(x)M +
+    [J(e_k) y, 0] (MATH.md), and DomainMatrix.lu_solve over QQ<exp(2πi/N)>."""
+    from sympy import I, QQ, exp, pi
+    from sympy.polys.matrices import DomainMatrix
+
+    n = system.n
+    K = QQ.algebraic_field(exp(2 * pi * I / N))
+    z = K.from_sympy(exp(2 * pi * I / N))
+    w = z ** (N // n)
+    q = lambda t: K.from_sympy(t) if not isinstance(t, Fraction) else K(t.numerator) / K(t.denominator)  # noqa: E731
+    sg = [1 if c == "+" else -1 for c in signs]
+    Pc = [[sum((K(sg[j]) * w ** ((-j * ((c - r) % n)) % n) for j in range(n)), K.zero) / K(n)
+           for c in range(n)] for r in range(n)]
+    B = [[Pc[r % n][c % n] if (r < n) == (c < n) else K.zero for c in range(2 * n)] for r in range(2 * n)]
+    Hs = [[q(t) for t in row] for row in system.hessian]
+    M = (DomainMatrix(B, (2 * n, 2 * n), K) * DomainMatrix(Hs, (2 * n, 2 * n), K)).to_list()
+    X = [q(t) for t in x]
+    J = lambda v: [[v[(i + j) % n] if (i < n and j >= n) else (-v[(i + j) % n] if (i >= n and j < n) else K.zero)  # noqa: E731
+                    for j in range(2 * n)] for i in range(2 * n)]
+    Jx = DomainMatrix(J(X), (2 * n, 2 * n), K)
+    Md = DomainMatrix(M, (2 * n, 2 * n), K)
+    y = (Md * DomainMatrix([[t] for t in X], (2 * n, 1), K)).to_list()
+    D = (Jx * Md).to_list()
+    for k in range(n):
+        e = [K.one if i == k else K.zero for i in range(2 * n)]
+        col = (DomainMatrix(J(e), (2 * n, 2 * n), K) * DomainMatrix(y, (2 * n, 1), K)).to_list()
+        for i in range(2 * n):
+            D[i][k] += col[i][0]
+    L = [[(K.one if i == j else K.zero) - q(eps) * D[i][j] for j in range(2 * n)] for i in range(2 * n)]
+    sol = DomainMatrix(L, (2 * n, 2 * n), K).lu_solve(DomainMatrix([[t] for t in X], (2 * n, 1), K))
+    return [list(reversed([Fraction(int(c.numerator), int(c.denominator)) for c in sol[i, 0].element.to_list()]))
+            for i in range(2 * n)]
+
+
+@pytest.mark.parametrize("n, signs, N", [(3, "+-+", 3), (4, "+-++", 4), (5, "-+-++", 5), (3, "++-", 6)])
+def test_step_matches_sympy_algebraic_field(n, signs, N):
+    system = default_system() if n == 3 else LiePoissonSystem.random(n, seed=n)
+    x = DEFAULT_X0 if n == 3 else random_point(n, 2)
+    x = [Fraction(t) for t in x]
+    ar = get_arith(f"cyclo:{N}")
+    y = KahanMap(system.field("g", signs, cyclotomic=True), "1/10", ar).step(x)
+    expected = _sympy_step(system, signs, x, Fraction(1, 10), N)
+    got = [[Fraction(int(c.p), int(c.q)) for c in t.p.coeffs()] for t in y]
+    assert got == expected
+    assert any(len(c) > 1 for c in got)        # genuinely not rational
+
+
+def test_regression_values_in_q_zeta3():
+    # a fixed value (from the SymPy cross-check above), kept as an exact string
+    ar = get_arith("cyclo:3")
+    y = KahanMap(default_system().field("g", "+-+", cyclotomic=True), "1/10", ar).step(DEFAULT_X0)
+    assert ar.format(y[0]) == "8923780/9706347 - 1413800/1078483*z"
+
+
+# --- gradients: closed form against SymPy differentiation ------------------------------
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_grad_htilde_matches_symbolic_derivative(n):
+    import sympy as sp
+
+    system = LiePoissonSystem.random(n, seed=10 + n)
+    x = [Fraction(t) for t in random_point(n, 3)]
+    eps = Fraction(1, 3)
+    t = sp.Symbol("t")
+    Hs = sp.Matrix(system.hessian).applyfunc(sp.nsimplify)
+    expected = []
+    for k in range(2 * n):     # d/dt H̃(x + t e_k) at t = 0, one symbol only
+        pt = [sp.nsimplify(v) + (t if i == k else 0) for i, v in enumerate(x)]
+        J = sp.Matrix(system.J(pt))
+        R = sp.eye(2 * n) - sp.nsimplify(eps) ** 2 * (Hs * J) ** 2
+        H = (sp.Matrix(pt).T * R.LUsolve(Hs * sp.Matrix(pt)))[0]
+        expected.append(Fraction(str(sp.diff(H, t).subs(t, 0))))
+    assert grad_Htilde(system.field("f"), x, eps, "fraction") == expected
+
+
+# --- complete Liouville integrability, exact in Q(ζ_N) --------------------------------
+
+
+def _check(records):
+    assert [r.name for r in records] == ["conservation", "commutation", "gradients", "involutivity:J",
+                                         "involutivity:Pi", "rank", "control:commutation",
+                                         "control:conservation"]
+    for r in records:
+        assert r.passed, r
+    assert [r.holds for r in records if r.name.startswith("control")] == [False, False]
+    assert all(r.residual != "0" for r in records if r.name.startswith("control"))
+
+
+def test_paper_6d_example_with_b0_b1_b2():
+    """2n = 6: the three involutions B_0, B_1, B_2 (sign patterns; the printed 𝓑_1
+    block is the misprinted B_2 = B_{n-1}, MATH.md item 4) in Q(ζ_3) and Q(ζ_6)."""
+    system = default_system()
+    assert integral_patterns(3) == ["-++", "+-+", "++-"]
+    for N in (3, 6):
+        recs = liouville_at_points(system, DEFAULT_X0, "1/10", f"cyclo:{N}", steps=3,
+                                   patterns=integral_patterns(3))
+        _check(recs)
+        assert recs[0].evidence == f"exact in Q(zeta_{N}) at 4 orbit points"
+        assert recs[5].residual == "ranks [3, 3, 3, 3], n = 3"
+
+
+@pytest.mark.parametrize("n, pairs, steps", [(2, "all", 1), (3, "all", 1), (4, "all", 1), (5, "f", 0)])
+def test_liouville_exact_all_involutions(n, pairs, steps):
+    system = LiePoissonSystem.random(n, seed=n)
+    _check(liouville_at_points(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=steps, pairs=pairs))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [5, 6, 7, 8])
+def test_liouville_exact_all_involutions_large_n(n):
+    system = LiePoissonSystem.random(n, seed=n)
+    _check(liouville_at_points(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=0,
+                               pairs="all" if n <= 6 else "f"))
+
+
+def test_rational_arithmetic_keeps_rational_involutions():
+    # n = 4 in Q: only rational patterns; the full set of integrals needs cyclo:4
+    system = LiePoissonSystem.random(4, seed=4)
+    pats = [p for p in rational_sign_patterns(4) if p not in ("++++", "----")]
+    with pytest.raises(NotRationalError):
+        liouville_at_points(system, random_point(4, 1), "1/7", "flint", steps=0, patterns=pats)
+
+
+def test_integrals_are_exact_in_every_field_containing_omega():
+    system = default_system()
+    g = system.field("g", "+-+", cyclotomic=True)
+    vals = {N: Htilde(g, [get_arith(f"cyclo:{N}")(Fraction(t)) for t in DEFAULT_X0], "1/10", f"cyclo:{N}")
+            for N in (3, 6, 12)}
+    assert get_arith("cyclo:12")(vals[3]) == get_arith("cyclo:12")(vals[6]) == vals[12]
+
+
+@pytest.mark.parametrize("name", EXACT + ["cyclo:2", "cyclo:4", "gf:1000003"])
+def test_n2_liouville_in_every_exact_arithmetic(name):
+    """n = 2: all involutions are rational, so every exact arithmetic certifies the
+    claims, and the controls fail in each of them."""
+    system = LiePoissonSystem.random(2, seed=7)
+    _check(liouville_at_points(system, random_point(2, 3), "1/5", name, steps=2))
+
+
+# --- command line -----------------------------------------------------------------------
+
+
+def test_cli_liouville_cyclo(capsys):
+    import json
+
+    from exact_khk.cli import main
+
+    assert main(["liouville", "--arith", "cyclo:3", "--involutions", "basis", "--steps", "1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["ok"] and out["involutions"] == ["-++", "+-+", "++-"]
+    assert {r["name"]: r["holds"] for r in out["records"]}["control:commutation"] is False
+    assert all(r["evidence"] == "exact in Q(zeta_3) at 2 orbit points" for r in out["records"])
+    assert main(["liouville", "--arith", "flint", "--steps", "0"]) == 2
+    assert "--arith: flint cannot represent" in capsys.readouterr().err
