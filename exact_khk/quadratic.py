@@ -68,6 +68,10 @@ class QuadraticField:
             raise InputError("field: linear part and constant must have the dimension of the tensor")
         return cls(N, tuple(quad), lin, cst, label)
 
+    def terms(self) -> tuple:
+        """The quadratic terms ``quad`` (subclasses may build them on demand)."""
+        return self.quad
+
     @property
     def homogeneous(self) -> bool:
         """True when f is a homogeneous quadratic (no linear or constant part)."""
@@ -79,9 +83,9 @@ class QuadraticField:
         if hit is not None:
             return hit
         conv = ar.convert
-        fterms = [[(j, k, conv(c)) for (j, k), c in terms] for terms in self.quad]
+        fterms = [[(j, k, conv(c)) for (j, k), c in terms] for terms in self.terms()]
         jac = [[{} for _ in range(self.dim)] for _ in range(self.dim)]
-        for i, terms in enumerate(self.quad):
+        for i, terms in enumerate(self.terms()):
             for (j, k), c in terms:  # d/dx_j (c x_j x_k) = c x_k, and symmetrically
                 jac[i][j][k] = jac[i][j].get(k, 0) + c
                 jac[i][k][j] = jac[i][k].get(j, 0) + c
@@ -136,7 +140,7 @@ class QuadraticField:
             return hit
         N = self.dim
         jac = [[[Fraction(0)] * N for _ in range(N)] for _ in range(N)]
-        for i, terms in enumerate(self.quad):
+        for i, terms in enumerate(self.terms()):
             for (j, k), c in terms:
                 jac[i][j][k] += _as_fraction(c)
                 jac[i][k][j] += _as_fraction(c)

@@ -271,16 +271,9 @@ class LiePoissonSystem:
         n, N = self.n, self.dim
         if len(M) != N or any(len(r) != N for r in M):
             raise InputError(f"hessian: expected a {N}x{N} matrix")
-        # f_i = Σ_k x_k (J(e_k) M x)_i; (J(e_k) M)[i][l] = M[n + (k-i)%n][l] (i < n),
-        # and -M[(k-i')%n][l] for i = n + i'.
-        T = [[[0] * N for _ in range(N)] for _ in range(N)]
-        for k in range(n):
-            for i in range(n):
-                for l in range(N):
-                    T[i][k][l] = M[n + (k - i) % n][l]
-                    T[n + i][k][l] = -M[(k - i) % n][l]
-        base = QuadraticField.from_tensor(T, label=label)
-        return LiePoissonField(base.dim, base.quad, base.linear, base.const, label,
+        # The quadratic terms are built on first use (LiePoissonField.terms):
+        # the structured step never needs them, and for large n they are huge.
+        return LiePoissonField(N, None, tuple(() for _ in range(N)), tuple(0 for _ in range(N)), label,
                                system=self, hessian=tuple(tuple(r) for r in M))
 
     def field(self, kind: str = "f", signs=None, power: int = 0,
@@ -349,3 +342,26 @@ class LiePoissonField(QuadraticField):
     system: LiePoissonSystem = None
     hessian: tuple = ()
     signs: str | None = None
+
+    def terms(self) -> tuple:
+        """The quadratic terms of f(x) = J(x) M x, built once on first use:
+        f_i = Σ_{k<n} x_k (J(e_k) M x)_i with (J(e_k) M)[i][l] = M[n + (k-i)%n][l]
+        for i < n and −M[(k-i')%n][l] for i = n + i'."""
+        hit = self._cache.get("terms")
+        if hit is None:
+            n, N, M = self.system.n, self.dim, self.hessian
+            out = []
+            for i in range(N):
+                row, sign = (n + 0, 1) if i < n else (0, -1)
+                ii = i if i < n else i - n
+                acc = {}
+                for k in range(n):
+                    Mr = M[row + (k - ii) % n]
+                    for l in range(N):
+                        c = Mr[l]
+                        if c != 0:
+                            key = (min(k, l), max(k, l))
+                            acc[key] = acc.get(key, 0) + sign * c
+                out.append(tuple((key, c) for key, c in sorted(acc.items()) if c != 0))
+            hit = self._cache["terms"] = tuple(out)
+        return hit

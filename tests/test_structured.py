@@ -213,3 +213,34 @@ def test_structured_step_at_n_256():
     assert R.mul(a11, xu) + R.mul(a12, xv) == R.poly(reflect(z[:n]))
     assert R.mul(a21, xu) + R.mul(a22, xv) == R.poly(reflect(z[n:]))
     assert z != tuple(x)  # negative control: the step moved the point
+
+
+def test_large_n_structured_step_never_builds_the_dense_tensor():
+    """The Lie–Poisson field builds its (2n)^3 quadratic terms only on demand; the
+    structured step (auto for flint at n >= STRUCTURED_MIN_N) never needs them."""
+    from exact_khk.systems import random_point
+
+    s = LiePoissonSystem.random(32, 3)
+    fld = s.field("f")
+    phi = KahanMap(fld, "1/10", "flint")
+    assert phi.structure is not None
+    x = random_point(32, 3)
+    y = phi.step(x)
+    assert "terms" not in fld._cache
+    # the result satisfies the equivalent form Φ = (I + ε f'(Φ)) x, which does build them
+    ar = phi.arith
+    Jy = fld.jacobian(ar, y)
+    xs = [ar(t) for t in x]
+    assert "terms" in fld._cache
+    assert list(y) == [xs[i] + phi.eps * sum(Jy[i][j] * xs[j] for j in range(64)) for i in range(64)]
+
+
+@pytest.mark.slow
+def test_exact_orbit_at_n_256_is_reversible():
+    """Two exact steps at n = 256 through the public API (about 40 s), undone exactly."""
+    from exact_khk.systems import random_point
+
+    s = LiePoissonSystem.random(256, 1)
+    phi = KahanMap(s.field("f"), "1/10", "flint")
+    pts = phi.orbit(random_point(256, 1), 2)
+    assert phi.inverse(pts[2]) == pts[1] and phi.inverse(pts[1]) == pts[0]
