@@ -35,11 +35,17 @@ python-flint ``fmpz_mat.solve``, or Bareiss elimination for gmpy2; ``fraction``
 is the plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
 by the DFT for ``float``/``mp:P``); ``'auto'`` (default) takes the structured
-path for Lie–Poisson fields whose Hessian blocks are cyclic Hankel when
-python-flint is installed, the arithmetic is ``flint``, ``float`` or ``mp:P``
-(``gmpy2`` and ``fraction`` may ask for it explicitly), and n ≥
-:data:`STRUCTURED_MIN_N` (the measured crossover, docs/benchmarks.md);
-otherwise dense.
+path for exact ``flint`` steps of Lie–Poisson fields whose Hessian blocks are
+cyclic Hankel when n ≥ :data:`STRUCTURED_MIN_N` (the crossover measured along
+orbits, docs/benchmarks.md); otherwise dense.  ``gmpy2`` and ``fraction`` may
+ask for the structured path explicitly.
+
+Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
+results are what p-bit arithmetic gives.  ``method='structured'`` with them
+computes each step by the DFT in ball arithmetic at p + guard bits and rounds
+the result into the arithmetic: far faster for large n (float at n = 4096 in a
+fraction of a second) and *more* accurate than a p-bit elimination, so it does
+not model p-bit rounding.
 
 >>> dense, fast = (KahanMap(sys3.field("f"), "1/10", "flint", method=m) for m in ("dense", "structured"))
 >>> fast.step(y) == dense.step(y)
@@ -59,12 +65,11 @@ from .parsing import parse_rational
 
 METHODS = ("auto", "dense", "structured")
 
-#: smallest n for which ``method='auto'`` takes the structured path, for exact
-#: and floating arithmetics.  Measured crossovers (docs/benchmarks.md): along
-#: exact orbits the dense fmpz_mat solve keeps up until n ≈ 16–32 (both
-#: solvers' cost is then dominated by p-adic lifting, which the 2×2 form does
-#: not shrink); the DFT step wins from n = 3.
-STRUCTURED_MIN_N = {"exact": 24, "floating": 3}
+#: smallest n for which ``method='auto'`` takes the structured path (exact
+#: flint steps only).  Measured crossover (docs/benchmarks.md): along exact
+#: orbits the dense fmpz_mat solve keeps up until n ≈ 16–32 (both solvers'
+#: cost is then dominated by p-adic lifting, which the 2×2 form does not shrink).
+STRUCTURED_MIN_N = {"exact": 24}
 
 
 def as_point(ar, x, dim: int, name: str = "x"):
@@ -264,10 +269,8 @@ def _choose_structure(field, ar, method):
             raise InputError("method: 'structured' needs python-flint, a Lie–Poisson field whose "
                              "Hessian blocks are cyclic Hankel, and a rational, float or mp:P arithmetic")
         return st
-    if st is None or (ar.exact and ar.name != "flint"):
-        return None
-    if st.n < STRUCTURED_MIN_N["exact" if ar.exact else "floating"]:
-        return None
+    if st is None or ar.name != "flint" or st.n < STRUCTURED_MIN_N["exact"]:
+        return None  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
     return st
 
 

@@ -52,8 +52,6 @@ from .kahan import KahanMap
 from .parsing import parse_rational, parse_vector
 from .systems import b0_signs
 
-# mp:4096 is left out until kahan.py's warning threshold 2.0 ** (prec / 2) stops
-# overflowing for prec > 2046 (reported); ball:4096 covers the high end.
 DEFAULT_ARITHS = ("float", "mp:53", "mp:64", "mp:113", "mp:256", "mp:1024", "mp:4096",
                   "ball:64", "ball:256", "ball:1024", "ball:4096")
 LOG10_2 = math.log10(2)

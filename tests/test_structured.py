@@ -129,14 +129,15 @@ def test_dft_step_within_rigorous_bound(name):
 
 
 def test_dft_step_through_kahanmap_matches_dense_float():
-    """The auto-chosen DFT step and the dense float LU agree within the dense step's
-    first-order bound (3N·ρ·κ₁·u·|z|, ρ ≤ 4 here), since the DFT step is within rounding."""
+    """The DFT step (method='structured') and the dense float LU agree within the dense
+    step's first-order bound (3N·ρ·κ₁·u·|z|, ρ ≤ 4 here), since the DFT step is within rounding."""
     s = LiePoissonSystem.random(6, seed=1)
     fld = s.field("g")
     x = _point(random.Random(1), 6)
-    fast = KahanMap(fld, "1/10", "float")
+    fast = KahanMap(fld, "1/10", "float", method="structured")
     assert fast.structure is not None
-    dense = KahanMap(fld, "1/10", "float", method="dense")
+    dense = KahanMap(fld, "1/10", "float")
+    assert dense.structure is None  # auto: floating arithmetic stays genuine p-bit arithmetic
     z1, z2 = fast.step(x), dense.step(x)
     M = KahanMap(fld, "1/10", "fraction").system_matrix([Fraction(t) for t in x])
     from exact_khk.linalg import identity, norm1, solve
@@ -173,7 +174,8 @@ def test_auto_choice_and_fallbacks():
     assert KahanMap(big.field("g"), "1/3", "fraction").structure is None  # the reference stays dense
     assert KahanMap(small.field("f"), "1/3", "flint").structure is None
     assert KahanMap(small.field("f"), "1/3", "float").structure is None
-    assert KahanMap(LiePoissonSystem.random(3, 1).field("f"), "1/3", "mp:100").structure is not None
+    assert KahanMap(big.field("f"), "1/3", "mp:100").structure is None  # floating: dense unless asked
+    assert KahanMap(big.field("f"), "1/3", "mp:100", method="structured").structure is not None
     # a generic quadratic field, and a Hessian whose blocks are not cyclic Hankel: dense
     generic = QuadraticField.from_tensor([[[0, 1], [0, 0]], [[1, 0], [0, 0]]])
     assert KahanMap(generic, "1/3", "flint").structure is None
