@@ -1,0 +1,109 @@
+"""The p-adic division in Z[t]/(tⁿ − 1) behind the structured exact step
+(:meth:`exact_khk.circulant.CirculantRing.solve`), against python-flint's dense
+``fmpz_mat.solve`` of the n×n circulant system (an independent algorithm)."""
+
+import random
+from math import prod
+
+import pytest
+
+flint = pytest.importorskip("flint")
+
+from exact_khk.circulant import LIFT_PRIMES, CirculantRing, rational_reconstruction  # noqa: E402
+from exact_khk.linalg import SingularMatrix  # noqa: E402
+
+
+def _poly(rng, n, bits):
+    return flint.fmpz_poly([rng.randint(-2 ** bits, 2 ** bits) for _ in range(n)])
+
+
+def _as_rational(W, delta):
+    return [flint.fmpq_poly(w) / delta for w in W]
+
+
+def _check(R, d, rhs):
+    W, delta = R.solve(d, rhs)
+    assert delta > 0
+    for w, r in zip(W, rhs):
+        assert R.mul(d, w) == r * delta  # the defining equation, exactly
+    ref_W, ref_delta = R._solve_dense(d, rhs)
+    assert _as_rational(W, delta) == _as_rational(ref_W, ref_delta)
+    return W, delta
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 8, 12, 17])
+def test_solve_equals_dense_circulant_solve(n):
+    rng = random.Random(n)
+    R = CirculantRing(n)
+    checked = 0
+    for bits in (1, 8, 64, 300):
+        for _ in range(3):
+            d = _poly(rng, n, bits)
+            if d.gcd(R._zmodulus).degree() != 0:
+                continue  # not a unit: covered below
+            _check(R, d, [_poly(rng, n, bits), _poly(rng, n, rng.randint(1, 2 * bits))])
+            checked += 1
+    assert checked >= 8
+
+
+def test_precision_search_does_not_depend_on_the_hint():
+    """The starting precision is a hint (the last answer's height); a hint far too
+    small or too large changes the work, not the answer."""
+    rng = random.Random(7)
+    n = 6
+    d, rhs = _poly(rng, n, 40), [_poly(rng, n, 40), _poly(rng, n, 5)]
+    answers = []
+    for ratio in (0.0, 1.0, 1e9):
+        R = CirculantRing(n)
+        R.height_ratio = ratio
+        answers.append(_as_rational(*_check(R, d, rhs)))
+    assert answers[0] == answers[1] == answers[2]
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 6])
+def test_non_units_raise(n):
+    R = CirculantRing(n)
+    t = flint.fmpz_poly([0, 1])
+    rhs = [flint.fmpz_poly([1, 2]), flint.fmpz_poly([3])]
+    singular = [flint.fmpz_poly([0]), R.mul(t - 1, flint.fmpz_poly([5, -2, 7]))]  # d(1) = 0
+    if n % 2 == 0:
+        singular.append(t + 1)  # d(−1) = 0
+    for d in singular:
+        with pytest.raises(SingularMatrix):
+            R.solve(d, rhs)
+        with pytest.raises(ZeroDivisionError):  # control: the dense solve agrees it is singular
+            R._solve_dense(d, rhs)
+
+
+def test_units_that_are_not_units_mod_the_lifting_primes():
+    """d = t − 1 + c is a unit of Q[t]/(tⁿ − 1) (d(ω) = ω − 1 + c ≠ 0) but not mod any
+    prime dividing c: the next prime is used, and past the last one the dense solve."""
+    n = 5
+    R = CirculantRing(n)
+    t = flint.fmpz_poly([0, 1])
+    rhs = [flint.fmpz_poly([1, -4, 2, 0, 9])]
+    for c in (LIFT_PRIMES[0], LIFT_PRIMES[0] * LIFT_PRIMES[1], prod(LIFT_PRIMES)):
+        _check(R, t - 1 + c, rhs)
+
+
+def test_symmetric_mod():
+    rng = random.Random(3)
+    R = CirculantRing(5)
+    for _ in range(300):
+        m = flint.fmpz(rng.choice([2, 3, 7, rng.getrandbits(80) + 2]))
+        cs = [rng.randint(-5 * int(m), 5 * int(m)) for _ in range(5)]
+        got = R.symmetric_mod(flint.fmpz_poly(cs), m)
+        half = int(m) // 2
+        assert [int(got[i]) for i in range(5)] == [(c + half) % int(m) - half for c in cs]
+
+
+def test_rational_reconstruction():
+    rng = random.Random(5)
+    m = flint.fmpz(LIFT_PRIMES[0]) ** 3
+    limit = int((m // 2).isqrt())
+    for _ in range(200):
+        num, den = rng.randint(-limit, limit), rng.randint(1, limit)
+        g = flint.fmpz(num).gcd(den)
+        num, den = num // int(g), den // int(g)
+        a = num * pow(den, -1, int(m)) % int(m)
+        assert rational_reconstruction(flint.fmpz(a), m) == (num, den)
