@@ -123,7 +123,13 @@ class IntegerKernel:
     ``split(v)`` → (integers, common denominator); ``tensor(rows)`` stores a
     constant integer matrix (sparse rows here); ``contract(W, w)`` → W·w as a
     flat list; ``solve(M, B)`` → rows of rationals (:func:`~exact_khk.linalg.bareiss_solve`).
-    Subclassed for python-flint, whose ``fmpz_mat`` does all three in C.
+
+    The dense Kahan step works on *columns* of rationals in the kernel's own
+    form: ``column(x)`` makes one from a sequence, ``values(col)`` gives the
+    tuple back, ``clear(col)`` is [xi, dx] (x = xi/dx), ``square(V, v)`` the
+    N×N matrix with vec = V·v, ``product(R, v)`` the column R·v and
+    ``solve_column(M, b)`` the column M⁻¹b.  Subclassed for python-flint,
+    whose ``fmpz_mat``/``fmpq_mat`` do all of these in C.
     """
 
     def __init__(self, name, make, num, den, gcd):
@@ -150,6 +156,26 @@ class IntegerKernel:
         Y, d = bareiss_solve(M, B)
         return [[self.make(y, d) for y in row] for row in Y]
 
+    def column(self, x):
+        return list(x)
+
+    def values(self, col):
+        return tuple(col)
+
+    def clear(self, col):
+        xi, d = self.split(col)
+        return xi + [d]
+
+    def square(self, V, v):
+        flat, N = self.contract(V, v), len(v) - 1
+        return [flat[i * N:(i + 1) * N] for i in range(N)]
+
+    def product(self, R, v):
+        return [[t] for t in self.contract(R, v)]
+
+    def solve_column(self, M, b):
+        return [row[0] for row in self.solve(M, b)]
+
 
 class FlintKernel(IntegerKernel):
     """:class:`IntegerKernel` on python-flint ``fmpz_mat`` (solve: ``fmpz_mat.solve``)."""
@@ -168,6 +194,27 @@ class FlintKernel(IntegerKernel):
         X = self.flint.fmpz_mat(M).solve(self.flint.fmpz_mat(B))
         m, flat = X.ncols(), X.entries()
         return [flat[i * m:(i + 1) * m] for i in range(X.nrows())]
+
+    # columns are N×1 fmpq_mat: numer_denom() clears denominators in C
+    def column(self, x):
+        return self.flint.fmpq_mat(len(x), 1, x)
+
+    def values(self, col):
+        return tuple(col.entries())
+
+    def clear(self, col):
+        xi, d = col.numer_denom()
+        return self.flint.fmpz_mat(xi.nrows() + 1, 1, xi.entries() + [d])
+
+    def square(self, V, v):
+        N = v.nrows() - 1
+        return self.flint.fmpz_mat(N, N, (V * v).entries())
+
+    def product(self, R, v):
+        return R * v
+
+    def solve_column(self, M, b):
+        return M.solve(b)
 
 
 class RationalArith(Arith):

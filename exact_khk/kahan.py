@@ -36,9 +36,11 @@ is the plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
 by the DFT for ``float``/``mp:P``); ``'auto'`` (default) takes the structured
 path for exact ``flint`` steps of Lie–Poisson fields whose Hessian blocks are
-cyclic Hankel when n ≥ :data:`STRUCTURED_MIN_N` (the crossover measured along
-orbits, docs/benchmarks.md); otherwise dense.  ``gmpy2`` and ``fraction`` may
-ask for the structured path explicitly.
+cyclic Hankel when n ≥ 16, and for 4 ≤ n < 16 once the point's height reaches
+:data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers measured
+along orbits, docs/benchmarks.md); otherwise dense.  Both paths give the same
+rational point.  ``gmpy2`` and ``fraction`` may ask for the structured path
+explicitly.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
 results are what p-bit arithmetic gives.  ``method='structured'`` with them
@@ -65,16 +67,21 @@ from .parsing import parse_rational
 
 METHODS = ("auto", "dense", "structured")
 
-#: smallest n for which ``method='auto'`` takes the structured path (exact
-#: flint steps only).  Measured crossover (docs/benchmarks.md): along exact
-#: orbits the dense fmpz_mat solve keeps up until n ≈ 16–32 (both solvers'
-#: cost is then dominated by p-adic lifting, which the 2×2 form does not shrink).
-STRUCTURED_MIN_N = {"exact": 24}
+#: ``method='auto'`` for exact flint steps: structured for n ≥ ``["exact"]``;
+#: for ``["exact_tall"]`` ≤ n < ``["exact"]`` structured once the point's height
+#: (bits of its largest numerator or denominator) reaches
+#: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
+#: orbits (docs/benchmarks.md): n = 4 at ≈ 700 bits, n = 8 at ≈ 600 bits,
+#: n = 16 from the start; at n = 2, 3 the dense fmpz_mat solve stays ahead.
+STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
+STRUCTURED_MIN_BITS = 1024
 
 
 def as_point(ar, x, dim: int, name: str = "x"):
     """Convert a point (strings, ints, Fractions, backend rationals, or elements
     of ``ar``) into a tuple of elements of ``ar``; checks the dimension."""
+    if ar.exact and type(x) is tuple and len(x) == dim and all(type(t) is type(ar.zero) for t in x):
+        return x  # already a point of ar (e.g. a previous step's result)
     try:
         coords = list(x)
     except TypeError:
@@ -89,6 +96,8 @@ def as_point(ar, x, dim: int, name: str = "x"):
             out.append(t)
         else:
             out.append(ar.convert(parse_rational(t, f"{name}[{i}]")))
+        if not ar.exact and not ar.is_finite(out[-1]):
+            raise InputError(f"{name}[{i}]: expected a finite number, got {t!r}")
     return tuple(out)
 
 
@@ -103,16 +112,18 @@ class KahanMap:
     the arithmetic; ``arith`` a name (see :func:`exact_khk.arith.get_arith`) or
     context, default the fastest exact one; ``method`` one of :data:`METHODS`
     (see the module docstring).  ``structure`` is the
-    :class:`~exact_khk.circulant.CirculantStructure` in use, or None (dense).
+    :class:`~exact_khk.circulant.CirculantStructure` the step may use, or None
+    (dense); ``dense_below`` the point height in bits under which an exact
+    step stays dense anyway (0: always structured).
     """
 
-    method, structure = "dense", None  # for maps built without __init__
+    method, structure, dense_below = "dense", None, 0  # for maps built without __init__
 
     def __init__(self, field, eps, arith=None, method="auto"):
         self.field = field
         self.arith = ar = get_arith(arith)
         self.method = method
-        self.structure = _choose_structure(field, ar, method)
+        self.structure, self.dense_below = _choose_structure(field, ar, method)
         if _is_element(ar, eps):
             self.eps = eps
             self.eps_exact = ar.to_fraction(eps) if ar.rational else None
@@ -133,7 +144,7 @@ class KahanMap:
         """The same map with another step size (e.g. ``-eps`` for the inverse)."""
         out = KahanMap.__new__(KahanMap)
         out.field, out.arith, out.eps = self.field, self.arith, eps
-        out.method, out.structure = self.method, self.structure
+        out.method, out.structure, out.dense_below = self.method, self.structure, self.dense_below
         out.eps_exact = self.arith.to_fraction(eps) if self.arith.rational else None
         return out
 
@@ -191,33 +202,41 @@ class KahanMap:
         self._check_condition(z, cond, x, eps)
         return z
 
-    def _integer_step(self, x):
-        """Dense exact step over Z: q·den·dx·(I − εf'(x)) = W·w in one contraction,
-        then one fraction-free solve (python-flint ``fmpz_mat.solve`` or Bareiss)."""
-        ar, eps = self.arith, self.eps
-        K = ar.integers
-        W, den = self.field.integer_jacobian(K)
-        xi, dx = K.split(x)
-        p, c = K.num(eps), K.den(eps) * den
-        N = len(x)
-        flat = K.contract(W, [-p * t for t in xi] + [-p * dx, c * dx])
-        try:
-            X = K.solve([flat[i * N:(i + 1) * N] for i in range(N)], [[c * t] for t in xi])
-        except (SingularMatrix, ZeroDivisionError):
-            raise self._singular(x, eps) from None
-        return tuple(row[0] for row in X)
+    def _integer_steps(self, x):
+        """Dense exact steps over Z from the point ``x`` (endless iterator).
+
+        The state is a kernel column (python-flint: an fmpq_mat); with v = [xi, dx]
+        (x = xi/dx), D·(I − εf'(x)) and D·((I + εL)x + 2εc) are the contractions
+        V·v and R·v (:meth:`~exact_khk.quadratic.QuadraticField.integer_system`),
+        then one fraction-free solve (``fmpz_mat.solve``, or Bareiss for gmpy2).
+        """
+        K, eps = self.arith.integers, self.eps
+        V, R = self.field.integer_system(K, K.num(eps), K.den(eps))
+        col = K.column(x)
+        while True:
+            v = K.clear(col)
+            try:
+                col = K.solve_column(K.square(V, v), K.product(R, v))
+            except (SingularMatrix, ZeroDivisionError):
+                raise self._singular(x, eps) from None
+            x = K.values(col)
+            yield x
 
     def step(self, x):
         """Φ_f(x, ε)."""
         with self.arith.local():  # e.g. the working precision of ball:P
             return self._step(self.point(x))
 
+    def _structured_at(self, x) -> bool:
+        """Whether the step at x takes the structured path."""
+        return self.structure is not None and (not self.dense_below or _height(self.arith, x) >= self.dense_below)
+
     def _step(self, x):
         ar, eps = self.arith, self.eps
-        if self.structure is not None:
+        if self._structured_at(x):
             return self._structured_step(x)
-        if self.field.homogeneous and ar.integers is not None:
-            return self._integer_step(x)
+        if ar.integers is not None:
+            return next(self._integer_steps(x))
         M = self.system_matrix(x)
         if self.field.homogeneous:
             X = self._solve(M, [[t] for t in x], x, eps)
@@ -226,6 +245,19 @@ class KahanMap:
         X = self._solve(M, [[t] for t in fx], x, eps)
         two_eps = eps + eps
         return tuple(xi + two_eps * row[0] for xi, row in zip(x, X))
+
+    def _steps(self, x):
+        """Φ(x), Φ²(x), … (endless); the dense exact path keeps its state as a
+        kernel column between steps instead of re-reading the point, until the
+        height makes the structured path pay (``method='auto'``)."""
+        if self.arith.integers is not None and not self._structured_at(x):
+            for x in self._integer_steps(x):
+                yield x
+                if self._structured_at(x):
+                    break
+        while True:
+            x = self._step(x)
+            yield x
 
     def inverse(self, x):
         """Φ_f(x, −ε) = Φ_f^{-1}(x, ε)."""
@@ -239,9 +271,11 @@ class KahanMap:
         if not isinstance(steps, int) or steps < 0:
             raise InputError(f"steps: expected a non-negative integer, got {steps!r}")
         pts = [self.point(x0, "x0")]
+        it = self._steps(pts[0])
         for k in range(1, steps + 1):
             try:
-                pts.append(self.step(pts[-1]))
+                with self.arith.local():
+                    pts.append(next(it))
             except SingularStepError as exc:
                 raise exc.at_step(k) from None
             if progress is not None:
@@ -256,22 +290,28 @@ class KahanMap:
             return self._solve(self.system_matrix(x), self.system_matrix(y, sign=-1), x, self.eps)
 
 
+def _height(ar, x) -> int:
+    """Bits of the largest numerator or denominator of a rational point."""
+    K = ar.integers
+    return max(max(abs(K.num(t)).bit_length(), K.den(t).bit_length()) for t in x)
+
+
 def _choose_structure(field, ar, method):
-    """The circulant structure the step will use, or None for the dense path."""
+    """(circulant structure the step may use or None, ``dense_below``)."""
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
     if method == "dense":
-        return None
+        return None, 0
     usable = circulant.flint is not None and (ar.rational or ar.fourier)
     st = circulant.circulant_structure(field) if usable else None
     if method == "structured":
         if st is None:
             raise InputError("method: 'structured' needs python-flint, a Lie–Poisson field whose "
                              "Hessian blocks are cyclic Hankel, and a rational, float or mp:P arithmetic")
-        return st
-    if st is None or ar.name != "flint" or st.n < STRUCTURED_MIN_N["exact"]:
-        return None  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
-    return st
+        return st, 0
+    if st is None or ar.name != "flint" or st.n < STRUCTURED_MIN_N["exact_tall"]:
+        return None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
+    return st, (0 if st.n >= STRUCTURED_MIN_N["exact"] else STRUCTURED_MIN_BITS)
 
 
 def kahan_step(field, x, eps, arith=None):

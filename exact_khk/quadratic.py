@@ -125,6 +125,26 @@ class QuadraticField:
             rows.append(row)
         return rows
 
+    def _rational_jacobian(self):
+        """(H, L, c, den): H[i][j][k] = ∂²f_i/∂x_j∂x_k, L, c as Fractions, and den
+        the common denominator of H and L (cached)."""
+        hit = self._cache.get("ratjac")
+        if hit is None:
+            N = self.dim
+            H = [[[Fraction(0)] * N for _ in range(N)] for _ in range(N)]
+            for i, terms in enumerate(self.terms()):
+                for (j, k), c in terms:
+                    H[i][j][k] += _as_fraction(c)
+                    H[i][k][j] += _as_fraction(c)
+            L = [[Fraction(0)] * N for _ in range(N)]
+            for i, row in enumerate(self.linear):
+                for j, c in row:
+                    L[i][j] += _as_fraction(c)
+            den = lcm(1, *(t.denominator for plane in H for row in plane for t in row),
+                      *(t.denominator for row in L for t in row))
+            hit = self._cache["ratjac"] = (H, L, [_as_fraction(c) for c in self.const], den)
+        return hit
+
     def integer_jacobian(self, kernel):
         """``(W, den)`` with vec(den·(I − ε f'(x)))-style contraction data, in ``kernel``'s form.
 
@@ -136,22 +156,40 @@ class QuadraticField:
         """
         key = ("intjac", kernel.name)
         hit = self._cache.get(key)
-        if hit is not None:
-            return hit
-        N = self.dim
-        jac = [[[Fraction(0)] * N for _ in range(N)] for _ in range(N)]
-        for i, terms in enumerate(self.terms()):
-            for (j, k), c in terms:
-                jac[i][j][k] += _as_fraction(c)
-                jac[i][k][j] += _as_fraction(c)
-        lin = [[Fraction(0)] * N for _ in range(N)]
-        for i, row in enumerate(self.linear):
-            for j, c in row:
-                lin[i][j] += _as_fraction(c)
-        den = lcm(1, *(t.denominator for plane in jac for row in plane for t in row),
-                  *(t.denominator for row in lin for t in row))
-        rows = [[int(t * den) for t in jac[i][j]] + [int(lin[i][j] * den), int(i == j)]
-                for i in range(N) for j in range(N)]
-        hit = (kernel.tensor(rows), den)
-        self._cache[key] = hit
+        if hit is None:
+            H, L, _, den = self._rational_jacobian()
+            N = self.dim
+            rows = [[int(t * den) for t in H[i][j]] + [int(L[i][j] * den), int(i == j)]
+                    for i in range(N) for j in range(N)]
+            hit = self._cache[key] = (kernel.tensor(rows), den)
+        return hit
+
+    def integer_system(self, kernel, p, q):
+        """``(V, R)``: the Kahan system at ε = p/q as two integer tensors in ``kernel``'s form.
+
+        For x = xi/dx (integers) and v = [xi, dx], with D = q·den·dx
+        (den: the common denominator of f's coefficients),
+
+        * ``V · v`` is vec(D·(I − ε f'(x))), row-major (N² rows);
+        * ``R · v`` is D·((I + εL)x + 2εc) (N rows),
+
+        so the Kahan step x̃ = (I − εf'(x))^{-1}((I + εL)x + 2εc) — equal to
+        x + 2ε(I − εf'(x))^{-1} f(x), since f'(x)x = 2Q(x) + Lx — is one
+        integer solve.  For homogeneous f, R · v = q·den·xi.  Cached for the
+        last few (kernel, ε).
+        """
+        p, q = int(p), int(q)
+        systems = self._cache.setdefault(("intsys", kernel.name), {})
+        hit = systems.get((p, q))
+        if hit is None:
+            H, L, c, den = self._rational_jacobian()
+            den = lcm(den, *(t.denominator for t in c))
+            N = self.dim
+            V = [[int(-p * den * t) for t in H[i][j]] + [int(den * (q * (i == j) - p * L[i][j]))]
+                 for i in range(N) for j in range(N)]
+            R = [[int(den * (q * (i == k) + p * L[i][k])) for k in range(N)] + [int(2 * p * den * c[i])]
+                 for i in range(N)]
+            if len(systems) >= 8:  # a scan over many ε must not grow the cache without bound
+                systems.pop(next(iter(systems)))
+            hit = systems[(p, q)] = (kernel.tensor(V), kernel.tensor(R))
         return hit

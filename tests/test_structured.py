@@ -19,7 +19,9 @@ from exact_khk import (InputError, KahanMap, LiePoissonSystem, NearSingularWarni
 from exact_khk.circulant import (circulant_structure, exact_htilde, exact_step, numeric_step,
                                  structure_from_system)
 from exact_khk.invariants import Htilde
-from exact_khk.kahan import STRUCTURED_MIN_N
+from exact_khk import circulant
+from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N, _height
+from exact_khk.systems import random_point
 
 from .conftest import EXACT
 
@@ -65,7 +67,7 @@ def test_htilde_structured_equals_dense():
         for fld in _fields(n)[:4]:
             x = [ar(t) for t in _point(rng, n)]
             eps = ar(Fraction(1, rng.randint(3, 12)))
-            assert exact_htilde(circulant_structure(fld), x, eps, ar) == Htilde(fld, x, eps, ar)
+            assert exact_htilde(circulant_structure(fld), x, eps, ar) == Htilde(fld, x, eps, ar, method="dense")
 
 
 def test_htilde_structured_is_conserved():
@@ -191,6 +193,26 @@ def test_auto_choice_and_fallbacks():
         KahanMap(odd, "1/3", "flint", method="structured")
     with pytest.raises(InputError, match="method"):
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
+
+
+def test_auto_switches_to_structured_with_height(monkeypatch):
+    """For 4 ≤ n < 16, ``auto`` steps dense from low points and structured from points
+    of height ≥ STRUCTURED_MIN_BITS; the orbit is the dense orbit exactly."""
+    n, steps = 6, 24  # heights 2, 40, 101, …, 1026 at step 20
+    fld = LiePoissonSystem.random(n, 1).field("f")
+    auto, dense = KahanMap(fld, "1/10", "flint"), KahanMap(fld, "1/10", "flint", method="dense")
+    assert auto.structure is not None and auto.dense_below == STRUCTURED_MIN_BITS
+    calls = []
+    real = circulant.exact_step
+    monkeypatch.setattr(circulant, "exact_step", lambda st, x, *a: calls.append(x) or real(st, x, *a))
+    pts = auto.orbit(random_point(n, 1), steps)
+    assert pts == dense.orbit(random_point(n, 1), steps)
+    tall = [p for p in pts[:-1] if _height(auto.arith, p) >= STRUCTURED_MIN_BITS]
+    assert 0 < len(tall) < steps  # the orbit crosses the threshold
+    assert calls == tall  # structured exactly from the tall points on
+    calls.clear()
+    assert auto.step(pts[0]) == pts[1] and calls == []
+    assert auto.step(pts[-2]) == pts[-1] and calls == [pts[-2]]
 
 
 def test_structured_step_at_n_256():
