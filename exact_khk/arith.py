@@ -298,6 +298,8 @@ class MPArith(Arith):
     def convert(self, value):
         if isinstance(value, self.ctx.mpf):
             return +value
+        if isinstance(value, float):  # its exact binary value, rounded (nan/inf kept)
+            return self.ctx.mpf(value)
         q = _as_fraction(value)
         return self.ctx.make_mpf(libmp.from_rational(q.numerator, q.denominator,
                                                      self.prec, libmp.round_nearest))

@@ -350,10 +350,11 @@ class CirculantRing:
 
 
 def rational_reconstruction(a, m):
-    """(num, den), den ≥ 0, with num ≡ a·den (mod m) and (num, den) a shortest
-    nonzero vector of the lattice {(x, y): x ≡ a·y mod m} (LLL on its 2×2
-    basis; in dimension 2 this is Lagrange–Gauss reduction, in C).  If a ≡ N/D
-    with |N|, D ≤ √(m/2), then N/D = num/den.
+    """(num, den), den ≥ 0, with num ≡ a·den (mod m): the first vector of an
+    LLL-reduced basis (python-flint, δ = 0.99) of the lattice
+    {(x, y): x ≡ a·y mod m}.  If a ≡ N/D (mod m) with |N|, D ≤ √m/4, then
+    num/den = N/D: LLL's first vector is within a factor √1.36 of the
+    shortest, and every vector independent of (N, D) is longer than m/|(N, D)|.
 
     >>> rational_reconstruction(5 * pow(7, -1, 1000003) % 1000003, 1000003)
     (5, 7)

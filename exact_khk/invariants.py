@@ -55,9 +55,9 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     Exact rational arithmetics with python-flint solve the 2n×2n system as a
     2×2 system over circulants (:func:`exact_khk.circulant.exact_htilde`) when
     the Hessian blocks are cyclic Hankel and n ≥ :data:`STRUCTURED_MIN_N`
-    (measured: n = 3, 8, 32 along orbits 4×, 50×, 500× faster than the dense
-    solve); the result is the same rational number.  ``method='dense'`` forces
-    the 2n×2n solve.
+    (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
+    40×, 160× faster than the dense solve); the result is the same rational
+    number.  ``method='dense'`` forces the 2n×2n solve.
     """
     ar = get_arith(arith)
     if not hasattr(field, "system") or field.system is None:

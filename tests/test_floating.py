@@ -98,3 +98,20 @@ def test_near_singular_float_step_warns_with_condition():
         KahanMap(s.field("f"), eps, "float").step(x)
     near = [w for w in rec if issubclass(w.category, NearSingularWarning)]
     assert near and near[0].message.condition > 2.0 ** 26
+
+
+@pytest.mark.parametrize("name", ["float", "mp:80"])
+def test_non_finite_coordinates_are_refused(name):
+    """NaN or ±inf in a point is bad input (named), not a 'singular step'."""
+    from exact_khk import InputError
+
+    ar = get_arith(name)
+    phi = KahanMap(default_system().field("f"), DEFAULT_EPS, name)
+    for bad in (float("nan"), float("inf"), -float("inf")):
+        x = list(phi.point(DEFAULT_X0))
+        x[2] = ar.convert(bad)
+        with pytest.raises(InputError, match=r"x\[2\]: expected a finite number"):
+            phi.step(tuple(x))
+        with pytest.raises(InputError, match=r"x0\[2\]"):
+            phi.orbit(x, 1)
+    assert all(ar.is_finite(t) for t in phi.step(DEFAULT_X0))  # control: a finite point steps
