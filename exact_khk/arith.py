@@ -120,16 +120,17 @@ class IntegerKernel:
     """Integer linear algebra behind a rational arithmetic: denominators are
     cleared once and systems are solved over Z (fraction-free).
 
-    ``split(v)`` → (integers, common denominator); ``tensor(rows)`` stores a
-    constant integer matrix (sparse rows here); ``contract(W, w)`` → W·w as a
-    flat list; ``solve(M, B)`` → rows of rationals (:func:`~exact_khk.linalg.bareiss_solve`).
+    ``split(v)`` → (integers, common denominator); ``solve(M, B)`` → rows of
+    rationals (:func:`~exact_khk.linalg.bareiss_solve`).
 
     The dense Kahan step works on *columns* of rationals in the kernel's own
     form: ``column(x)`` makes one from a sequence, ``values(col)`` gives the
-    tuple back, ``clear(col)`` is [xi, dx] (x = xi/dx), ``square(V, v)`` the
-    N×N matrix with vec = V·v, ``product(R, v)`` the column R·v and
-    ``solve_column(M, b)`` the column M⁻¹b.  Subclassed for python-flint,
-    whose ``fmpz_mat``/``fmpq_mat`` do all of these in C.
+    tuple back, ``clear(col)`` is v = (xi, dx) (x = xi/dx).  ``tensor(rows)``
+    stores a constant integer matrix W acting on [xi, dx] (sparse rows here),
+    ``apply(W, v)`` is W·[xi, dx], ``square(S, v)`` the N×N matrix with
+    vec = V·[xi, dx] (S = ``square_tensor(V)``), ``product(R, v)`` the column
+    R·[xi, dx] and ``solve_column(M, b)`` the column M⁻¹b.  Subclassed for
+    python-flint, whose ``fmpz_mat``/``fmpq_mat`` do all of these in C.
     """
 
     def __init__(self, name, make, num, den, gcd):
@@ -146,9 +147,9 @@ class IntegerKernel:
     def tensor(self, rows):
         return [[(k, c) for k, c in enumerate(row) if c] for row in rows]
 
-    def contract(self, W, w):
-        zero = w[0] * 0
-        return [sum((c * w[k] for k, c in row), zero) for row in W]
+    def apply(self, W, v):
+        zero = v[0] * 0
+        return [sum((c * v[k] for k, c in row), zero) for row in W]
 
     def solve(self, M, B):
         from .linalg import bareiss_solve
@@ -166,12 +167,23 @@ class IntegerKernel:
         xi, d = self.split(col)
         return xi + [d]
 
-    def square(self, V, v):
-        flat, N = self.contract(V, v), len(v) - 1
-        return [flat[i * N:(i + 1) * N] for i in range(N)]
+    def square_tensor(self, rows):
+        """The rows of vec(M) for an N×N matrix M = V·v (row-major), stored once
+        per distinct row with each entry's index into them: Kahan systems repeat
+        rows (a Lie–Poisson one has at most 4n distinct among its 4n²), and the dense
+        step then contracts only those."""
+        distinct, index = {}, []
+        for row in rows:
+            index.append(distinct.setdefault(tuple(row), len(distinct)))
+        return self.tensor(list(distinct)), index, math.isqrt(len(rows))
+
+    def square(self, S, v):
+        U, index, N = S
+        flat = self.apply(U, v)
+        return [[flat[k] for k in index[i * N:(i + 1) * N]] for i in range(N)]
 
     def product(self, R, v):
-        return [[t] for t in self.contract(R, v)]
+        return [[t] for t in self.apply(R, v)]
 
     def solve_column(self, M, b):
         return [row[0] for row in self.solve(M, b)]
@@ -185,17 +197,22 @@ class FlintKernel(IntegerKernel):
         super().__init__("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, lambda a, b: a.gcd(b))
 
     def tensor(self, rows):
-        return self.flint.fmpz_mat(rows)
+        """(W without its last column, that column or None if it is zero), so that
+        W·[xi, dx] is two products with the parts ``clear`` returns."""
+        fmpz_mat, last = self.flint.fmpz_mat, [r[-1] for r in rows]
+        return fmpz_mat([r[:-1] for r in rows]), fmpz_mat(len(rows), 1, last) if any(last) else None
 
-    def contract(self, W, w):
-        return (W * self.flint.fmpz_mat(len(w), 1, w)).entries()
+    def apply(self, W, v):
+        (Wx, wd), (xi, d) = W, v
+        return Wx * xi if wd is None else Wx * xi + wd * d
 
     def solve(self, M, B):
         X = self.flint.fmpz_mat(M).solve(self.flint.fmpz_mat(B))
         m, flat = X.ncols(), X.entries()
         return [flat[i * m:(i + 1) * m] for i in range(X.nrows())]
 
-    # columns are N×1 fmpq_mat: numer_denom() clears denominators in C
+    # columns are N×1 fmpq_mat: numer_denom() clears denominators in C and
+    # gives v = (xi as an N×1 fmpz_mat, dx)
     def column(self, x):
         return self.flint.fmpq_mat(len(x), 1, x)
 
@@ -203,15 +220,15 @@ class FlintKernel(IntegerKernel):
         return tuple(col.entries())
 
     def clear(self, col):
-        xi, d = col.numer_denom()
-        return self.flint.fmpz_mat(xi.nrows() + 1, 1, xi.entries() + [d])
+        return col.numer_denom()
 
-    def square(self, V, v):
-        N = v.nrows() - 1
-        return self.flint.fmpz_mat(N, N, (V * v).entries())
+    def square(self, S, v):
+        U, index, N = S
+        flat = self.apply(U, v).entries()
+        return self.flint.fmpz_mat(N, N, [flat[k] for k in index])
 
     def product(self, R, v):
-        return R * v
+        return self.apply(R, v)
 
     def solve_column(self, M, b):
         return M.solve(b)

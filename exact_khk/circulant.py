@@ -65,6 +65,13 @@ class CirculantStructure:
     n: int
     m: tuple  # ((m11, m12), (m21, m22)), each a tuple of n Fractions
 
+    def __hash__(self):  # computed once: every step looks the structure up in caches
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = hash((self.n, self.m))
+            object.__setattr__(self, "_hash", h)
+        return h
+
 
 def hankel_first_row(block):
     """w (as Fractions) if ``block[i][j] == w[(i + j) % n]`` for all i, j (a cyclic

@@ -292,6 +292,8 @@ class KahanMap:
 
 def _height(ar, x) -> int:
     """Bits of the largest numerator or denominator of a rational point."""
+    if hasattr(x[0], "height_bits"):  # python-flint fmpq: one call per coordinate
+        return max(t.height_bits() for t in x)
     K = ar.integers
     return max(max(abs(K.num(t)).bit_length(), K.den(t).bit_length()) for t in x)
 

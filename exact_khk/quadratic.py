@@ -145,32 +145,15 @@ class QuadraticField:
             hit = self._cache["ratjac"] = (H, L, [_as_fraction(c) for c in self.const], den)
         return hit
 
-    def integer_jacobian(self, kernel):
-        """``(W, den)`` with vec(den·(I − ε f'(x)))-style contraction data, in ``kernel``'s form.
-
-        Row ``i*dim + j`` of ``W`` is ``[den·∂²f_i/∂x_j∂x_k for k] + [den·L_ij, δ_ij]``
-        (integers, ``den`` the common denominator of the Jacobian's coefficients), so
-        for x = xi/dx and ε = p/q the integer matrix
-        ``q·den·dx·(I − ε f'(x)) = W · [−p·xi, −p·dx, q·den·dx]`` is one contraction
-        (see :class:`exact_khk.arith.IntegerKernel`).  Cached per kernel.
-        """
-        key = ("intjac", kernel.name)
-        hit = self._cache.get(key)
-        if hit is None:
-            H, L, _, den = self._rational_jacobian()
-            N = self.dim
-            rows = [[int(t * den) for t in H[i][j]] + [int(L[i][j] * den), int(i == j)]
-                    for i in range(N) for j in range(N)]
-            hit = self._cache[key] = (kernel.tensor(rows), den)
-        return hit
-
     def integer_system(self, kernel, p, q):
         """``(V, R)``: the Kahan system at ε = p/q as two integer tensors in ``kernel``'s form.
 
         For x = xi/dx (integers) and v = [xi, dx], with D = q·den·dx
         (den: the common denominator of f's coefficients),
 
-        * ``V · v`` is vec(D·(I − ε f'(x))), row-major (N² rows);
+        * ``V · v`` is vec(D·(I − ε f'(x))), row-major (N² rows; ``V`` is
+          stored by :meth:`~exact_khk.arith.IntegerKernel.square_tensor` and
+          ``kernel.square(V, v)`` gives the N×N matrix);
         * ``R · v`` is D·((I + εL)x + 2εc) (N rows),
 
         so the Kahan step x̃ = (I − εf'(x))^{-1}((I + εL)x + 2εc) — equal to
@@ -191,5 +174,5 @@ class QuadraticField:
                  for i in range(N)]
             if len(systems) >= 8:  # a scan over many ε must not grow the cache without bound
                 systems.pop(next(iter(systems)))
-            hit = systems[(p, q)] = (kernel.tensor(V), kernel.tensor(R))
+            hit = systems[(p, q)] = (kernel.square_tensor(V), kernel.tensor(R))
         return hit

@@ -47,6 +47,21 @@ def test_affine_field_is_not_homogeneous():
 
 
 @pytest.mark.parametrize("arith", FAST)
+def test_square_tensor_keeps_each_distinct_row_once(arith):
+    """The system's N² rows are stored once per distinct row: a Lie–Poisson field's
+    four circulant blocks leave at most 4n (n per block), and the count agrees
+    with the distinct rows of the Hessian itself."""
+    K = get_arith(arith).integers
+    for n in (2, 3, 5):
+        fld = LiePoissonSystem.random(n, seed=n).field("f")
+        H, L, _, _ = fld._rational_jacobian()
+        rows = {tuple(H[i][j]) + (int(i == j),) for i in range(2 * n) for j in range(2 * n)}
+        (_, index, N) = fld.integer_system(K, 1, 10)[0]
+        assert N == 2 * n and len(index) == N * N
+        assert max(index) + 1 == len(rows) <= 4 * n
+
+
+@pytest.mark.parametrize("arith", FAST)
 def test_integer_system_is_the_scaled_kahan_system(arith):
     """V·v = vec(D(I − εf'(x))) and R·v = D((I + εL)x + 2εc), D = q·den·dx, entry by entry
     against the Fraction system matrix and f(x) (for the affine field and a Lie–Poisson one)."""
