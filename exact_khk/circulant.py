@@ -210,7 +210,7 @@ class CirculantRing:
     def __init__(self, n):
         if flint is None:  # pragma: no cover
             raise ImportError("the structured exact step needs python-flint")
-        self.n, self._hankel = n, {}
+        self.n, self._hankel, self._cyclotomic = n, {}, []
         self.modulus = flint.fmpq_poly([-1] + [0] * (n - 1) + [1])
         self._zmodulus = flint.fmpz_poly([-1] + [0] * (n - 1) + [1])
         #: answer height / height of D at the last division: where the next
@@ -267,9 +267,10 @@ class CirculantRing:
         hr = max(r.height_bits() for r in rhs)
         adj_bits = int((n - 1) * (hd + norm_bits) + hr + norm_bits) + 1
         # two attempts with reconstruction, starting near the last answer's height
-        # relative to d (clamped: a hint from an unrelated division must not cost
-        # much), then the Cramer bound, which needs no reconstruction
-        bits = int(min(max(self.height_ratio, 0.5), 2.0) * hd * 1.05) + 64
+        # relative to d (≥ 0.5; an answer near the Cramer bound, as at random
+        # points, sends the next division straight to it), then the Cramer bound,
+        # which needs no reconstruction
+        bits = int(max(self.height_ratio, 0.5) * hd * 1.05) + 64
         k = 1
         for attempt in (bits, bits * 3 // 2):
             if 2 * attempt >= adj_bits:
@@ -283,7 +284,7 @@ class CirculantRing:
         j = -(-(adj_bits + 2) // p.bit_length())  # m > 2·|adj(C(d))·r|
         u, k = self._lift(d, u, k, p, j)
         m = p ** j
-        delta = abs(d.resultant(self._zmodulus))  # = |det C(d)|: δ·r/d is integral
+        delta = self.resultant(d)  # = |det C(d)|: δ·r/d is integral
         W = [self.symmetric_mod(self.mul(r, u % m) * delta, m) for r in rhs]
         if any(self.mul(d, w) != r * delta for w, r in zip(W, rhs)):  # pragma: no cover
             raise ArithmeticError("circulant solve: the Cramer-bound solution failed its check")
@@ -301,6 +302,17 @@ class CirculantRing:
             e = (self.mul(d % p ** k2, u) - 1) // pk % low
             u, k = u - pk * (self.mul(u, e) % low), k2
         return u, k
+
+    def resultant(self, d):
+        """|Res(d, tⁿ − 1)| = |det C(d)| as the product of |Res(d mod Φ_k, Φ_k)| over the
+        cyclotomic factors Φ_k of tⁿ − 1 (k | n): for tall d far faster than one
+        resultant with tⁿ − 1 (measured 1.2 s against 14 ms at n = 4 and 200 000 bits)."""
+        if not self._cyclotomic:
+            self._cyclotomic = [flint.fmpz_poly.cyclotomic(k) for k in range(1, self.n + 1) if self.n % k == 0]
+        out = flint.fmpz(1)
+        for phi in self._cyclotomic:
+            out *= (d % phi).resultant(phi)
+        return abs(out)
 
     def _remember(self, found, hd):
         W, delta = found

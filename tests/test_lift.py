@@ -107,3 +107,19 @@ def test_rational_reconstruction():
         num, den = num // int(g), den // int(g)
         a = num * pow(den, -1, int(m)) % int(m)
         assert rational_reconstruction(flint.fmpz(a), m) == (num, den)
+
+
+@pytest.mark.parametrize("n", [1, 2, 4, 6, 7, 12])
+def test_resultant_by_cyclotomic_factors(n):
+    """|Res(d, tⁿ − 1)| from the factors Φ_k equals python-flint's resultant with
+    tⁿ − 1 itself and the determinant of the circulant C(d) (both computed
+    directly); zero exactly for a non-unit."""
+    rng = random.Random(n)
+    R = CirculantRing(n)
+    modulus = flint.fmpz_poly([-1] + [0] * (n - 1) + [1])
+    for bits in (3, 80):
+        d = _poly(rng, n, bits)
+        C = flint.fmpz_mat(n, n, [d[(i - j) % n] for i in range(n) for j in range(n)])
+        assert R.resultant(d) == abs(d.resultant(modulus)) == abs(C.det())
+    # ∏_ω (1 + ω) = 1 − (−1)ⁿ over the n-th roots of unity (tⁿ − 1 at t = −1)
+    assert R.resultant(flint.fmpz_poly([1, 1])) == abs(1 - (-1) ** n)
