@@ -267,10 +267,12 @@ class CirculantRing:
         hr = max(r.height_bits() for r in rhs)
         adj_bits = int((n - 1) * (hd + norm_bits) + hr + norm_bits) + 1
         # two attempts with reconstruction, starting near the last answer's height
-        # relative to d (≥ 0.5; an answer near the Cramer bound, as at random
-        # points, sends the next division straight to it), then the Cramer bound,
-        # which needs no reconstruction
-        bits = int(max(self.height_ratio, 0.5) * hd * 1.05) + 64
+        # relative to d, then the Cramer bound, which needs no reconstruction.  The
+        # hint is capped at 2 (one from an unrelated division must not cost much)
+        # unless the bound is itself within 8·hd (small n): then an answer near the
+        # bound, as at random points, sends the next division straight to it
+        cap = max(2.0, adj_bits / hd) if adj_bits <= 8 * hd else 2.0
+        bits = int(min(max(self.height_ratio, 0.5), cap) * hd * 1.05) + 64
         k = 1
         for attempt in (bits, bits * 3 // 2):
             if 2 * attempt >= adj_bits:
