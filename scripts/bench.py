@@ -84,6 +84,7 @@ def timed_together(fns, min_total=0.5, max_reps=30, batch=0.005):
 
 def _rounds(fns, number, min_total, max_reps, batch):
     for k, fn in fns.items():
+        fn()  # warm-up: the first call may build caches (e.g. the integer system)
         t0 = time.perf_counter()
         fn()
         number[k] = max(1, int(batch / max(time.perf_counter() - t0, 1e-7)))
