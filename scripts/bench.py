@@ -209,6 +209,23 @@ def orbit_steps(ns, heights, log, steps=16):
     return rows
 
 
+def crossover(ns, heights, log):
+    """dense / structured step time at points of one exact orbit, by height: where
+    ``method='auto'`` should switch (the rule in :mod:`exact_khk.kahan`)."""
+    rows = []
+    for n in ns:
+        fld = LiePoissonSystem.random(n, seed=1).field("f")
+        st, de = (KahanMap(fld, EPS, "flint", method=m) for m in ("structured", "dense"))
+        x, cells = de.point(random_point(n, 1)), []
+        for target in heights:
+            x = advance(st, x, target)
+            r = timed_together({"structured": lambda: st.step(x), "dense": lambda: de.step(x)}, min_total=0.3)
+            cells.append((target, height(x), r["dense"] / r["structured"]))
+        rows.append((n, cells))
+        log(f"crossover n={n}: " + ", ".join(f"{h} bits {q:.2f}" for _, h, q in cells))
+    return rows
+
+
 def structured_along_orbit(n, stops, log):
     """One step of each method at points of one exact orbit (structured vs dense)."""
     fld = LiePoissonSystem.random(n, seed=1).field("f")
@@ -375,7 +392,14 @@ def write(path, info, args, res, elapsed):
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
           "\"—\": not run (a smaller case already took more than "
           f"{SLOW:g} s).", "",
-          "## Structured against dense along one exact orbit", "",
+          "## Where the structured step overtakes the dense one (exact orbits)", "",
+          "dense / structured time of one step at points of the orbit of `random_point(n, 1)`, by the "
+          "point's height (above 1: structured faster). `auto` switches at "
+          f"{STRUCTURED_MIN_BITS} bits for {STRUCTURED_MIN_N['exact_tall']} ≤ n < {STRUCTURED_MIN_N['exact']}.", "",
+          "| n | " + " | ".join(f"from ≥ {t} bits" for t, _, _ in res["crossover"][0][1]) + " |",
+          "|---|" + "---|" * len(res["crossover"][0][1])]
+    L += [f"| {n} | " + " | ".join(f"{q:.2f} ({h} bits)" for _, h, q in cells) + " |" for n, cells in res["crossover"]]
+    L += ["", "## Structured against dense along one exact orbit", "",
           "| n | step | height (bits) | structured | dense | dense / structured |", "|---|---|---|---|---|---|"]
     L += [f"| {n} | {k} | {h} | {fmt(a)} | {fmt(b)} | {ratio(b, a)} |" for n, k, h, a, b in along]
     L += ["", "## H̃ at orbit points (exact, python-flint)", "",
@@ -424,6 +448,7 @@ def main(argv=None):
         "orbit": orbit_steps((2, 3, 4, 8) if quick else range(2, 9), (0, 1000) if quick else (0, 1000, 10000), log),
         "exact": exact_table((2, 3, 4, 8) if quick else range(2, 9),
                              (64, 10000) if quick else (64, 1000, 10000, 100000), log),
+        "crossover": crossover((4, 8) if quick else (4, 5, 6, 7, 8, 12), (0, 100, 200, 400, 800, 1600), log),
         "along": structured_along_orbit(32, (0, 24) if quick else (0, 24, 50), log),
         "htilde": htilde_table(((3, 50), (8, 20)) if quick else ((3, 50), (8, 20), (16, 10)), log),
         "numeric": numeric_table((2, 4, 8), log),
