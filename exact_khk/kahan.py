@@ -71,8 +71,11 @@ METHODS = ("auto", "dense", "structured")
 #: for ``["exact_tall"]`` ≤ n < ``["exact"]`` structured once the point's height
 #: (bits of its largest numerator or denominator) reaches
 #: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
-#: orbits (docs/benchmarks.md): n = 4 at ≈ 700 bits, n = 8 at ≈ 600 bits,
-#: n = 16 from the start; at n = 2, 3 the dense fmpz_mat solve stays ahead.
+#: orbits (docs/benchmarks.md, "Where the structured step overtakes"): about
+#: 800 bits for n = 4, 8 and 12, 200–600 bits for n = 5, 6, 7; n = 16 from the
+#: start; at n = 2, 3 the dense fmpz_mat solve stays ahead.  One threshold for
+#: all n keeps the rule simple, at a price: for n = 7 at 800 bits the dense step
+#: it takes is measured 6× slower than the structured one.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
 STRUCTURED_MIN_BITS = 1024
 
