@@ -79,6 +79,10 @@ METHODS = ("auto", "dense", "structured")
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
 STRUCTURED_MIN_BITS = 1024
 
+#: dense orbit steps from this height on may solve output-sensitively (see
+#: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
+SMALL_ANSWER_MIN_BITS = 128
+
 
 def as_point(ar, x, dim: int, name: str = "x"):
     """Convert a point (strings, ints, Fractions, backend rationals, or elements
@@ -211,18 +215,26 @@ class KahanMap:
         The state is a kernel column (python-flint: an fmpq_mat); with v = [xi, dx]
         (x = xi/dx), D·(I − εf'(x)) and D·((I + εL)x + 2εc) are the contractions
         V·v and R·v (:meth:`~exact_khk.quadratic.QuadraticField.integer_system`),
-        then one fraction-free solve (``fmpz_mat.solve``, or Bareiss for gmpy2).
+        then one solve over Z (``fmpz_mat.solve``, or Bareiss for gmpy2).  Once a
+        step's answer reaches :data:`SMALL_ANSWER_MIN_BITS` with less than twice
+        the height of its point, as along orbits, the next solve is told that the
+        answer is small (python-flint then uses Dixon's solve for 8 ≤ N < 16).
         """
-        K, eps = self.arith.integers, self.eps
+        K, eps, ar = self.arith.integers, self.eps, self.arith
         V, R = self.field.integer_system(K, K.num(eps), K.den(eps))
-        col = K.column(x)
+        col, small = K.column(x), False
+        track = self.field.dim in K.small_answer_dims
+        height = _height(ar, x) if track else 0
         while True:
             v = K.clear(col)
             try:
-                col = K.solve_column(K.square(V, v), K.product(R, v))
+                col = K.solve_column(K.square(V, v), K.product(R, v), small)
             except (SingularMatrix, ZeroDivisionError):
                 raise self._singular(x, eps) from None
             x = K.values(col)
+            if track:
+                grown, height = height, _height(ar, x)
+                small = SMALL_ANSWER_MIN_BITS <= height < 2 * grown
             yield x
 
     def step(self, x):

@@ -9,7 +9,9 @@ import pytest
 import sympy as sp
 
 from exact_khk import InputError, KahanMap, LiePoissonSystem, SingularStepError, get_arith
+from exact_khk.kahan import SMALL_ANSWER_MIN_BITS
 from exact_khk.quadratic import QuadraticField
+from exact_khk.systems import random_point
 
 from .conftest import EXACT
 
@@ -179,3 +181,44 @@ def test_ready_made_point_of_wrong_dimension_is_refused(arith):
     phi = KahanMap(LiePoissonSystem.random(2, seed=1).field("f"), "1/10", arith)
     with pytest.raises(InputError, match="expected 4 coordinates"):
         phi.step((ar(1), ar(2), ar(3)))
+
+
+def test_orbit_solves_small_answers_output_sensitively(monkeypatch):
+    """Along an orbit at n = 5 (N = 10) the dense flint step tells the solver that
+    the answer is small once the height passes SMALL_ANSWER_MIN_BITS (python-flint
+    then runs Dixon's solve); the first step, with no history, never does.  The
+    orbit equals the gmpy2 Bareiss orbit (an independent solver) with ==."""
+    if not {"flint", "gmpy2"} <= set(EXACT):
+        pytest.skip("needs python-flint and gmpy2")
+    K = get_arith("flint").integers
+    flags, solve = [], K.solve_column
+
+    def spy(M, b, small=False):
+        flags.append(small)
+        return solve(M, b, small)
+
+    monkeypatch.setattr(K, "solve_column", spy)
+    fld = LiePoissonSystem.random(5, seed=1).field("f")
+    x = random_point(5, 1)
+    a = KahanMap(fld, "1/10", "flint", method="dense").orbit(x, 16)
+    b = KahanMap(fld, "1/10", "gmpy2", method="dense").orbit(x, 16)
+    assert _as_fractions(get_arith("flint"), a) == _as_fractions(get_arith("gmpy2"), b)
+    assert len(flags) == 16 and not flags[0] and sum(flags) >= 8
+    heights = [max(max(abs(t.p).bit_length(), t.q.bit_length()) for t in p) for p in a]
+    assert all(small == (SMALL_ANSWER_MIN_BITS <= heights[k] < 2 * heights[k - 1])
+               for k, small in enumerate(flags) if k > 0)
+
+
+def test_output_sensitive_solve_refuses_singular_systems():
+    """The Dixon branch raises the ZeroDivisionError the orbit turns into a
+    SingularStepError, like fmpz_mat.solve (negative control: a regular system)."""
+    K = get_arith("flint").integers
+    flint = pytest.importorskip("flint")
+    N = 8
+    M = flint.fmpz_mat([[i * N + j + 1 for j in range(N)] for i in range(N)])  # rank 2
+    b = flint.fmpz_mat(N, 1, list(range(N)))
+    for small in (False, True):
+        with pytest.raises(ZeroDivisionError):
+            K.solve_column(M, b, small)
+    A = M + flint.fmpz_mat([[int(i == j) * (i + 1) ** 3 for j in range(N)] for i in range(N)])
+    assert A * K.solve_column(A, b, True) == b
