@@ -31,8 +31,9 @@ blocks M_j, within a factor 2 of the 2-norm condition number) and
 
 Methods (``method=``): ``'dense'`` solves the 2n×2n system (rational
 arithmetics with an integer kernel clear denominators once and solve over Z:
-python-flint ``fmpz_mat.solve``, or Bareiss elimination for gmpy2; ``fraction``
-is the plain-elimination reference); ``'structured'`` solves it as a 2×2
+python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
+are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
+plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
 by the DFT for ``float``/``mp:P``); ``'auto'`` (default) takes the structured
 path for exact ``flint`` steps of Lie–Poisson fields whose Hessian blocks are
@@ -71,11 +72,11 @@ METHODS = ("auto", "dense", "structured")
 #: for ``["exact_tall"]`` ≤ n < ``["exact"]`` structured once the point's height
 #: (bits of its largest numerator or denominator) reaches
 #: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
-#: orbits (docs/benchmarks.md, "Where the structured step overtakes"): about
-#: 800 bits for n = 4, 8 and 12, 200–600 bits for n = 5, 6, 7; n = 16 from the
-#: start; at n = 2, 3 the dense fmpz_mat solve stays ahead.  One threshold for
-#: all n keeps the rule simple, at a price: for n = 7 at 800 bits the dense step
-#: it takes is measured 6× slower than the structured one.
+#: orbits against the dense orbit step (docs/benchmarks.md, "Where the
+#: structured step overtakes"): about 250 bits for n = 12, 400 for n = 7, 700
+#: for n = 6, 8, 1100 for n = 5 and 2000 for n = 4; n = 16 from the start; at
+#: n = 2, 3 the dense fmpz_mat solve stays ahead.  One threshold for all n keeps
+#: the rule simple, at up to about 1.6× in the band where it is wrong.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
 STRUCTURED_MIN_BITS = 1024
 
