@@ -126,6 +126,8 @@ class KahanMap:
     """
 
     method, structure, dense_below = "dense", None, 0  # for maps built without __init__
+    #: whether this map's last dense step found a small answer (see ``_integer_steps``)
+    _small_answers = False
 
     def __init__(self, field, eps, arith=None, method="auto"):
         self.field = field
@@ -220,12 +222,15 @@ class KahanMap:
         step's answer reaches :data:`SMALL_ANSWER_MIN_BITS` with less than twice
         the height of its point, as along orbits, the next solve is told that the
         answer is small (python-flint then uses Dixon's solve for 8 ≤ N < 16).
+        The map remembers this between calls, so that single steps at orbit
+        points (e.g. the commutation checks) profit too.
         """
         K, eps, ar = self.arith.integers, self.eps, self.arith
         V, R = self.field.integer_system(K, K.num(eps), K.den(eps))
-        col, small = K.column(x), False
+        col = K.column(x)
         track = self.field.dim in K.small_answer_dims
         height = _height(ar, x) if track else 0
+        small = track and self._small_answers and height >= SMALL_ANSWER_MIN_BITS
         while True:
             v = K.clear(col)
             try:
@@ -235,7 +240,8 @@ class KahanMap:
             x = K.values(col)
             if track:
                 grown, height = height, _height(ar, x)
-                small = SMALL_ANSWER_MIN_BITS <= height < 2 * grown
+                self._small_answers = height < 2 * grown
+                small = self._small_answers and height >= SMALL_ANSWER_MIN_BITS
             yield x
 
     def step(self, x):

@@ -396,8 +396,9 @@ def write(path, info, args, res, elapsed):
           f"{SLOW:g} s).", "",
           "## Where the structured step overtakes the dense one (exact orbits)", "",
           "dense / structured time of 8 steps of `KahanMap.orbit` from points of the orbit of "
-          "`random_point(n, 1)`, by the start point's height (above 1: structured faster; the dense "
-          "orbit solves output-sensitively from its second step on). `auto` switches at "
+          "`random_point(n, 1)`, by the start point's height (above 1: structured faster). The dense map "
+          "solves output-sensitively once its answers are known to be small; the timed calls repeat one "
+          "orbit, so after the warm-up call it does so from the first step. `auto` switches at "
           f"{STRUCTURED_MIN_BITS} bits for {STRUCTURED_MIN_N['exact_tall']} ≤ n < {STRUCTURED_MIN_N['exact']}.", "",
           "| n | " + " | ".join(f"from ≥ {t} bits" for t, _, _ in res["crossover"][0][1]) + " |",
           "|---|" + "---|" * len(res["crossover"][0][1])]

@@ -200,13 +200,23 @@ def test_orbit_solves_small_answers_output_sensitively(monkeypatch):
     monkeypatch.setattr(K, "solve_column", spy)
     fld = LiePoissonSystem.random(5, seed=1).field("f")
     x = random_point(5, 1)
-    a = KahanMap(fld, "1/10", "flint", method="dense").orbit(x, 16)
+    phi = KahanMap(fld, "1/10", "flint", method="dense")
+    a = phi.orbit(x, 16)
     b = KahanMap(fld, "1/10", "gmpy2", method="dense").orbit(x, 16)
     assert _as_fractions(get_arith("flint"), a) == _as_fractions(get_arith("gmpy2"), b)
     assert len(flags) == 16 and not flags[0] and sum(flags) >= 8
     heights = [max(max(abs(t.p).bit_length(), t.q.bit_length()) for t in p) for p in a]
     assert all(small == (SMALL_ANSWER_MIN_BITS <= heights[k] < 2 * heights[k - 1])
                for k, small in enumerate(flags) if k > 0)
+    gm = KahanMap(fld, "1/10", "gmpy2", method="dense")
+    same = lambda p, q: _as_fractions(get_arith("flint"), [p]) == _as_fractions(get_arith("gmpy2"), [q])  # noqa: E731
+    # the map remembers: a single step at an orbit point is solved as small ...
+    assert same(phi.step(a[-1]), gm.step(b[-1])) and flags[-1] is True
+    # ... until an answer of Cramer's size (a random 200-bit point) switches it off
+    tall = _point(random.Random(5), fld.dim, height=200)
+    y, z = phi.step(tall), phi.step(tall)
+    assert y == z and same(y, gm.step(tall))
+    assert flags[-2:] == [True, False]
 
 
 def test_output_sensitive_solve_refuses_singular_systems():
