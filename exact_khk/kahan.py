@@ -73,10 +73,10 @@ METHODS = ("auto", "dense", "structured")
 #: (bits of its largest numerator or denominator) reaches
 #: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
 #: orbits against the dense orbit step (docs/benchmarks.md, "Where the
-#: structured step overtakes"): about 250 bits for n = 12, 400 for n = 7, 700
-#: for n = 6, 8, 1100 for n = 5 and 2000 for n = 4; n = 16 from the start; at
+#: structured step overtakes"): about 250 bits for n = 12, 650–750 for
+#: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start; at
 #: n = 2, 3 the dense fmpz_mat solve stays ahead.  One threshold for all n keeps
-#: the rule simple, at up to about 1.6× in the band where it is wrong.
+#: the rule simple, at up to about 1.5× near it.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
 STRUCTURED_MIN_BITS = 1024
 
