@@ -239,7 +239,7 @@ class FlintKernel(IntegerKernel):
     #: p-adic solve (``fmpq_mat.solve(algorithm="dixon")``) stops at the answer's
     #: size: measured along exact orbits, Dixon is up to 6× faster there for
     #: N = 8..14 from about 128 bits, 2–5× slower at random points (answers of
-    #: Cramer size), and the same as ``fmpz_mat.solve`` for N ≥ 16
+    #: Cramer size), and about the same as ``fmpz_mat.solve`` at N = 16
     small_answer_dims = range(8, 16)
 
     def solve_column(self, M, b, small=False):
