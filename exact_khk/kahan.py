@@ -35,13 +35,17 @@ python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
 are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
 plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
-by the DFT for ``float``/``mp:P``); ``'auto'`` (default) takes the structured
-path for exact ``flint`` steps of Lie–Poisson fields whose Hessian blocks are
-cyclic Hankel when n ≥ 16, and for 4 ≤ n < 16 once the point's height reaches
-:data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers measured
-along orbits, docs/benchmarks.md); otherwise dense.  Both paths give the same
-rational point.  ``gmpy2`` and ``fraction`` may ask for the structured path
-explicitly.
+by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n in 1, 2, 3, 4, 6,
+``flint`` or ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of
+Q[t]/(tⁿ − 1) (:mod:`exact_khk.split`).  ``'auto'`` (default) takes, for
+Lie–Poisson fields whose Hessian blocks are cyclic Hankel, the split path for
+``flint`` and ``gmpy2`` when n is 2, 3, 4 or 6 (for ``flint`` at n = 2, 3 from
+the heights in :data:`SPLIT_MIN_BITS`); for other n the structured path for
+exact ``flint`` steps when n ≥ 16, and for 4 ≤ n < 16 once the point's height
+reaches :data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers
+measured along orbits, docs/benchmarks.md); otherwise dense.  Every path gives
+the same rational point.  ``gmpy2`` and ``fraction`` may ask for the
+structured path explicitly.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
 results are what p-bit arithmetic gives.  ``method='structured'`` with them
@@ -65,8 +69,9 @@ from .arith import get_arith
 from .errors import InputError, NearSingularWarning, SingularStepError
 from .linalg import SingularMatrix, solve
 from .parsing import parse_rational
+from .split import split_system
 
-METHODS = ("auto", "dense", "structured")
+METHODS = ("auto", "dense", "structured", "split")
 
 #: ``method='auto'`` for exact flint steps: structured for n ≥ ``["exact"]``;
 #: for ``["exact_tall"]`` ≤ n < ``["exact"]`` structured once the point's height
@@ -74,10 +79,18 @@ METHODS = ("auto", "dense", "structured")
 #: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
 #: orbits against the dense orbit step (docs/benchmarks.md, "Where the
 #: structured step overtakes"): about 250 bits for n = 12, 650–750 for
-#: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start; at
-#: n = 2, 3 the dense fmpz_mat solve stays ahead.  One threshold for all n keeps
-#: the rule simple, at up to about 1.5× near it.
+#: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start (n = 4
+#: and 6 now take the split step instead).  One threshold for all n keeps the
+#: rule simple, at up to about 1.5× near it.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
+
+#: ``method='auto'`` takes the split step (:mod:`exact_khk.split`) for Lie–Poisson
+#: fields with n in {2, 3, 4, 6} in these arithmetics, from the point height (bits)
+#: given per n (default 0).  Measured against the dense step (docs/benchmarks.md):
+#: with python-flint the split step is faster along orbits from about 220 bits
+#: (n = 2) and 40 bits (n = 3), at random points from about 450 and 128 bits, and
+#: from the start for n = 4, 6; with gmpy2 it beats Bareiss everywhere (1.3–15×).
+SPLIT_MIN_BITS = {"flint": {2: 256, 3: 64}, "gmpy2": {}}
 STRUCTURED_MIN_BITS = 1024
 
 #: dense orbit steps from this height on may solve output-sensitively (see
@@ -125,7 +138,7 @@ class KahanMap:
     step stays dense anyway (0: always structured).
     """
 
-    method, structure, dense_below = "dense", None, 0  # for maps built without __init__
+    method, split, structure, dense_below = "dense", False, None, 0  # for maps built without __init__
     #: whether this map's last dense step found a small answer (see ``_integer_steps``)
     _small_answers = False
 
@@ -133,7 +146,6 @@ class KahanMap:
         self.field = field
         self.arith = ar = get_arith(arith)
         self.method = method
-        self.structure, self.dense_below = _choose_structure(field, ar, method)
         if _is_element(ar, eps):
             self.eps = eps
             self.eps_exact = ar.to_fraction(eps) if ar.rational else None
@@ -142,6 +154,7 @@ class KahanMap:
             self.eps = ar.convert(self.eps_exact)
         if ar.is_zero(self.eps) is True:
             raise InputError("eps: the step size must be nonzero")
+        self.split, self.structure, self.dense_below = _choose_path(field, ar, method, self.eps)
 
     def __repr__(self):
         return f"KahanMap({self.field.label}, eps={self.arith.format(self.eps)}, arith={self.arith.name})"
@@ -154,7 +167,9 @@ class KahanMap:
         """The same map with another step size (e.g. ``-eps`` for the inverse)."""
         out = KahanMap.__new__(KahanMap)
         out.field, out.arith, out.eps = self.field, self.arith, eps
-        out.method, out.structure, out.dense_below = self.method, self.structure, self.dense_below
+        # the split step's blocks are circulant for every ε ≠ 0 if for one (split.py)
+        out.method, out.split, out.structure, out.dense_below = (self.method, self.split, self.structure,
+                                                                 self.dense_below)
         out.eps_exact = self.arith.to_fraction(eps) if self.arith.rational else None
         return out
 
@@ -201,8 +216,16 @@ class KahanMap:
         return SingularStepError([ar.format(t) for t in x], ar.format(eps))
 
     def _structured_step(self, x):
-        """The 2×2-over-circulants step (exact in Q[t]/(tⁿ−1), or by the DFT)."""
+        """The 2×2-over-circulants step (split over the factors of tⁿ − 1, exact in
+        Q[t]/(tⁿ − 1), or by the DFT)."""
         ar, eps = self.arith, self.eps
+        if self.split:
+            K = ar.integers
+            S = split_system(self.field, K, K.num(eps), K.den(eps))
+            try:
+                return S.step(K.clear(K.column(x)))
+            except ZeroDivisionError:
+                raise self._singular(x, eps) from None
         if ar.exact:
             try:
                 return circulant.exact_step(self.structure, x, eps, ar)
@@ -251,7 +274,7 @@ class KahanMap:
 
     def _structured_at(self, x) -> bool:
         """Whether the step at x takes the structured path."""
-        return self.structure is not None and (not self.dense_below or _height(self.arith, x) >= self.dense_below)
+        return (self.split or self.structure is not None) and (not self.dense_below or _height(self.arith, x) >= self.dense_below)
 
     def _step(self, x):
         ar, eps = self.arith, self.eps
@@ -320,22 +343,32 @@ def _height(ar, x) -> int:
     return max(max(abs(K.num(t)).bit_length(), K.den(t).bit_length()) for t in x)
 
 
-def _choose_structure(field, ar, method):
-    """(circulant structure the step may use or None, ``dense_below``)."""
+def _choose_path(field, ar, method, eps):
+    """(split, circulant structure the step may use or None, ``dense_below``)."""
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
     if method == "dense":
-        return None, 0
+        return False, None, 0
+    K = ar.integers
+    splits = K is not None and split_system(field, K, K.num(eps), K.den(eps)) is not None
+    if method == "split":
+        if not splits:
+            raise InputError("method: 'split' needs a rational arithmetic with an integer kernel (flint, "
+                             "gmpy2) and a field of dimension 2n, n in 1, 2, 3, 4, 6, whose Jacobian "
+                             "blocks are circulant (Lie–Poisson fields)")
+        return True, None, 0
+    if method == "auto" and splits and ar.name in SPLIT_MIN_BITS and circulant.circulant_structure(field):
+        return True, None, SPLIT_MIN_BITS[ar.name].get(field.dim // 2, 0)  # Lie–Poisson, n in 2, 3, 4, 6
     usable = circulant.flint is not None and (ar.rational or ar.fourier)
     st = circulant.circulant_structure(field) if usable else None
     if method == "structured":
         if st is None:
             raise InputError("method: 'structured' needs python-flint, a Lie–Poisson field whose "
                              "Hessian blocks are cyclic Hankel, and a rational, float or mp:P arithmetic")
-        return st, 0
+        return False, st, 0
     if st is None or ar.name != "flint" or st.n < STRUCTURED_MIN_N["exact_tall"]:
-        return None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
-    return st, (0 if st.n >= STRUCTURED_MIN_N["exact"] else STRUCTURED_MIN_BITS)
+        return False, None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
+    return False, st, (0 if st.n >= STRUCTURED_MIN_N["exact"] else STRUCTURED_MIN_BITS)
 
 
 def kahan_step(field, x, eps, arith=None):

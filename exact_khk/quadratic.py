@@ -161,10 +161,16 @@ class QuadraticField:
         integer solve.  For homogeneous f, R · v = q·den·xi.  Cached for the
         last few (kernel, ε).
         """
-        p, q = int(p), int(q)
-        systems = self._cache.setdefault(("intsys", kernel.name), {})
-        hit = systems.get((p, q))
-        if hit is None:
+        def build(p, q):
+            V, R = self.integer_rows(p, q)
+            return kernel.square_tensor(V), kernel.tensor(R)
+
+        return self.cached_system(("intsys", kernel.name), int(p), int(q), build)
+
+    def integer_rows(self, p, q):
+        """(V, R) of :meth:`integer_system` as plain lists of integer rows (N² and N
+        rows of N + 1 integers, acting on [xi, dx])."""
+        def build(p, q):
             H, L, c, den = self._rational_jacobian()
             den = lcm(den, *(t.denominator for t in c))
             N = self.dim
@@ -172,7 +178,17 @@ class QuadraticField:
                  for i in range(N) for j in range(N)]
             R = [[int(den * (q * (i == k) + p * L[i][k])) for k in range(N)] + [int(2 * p * den * c[i])]
                  for i in range(N)]
-            if len(systems) >= 8:  # a scan over many ε must not grow the cache without bound
+            return V, R
+
+        return self.cached_system("introws", int(p), int(q), build)
+
+    def cached_system(self, key, p, q, build):
+        """``build(p, q)`` for ε = p/q, cached under ``key`` for the last few ε (a
+        scan over many ε must not grow the cache without bound)."""
+        systems = self._cache.setdefault(key, {})
+        hit = systems.get((p, q))
+        if hit is None:
+            if len(systems) >= 8:
                 systems.pop(next(iter(systems)))
-            hit = systems[(p, q)] = (kernel.square_tensor(V), kernel.tensor(R))
+            hit = systems[(p, q)] = build(p, q)
         return hit

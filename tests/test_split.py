@@ -1,0 +1,170 @@
+"""The split step (one 2×2 system per cyclotomic factor of tⁿ − 1) against the dense step.
+
+Exact results are compared with ``==`` to the dense step (a different algorithm:
+one 2n×2n integer solve) and to the plain Fraction elimination, and checked in
+the step's defining equation (I − εf'(x)) x̃ = x evaluated in Fraction arithmetic.
+"""
+
+import random
+from fractions import Fraction
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
+                       get_arith, rational_sign_patterns)
+from exact_khk import split as split_mod
+from exact_khk.kahan import SPLIT_MIN_BITS, _height
+from exact_khk.split import SPLIT_N, split_system
+from exact_khk.systems import random_point
+
+KERNELS = ["flint", "gmpy2"]
+
+
+def _fields(n, seed):
+    s = LiePoissonSystem.random(n, seed=seed)
+    return [s.field("f"), s.field("f", power=1), s.field("control"),
+            *(s.field("g", sg) for sg in rational_sign_patterns(n)[:2])]
+
+
+def _outcome(phi, x, steps):
+    """The orbit, or the singular step's message (which names the point and ε)."""
+    try:
+        return phi.orbit(x, steps)
+    except SingularStepError as exc:
+        return str(exc)
+
+
+def _residual_zero(fld, x, y, eps):
+    """(I − εf'(x)) y == x in plain Fraction arithmetic (homogeneous fields)."""
+    fr = get_arith("fraction")
+    xs, ys = [Fraction(str(t)) for t in x], [Fraction(str(t)) for t in y]
+    M = KahanMap(fld, eps, fr, method="dense").system_matrix(xs)
+    return [sum(a * b for a, b in zip(row, ys)) for row in M] == xs
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 6])
+@pytest.mark.parametrize("arith", KERNELS)
+def test_split_equals_dense(n, arith):
+    rng = random.Random(n)
+    for seed in range(2):
+        for fld in _fields(n, seed):
+            eps = Fraction(rng.randint(1, 9), rng.randint(2, 20)) * rng.choice([1, -1])
+            x = random_point(n, seed)
+            split = KahanMap(fld, eps, arith, method="split")
+            got = _outcome(split, x, 6)
+            assert got == _outcome(KahanMap(fld, eps, arith, method="dense"), x, 6), (n, fld.label)
+            if not isinstance(got, str):
+                assert _residual_zero(fld, got[0], got[1], eps)
+                assert split.inverse(got[1]) == got[0]
+                assert got[1] != got[0]  # negative control: the step moved the point
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 6])
+def test_split_equals_fraction_reference(n):
+    fld = LiePoissonSystem.random(n, seed=7).field("f")
+    x = [Fraction(3, 7), Fraction(-2, 5)] + [Fraction(k, 3) for k in range(2 * n - 2)]
+    ref = KahanMap(fld, "1/11", "fraction").orbit(x, 3)
+    got = KahanMap(fld, "1/11", "flint", method="split").orbit(x, 3)
+    assert [[Fraction(int(t.p), int(t.q)) for t in p] for p in got] == [list(p) for p in ref]
+
+
+def test_split_singular_step_names_point_and_eps():
+    """An orbit that runs into det(I − εf'(x)) = 0 (n = 2, step 5): the split and the
+    dense step fail at the same step, with the same point and ε."""
+    fld = LiePoissonSystem.random(2, seed=3).field("f")
+    messages = set()
+    for arith in KERNELS:
+        for method in ("split", "dense"):
+            with pytest.raises(SingularStepError) as exc:
+                KahanMap(fld, "1/7", arith, method=method).orbit(random_point(2, 2), 12)
+            messages.add(str(exc.value))
+    assert len(messages) == 1
+    assert "step 5" in messages.pop()
+
+
+def test_split_inverse_singular_at_critical_point():
+    """Φ⁻¹ is undefined at Φ(x) when det(I + εf'(Φ(x))) = 0 (see test_properties)."""
+    fld = LiePoissonSystem.from_vectors("1,3", "-1,-3", "2,-3").field("f")
+    x = ["-3/2", "-8/3", "-3", "-8/3"]
+    for arith in KERNELS:
+        phi = KahanMap(fld, "-3/2", arith, method="split")
+        with pytest.raises(SingularStepError):
+            phi.inverse(phi.step(x))
+
+
+def test_split_two_dimensional_field():
+    """n = 1: any field on Q² has 1×1 (circulant) blocks; the split step is Cramer's
+    rule with one reduction.  ``auto`` keeps such a field dense (no small answers)."""
+    F = Fraction
+    fld = QuadraticField.from_tensor([[[0, F(1, 2)], [F(1, 2), 0]], [[0, F(-1, 2)], [F(-1, 2), 0]]],
+                                     linear=[[0, 0], [0, 1]], const=[1, 2])
+    for arith in KERNELS:
+        split = KahanMap(fld, "1/10", arith, method="split")
+        assert split.orbit(["1/3", "2/5"], 8) == KahanMap(fld, "1/10", arith, method="dense").orbit(["1/3", "2/5"], 8)
+        assert not KahanMap(fld, "1/10", arith).split
+
+
+def test_split_refuses_what_it_cannot_do():
+    with pytest.raises(InputError, match="split"):
+        KahanMap(LiePoissonSystem.random(5, 1).field("f"), "1/3", "flint", method="split")
+    for arith in ("fraction", "float", "mp:60"):
+        with pytest.raises(InputError, match="split"):
+            KahanMap(LiePoissonSystem.random(3, 1).field("f"), "1/3", arith, method="split")
+    assert split_system(LiePoissonSystem.random(5, 1).field("f"), get_arith("flint").integers, 1, 3) is None
+    assert 5 not in SPLIT_N
+
+
+def test_split_rejects_non_circulant_blocks():
+    """A field on Q⁴ whose Jacobian blocks are not circulant has no split system."""
+    F = Fraction
+    T = [[[F(0)] * 4 for _ in range(4)] for _ in range(4)]
+    T[0][0][1] = T[0][1][0] = F(1)  # f_0 = 2 x0 x1: not circulant in (x0, x1)
+    fld = QuadraticField.from_tensor(T)
+    assert split_system(fld, get_arith("flint").integers, 1, 3) is None
+    with pytest.raises(InputError, match="split"):
+        KahanMap(fld, "1/3", "flint", method="split")
+
+
+def test_auto_takes_split_from_its_height(monkeypatch):
+    """flint at n = 3: dense below SPLIT_MIN_BITS, split from there on; gmpy2 at
+    n = 2 splits from the start.  The orbits are the dense orbits exactly."""
+    calls = []
+    real = split_mod.SplitSystem.step
+    monkeypatch.setattr(split_mod.SplitSystem, "step", lambda self, v: calls.append(v) or real(self, v))
+    fld = LiePoissonSystem.random(3, 1).field("f")
+    auto = KahanMap(fld, "1/10", "flint")
+    assert auto.split and auto.dense_below == SPLIT_MIN_BITS["flint"][3] > 0
+    pts = auto.orbit(random_point(3, 1), 8)  # heights 2, 21, 57, 79, …
+    assert pts == KahanMap(fld, "1/10", "flint", method="dense").orbit(random_point(3, 1), 8)
+    tall = [p for p in pts[:-1] if _height(auto.arith, p) >= auto.dense_below]
+    assert 0 < len(tall) < 8 and len(calls) == len(tall)
+    calls.clear()
+    fld2 = LiePoissonSystem.random(2, 1).field("f")
+    gm = KahanMap(fld2, "1/10", "gmpy2")
+    assert gm.split and gm.dense_below == 0
+    assert gm.orbit(random_point(2, 1), 4) == KahanMap(fld2, "1/10", "gmpy2", method="dense").orbit(
+        random_point(2, 1), 4)
+    assert len(calls) == 4
+
+
+tall = st.fractions(min_value=-10 ** 30, max_value=10 ** 30, max_denominator=10 ** 30)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
+@given(st.sampled_from([2, 3, 4, 6]), st.integers(0, 10_000), st.sampled_from(["f", "g", "control"]),
+       st.lists(tall, min_size=12, max_size=12), st.fractions(-5, 5, max_denominator=7).filter(bool))
+def test_split_equals_dense_at_tall_points(n, seed, kind, coords, eps):
+    """Random points with 100-bit entries (answers of Cramer size, no small-answer luck)."""
+    fld = LiePoissonSystem.random(n, seed).field(kind)
+    x = coords[:2 * n]
+    dense = KahanMap(fld, eps, "flint", method="dense")
+    split = KahanMap(fld, eps, "flint", method="split")
+    try:
+        y = dense.step(x)
+    except SingularStepError:
+        with pytest.raises(SingularStepError):
+            split.step(x)
+        return
+    assert split.step(x) == y
