@@ -4,11 +4,12 @@
 Measures side by side in one run and writes docs/benchmarks.md:
 
 * exact step (Lie–Poisson field f, n = 2..8, heights 64..100 000 bits): the
-  library's dense integer step, its structured step, a bare python-flint
+  library's dense integer step, its structured and split steps, a bare python-flint
   ``fmpz_mat.solve`` on the same (pre-built) integer system, gmpy2 Bareiss,
   Fraction elimination and SymPy ``Matrix.LUsolve``;
 * exact orbit steps: ``KahanMap.orbit`` per step against a bare
   ``fmpz_mat.solve`` loop over the systems of the same orbit points;
+* where the split step (n = 2, 3, 4, 6) overtakes the dense one, flint and gmpy2;
 * structured against dense along an orbit at n = 32, and H̃ both ways;
 * floating step (``float``, ``mp:256``): dense LU, the DFT step, mpmath ``lu_solve``;
 * cost against n at fixed height, with the fitted log–log exponent;
@@ -46,7 +47,8 @@ import sympy  # noqa: E402
 
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
 from exact_khk.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
-from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
+from exact_khk.kahan import SPLIT_MIN_BITS, STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
+from exact_khk.split import SPLIT_N  # noqa: E402
 from exact_khk.systems import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
@@ -143,7 +145,8 @@ def exact_table(ns, heights, log):
             if n * bits > 4 * 10 ** 5:  # n = 8 at 100 000 bits: minutes per solver
                 continue
             x = point_of_height(n, bits, random.Random(bits * 100 + n))
-            maps = {m: KahanMap(fld, EPS, "flint", method=m) for m in ("auto", "dense", "structured")}
+            maps = {m: KahanMap(fld, EPS, "flint", method=m) for m in ("auto", "dense", "structured", "split")
+                    if m != "split" or n in SPLIT_N}
             xp = maps["dense"].point(x)
             Mz, Bz = integer_system(maps["dense"], xp)
             gm = KahanMap(fld, EPS, "gmpy2", method="dense")
@@ -168,10 +171,11 @@ def exact_table(ns, heights, log):
 
 
 def path(phi):
-    """The path ``phi`` takes: dense, structured, or dense below a height."""
-    if phi.structure is None:
+    """The path ``phi`` takes: dense, structured or split, or dense below a height."""
+    if phi.structure is None and not phi.split:
         return "dense"
-    return f"dense below {phi.dense_below} bits, then structured" if phi.dense_below else "structured"
+    kind = "split" if phi.split else "structured"
+    return f"dense below {phi.dense_below} bits, then {kind}" if phi.dense_below else kind
 
 
 def advance(phi, x, bits):
@@ -225,6 +229,36 @@ def crossover(ns, heights, log, steps=8):
             cells.append((target, height(x), r["dense"] / r["structured"]))
         rows.append((n, cells))
         log(f"crossover n={n}: " + ", ".join(f"{h} bits {q:.2f}" for _, h, q in cells))
+    return rows
+
+
+def height_any(x):
+    return max(max(int(t.numerator).bit_length(), int(t.denominator).bit_length()) for t in x)
+
+
+def split_crossover(ns, ariths, orbit_heights, random_heights, log):
+    """dense / split time by height, for 8 steps along the orbit of ``random_point(n, 1)``
+    and for one step at random points: where ``SPLIT_MIN_BITS`` should switch."""
+    rows = []
+    for arith in ariths:
+        for n in ns:
+            fld = LiePoissonSystem.random(n, seed=1).field("f")
+            sp, de = (KahanMap(fld, EPS, arith, method=m) for m in ("split", "dense"))
+            x, orbit = sp.point(random_point(n, 1)), []
+            for target in orbit_heights:
+                while height_any(x) < target:
+                    x = sp.step(x)
+                r = timed_together({"split": lambda: sp.orbit(x, 8), "dense": lambda: de.orbit(x, 8)},
+                                   min_total=0.3)
+                orbit.append((height_any(x), r["dense"] / r["split"]))
+            rand = []
+            for bits in random_heights:
+                xr = sp.point(point_of_height(n, bits, random.Random(bits * 100 + n)))
+                r = timed_together({"split": lambda: sp.step(xr), "dense": lambda: de.step(xr)}, min_total=0.3)
+                rand.append((bits, r["dense"] / r["split"]))
+            rows.append((arith, n, orbit, rand))
+            log(f"split crossover {arith} n={n}: orbit " + ", ".join(f"{h}b {q:.2f}" for h, q in orbit)
+                + "; random " + ", ".join(f"{h}b {q:.2f}" for h, q in rand))
     return rows
 
 
@@ -377,29 +411,42 @@ def write(path, info, args, res, elapsed):
             if r["auto"] > 1.3 * r["bare"]]
     L += ["", "Orbit steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
     L += ["", "## Exact step at random points (python-flint unless stated)", "",
-          "| n | h (bits) | library auto | dense (fmpz_mat) | structured | bare `fmpz_mat.solve` | dense / bare "
-          "| gmpy2 Bareiss | Fraction elim. | SymPy LUsolve | Fraction / dense | SymPy / dense | dense / structured |",
-          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+          "| n | h (bits) | library auto | dense (fmpz_mat) | structured | split | bare `fmpz_mat.solve` "
+          "| auto / bare | gmpy2 Bareiss | Fraction elim. | SymPy LUsolve | Fraction / dense | SymPy / dense "
+          "| dense / structured |",
+          "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in exact:
         L.append(f"| {r['n']} | {r['bits']} | {fmt(r['auto'])} | {fmt(r['dense'])} | {fmt(r['structured'])} | "
-                 f"{fmt(r['bare'])} | {ratio(r['dense'], r['bare'])} | {fmt(r['gmpy2'])} | "
+                 f"{fmt(r.get('split'))} | {fmt(r['bare'])} | {ratio(r['auto'], r['bare'])} | {fmt(r['gmpy2'])} | "
                  f"{fmt(r.get('fraction'))} | {fmt(r.get('sympy'))} | {ratio(r.get('fraction'), r['dense'])} | "
                  f"{ratio(r.get('sympy'), r['dense'])} | {ratio(r['dense'], r['structured'])} |")
     over = [f"n = {r['n']}, {r['bits']} bits ({ratio(r['auto'], r['bare'])})" for r in exact
             if r["auto"] > 1.3 * r["bare"]]
     L += ["", "Library steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
-    L += ["", f"\"library auto\" is the method `KahanMap` picks (exact flint steps are structured for "
-          f"n ≥ {STRUCTURED_MIN_N['exact']}, and for n ≥ {STRUCTURED_MIN_N['exact_tall']} from points of "
-          f"{STRUCTURED_MIN_BITS} bits on). Random points of height h have no special structure, so "
+    L += ["", f"\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = 2, 3, 4, 6, "
+          f"at n = 2, 3 from points of {SPLIT_MIN_BITS['flint'][2]} and {SPLIT_MIN_BITS['flint'][3]} bits on; "
+          f"structured for n ≥ {STRUCTURED_MIN_N['exact']}, and for other n ≥ {STRUCTURED_MIN_N['exact_tall']} "
+          f"from points of {STRUCTURED_MIN_BITS} bits on). \"split\": one 2×2 system per cyclotomic factor "
+          "of tⁿ − 1 (n = 2, 3, 4, 6 only). Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
           "\"—\": not run (a smaller case already took more than "
           f"{SLOW:g} s).", "",
-          "## Where the structured step overtakes the dense one (exact orbits)", "",
+          "## Where the split step overtakes the dense one", "",
+          "dense / split time (above 1: split faster) for 8 steps of `KahanMap.orbit` from points of the orbit "
+          "of `random_point(n, 1)` (by the start point's height), and for one step at random points of height h "
+          "(answers of Cramer size). `auto` takes the split step at these n for flint from "
+          + ", ".join(f"{b} bits (n = {n})" for n, b in SPLIT_MIN_BITS["flint"].items())
+          + " and otherwise from the start; for gmpy2 always.", "",
+          "| arith | n | along the orbit | random points |", "|---|---|---|---|"]
+    L += [f"| {a} | {n} | " + ", ".join(f"{h} bits: {q:.2f}" for h, q in orbit) + " | "
+          + ", ".join(f"{h} bits: {q:.2f}" for h, q in rand) + " |" for a, n, orbit, rand in res["split"]]
+    L += ["", "## Where the structured step overtakes the dense one (exact orbits)", "",
           "dense / structured time of 8 steps of `KahanMap.orbit` from points of the orbit of "
           "`random_point(n, 1)`, by the start point's height (above 1: structured faster). The dense map "
           "solves output-sensitively once its answers are known to be small; the timed calls repeat one "
           "orbit, so after the warm-up call it does so from the first step. `auto` switches at "
-          f"{STRUCTURED_MIN_BITS} bits for {STRUCTURED_MIN_N['exact_tall']} ≤ n < {STRUCTURED_MIN_N['exact']}.", "",
+          f"{STRUCTURED_MIN_BITS} bits for {STRUCTURED_MIN_N['exact_tall']} ≤ n < {STRUCTURED_MIN_N['exact']} "
+          "(n = 4, 6 take the split step instead).", "",
           "| n | " + " | ".join(f"from ≥ {t} bits" for t, _, _ in res["crossover"][0][1]) + " |",
           "|---|" + "---|" * len(res["crossover"][0][1])]
     L += [f"| {n} | " + " | ".join(f"{q:.2f} ({h} bits)" for _, h, q in cells) + " |" for n, cells in res["crossover"]]
@@ -452,6 +499,8 @@ def main(argv=None):
         "orbit": orbit_steps((2, 3, 4, 8) if quick else range(2, 9), (0, 1000) if quick else (0, 1000, 10000), log),
         "exact": exact_table((2, 3, 4, 8) if quick else range(2, 9),
                              (64, 10000) if quick else (64, 1000, 10000, 100000), log),
+        "split": split_crossover((2, 3) if quick else (2, 3, 4, 6), ("flint", "gmpy2"), (0, 50, 100, 200, 400),
+                                 (16, 64, 128, 256, 512), log),
         "crossover": crossover((4, 8) if quick else (4, 5, 6, 7, 8, 12), (0, 100, 200, 400, 800, 1600), log),
         "along": structured_along_orbit(32, (0, 24) if quick else (0, 24, 50), log),
         "htilde": htilde_table(((3, 50), (8, 20)) if quick else ((3, 50), (8, 20), (16, 10)), log),
