@@ -78,7 +78,7 @@ METHODS = ("auto", "dense", "structured", "split")
 #: (bits of its largest numerator or denominator) reaches
 #: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
 #: orbits against the dense orbit step (docs/benchmarks.md, "Where the
-#: structured step overtakes"): about 250 bits for n = 12, 650–750 for
+#: structured step overtakes"): about 250 bits for n = 12, 650–800 for
 #: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start (n = 4
 #: and 6 now take the split step instead).  One threshold for all n keeps the
 #: rule simple, at up to about 1.5× near it.
