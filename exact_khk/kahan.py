@@ -83,15 +83,15 @@ METHODS = ("auto", "dense", "structured", "split")
 #: and 6 now take the split step instead).  One threshold for all n keeps the
 #: rule simple, at up to about 1.5× near it.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
+STRUCTURED_MIN_BITS = 1024
 
 #: ``method='auto'`` takes the split step (:mod:`exact_khk.split`) for Lie–Poisson
 #: fields with n in {2, 3, 4, 6} in these arithmetics, from the point height (bits)
 #: given per n (default 0).  Measured against the dense step (docs/benchmarks.md):
 #: with python-flint the split step is faster along orbits from about 220 bits
 #: (n = 2) and 40 bits (n = 3), at random points from about 450 and 128 bits, and
-#: from the start for n = 4, 6; with gmpy2 it beats Bareiss everywhere (1.3–15×).
+#: from the start for n = 4, 6; with gmpy2 it beats Bareiss everywhere measured (1.35–16×).
 SPLIT_MIN_BITS = {"flint": {2: 256, 3: 64}, "gmpy2": {}}
-STRUCTURED_MIN_BITS = 1024
 
 #: dense orbit steps from this height on may solve output-sensitively (see
 #: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
@@ -133,9 +133,10 @@ class KahanMap:
     the arithmetic; ``arith`` a name (see :func:`exact_khk.arith.get_arith`) or
     context, default the fastest exact one; ``method`` one of :data:`METHODS`
     (see the module docstring).  ``structure`` is the
-    :class:`~exact_khk.circulant.CirculantStructure` the step may use, or None
-    (dense); ``dense_below`` the point height in bits under which an exact
-    step stays dense anyway (0: always structured).
+    :class:`~exact_khk.circulant.CirculantStructure` the step may use, or None;
+    ``split`` whether it takes the split step (:mod:`exact_khk.split`) instead;
+    ``dense_below`` the point height in bits under which an exact step stays
+    dense anyway (0: never).
     """
 
     method, split, structure, dense_below = "dense", False, None, 0  # for maps built without __init__
@@ -274,7 +275,8 @@ class KahanMap:
 
     def _structured_at(self, x) -> bool:
         """Whether the step at x takes the structured path."""
-        return (self.split or self.structure is not None) and (not self.dense_below or _height(self.arith, x) >= self.dense_below)
+        return ((self.split or self.structure is not None)
+                and (not self.dense_below or _height(self.arith, x) >= self.dense_below))
 
     def _step(self, x):
         ar, eps = self.arith, self.eps

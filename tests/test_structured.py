@@ -174,8 +174,11 @@ def test_auto_choice_and_fallbacks():
     big, small = LiePoissonSystem.random(STRUCTURED_MIN_N["exact"], 1), LiePoissonSystem.random(2, 1)
     assert KahanMap(big.field("g"), "1/3", "flint").structure is not None
     assert KahanMap(big.field("g"), "1/3", "fraction").structure is None  # the reference stays dense
-    assert KahanMap(small.field("f"), "1/3", "flint").structure is None
+    assert KahanMap(small.field("f"), "1/3", "flint").structure is None  # n = 2: the split step
+    assert KahanMap(small.field("f"), "1/3", "flint").split
     assert KahanMap(small.field("f"), "1/3", "float").structure is None
+    assert not KahanMap(small.field("f"), "1/3", "float").split
+    assert not KahanMap(small.field("f"), "1/3", "fraction").split
     assert KahanMap(big.field("f"), "1/3", "mp:100").structure is None  # floating: dense unless asked
     assert KahanMap(big.field("f"), "1/3", "mp:100", method="structured").structure is not None
     # a generic quadratic field, and a Hessian whose blocks are not cyclic Hankel: dense
@@ -186,7 +189,7 @@ def test_auto_choice_and_fallbacks():
     odd = LiePoissonSystem.random(3, 1).field_from_hessian(M)
     assert circulant_structure(odd) is None
     phi = KahanMap(odd, "1/3", "flint")
-    assert phi.structure is None
+    assert phi.structure is None and not phi.split
     x = [1, 0, 2, -1, 1, 1]
     assert [phi.arith.to_fraction(t) for t in phi.step(x)] == list(KahanMap(odd, "1/3", "fraction").step(x))
     with pytest.raises(InputError, match="method"):
@@ -196,7 +199,7 @@ def test_auto_choice_and_fallbacks():
 
 
 def test_auto_switches_to_structured_with_height(monkeypatch):
-    """For 4 ≤ n < 16, ``auto`` steps dense from low points and structured from points
+    """For 4 ≤ n < 16 (other than the split n = 4, 6), ``auto`` steps dense from low points and structured from points
     of height ≥ STRUCTURED_MIN_BITS; the orbit is the dense orbit exactly."""
     n, steps = 5, 32  # heights 2, 38, 75, …, 905 at step 24 (n = 4, 6 take the split step)
     fld = LiePoissonSystem.random(n, 1).field("f")
