@@ -19,7 +19,7 @@ from fractions import Fraction
 from . import __version__
 from .arith import arith_names, get_arith
 from .errors import InputError, PoleError, SingularStepError
-from .kahan import KahanMap
+from .kahan import METHODS, KahanMap
 from .parsing import parse_rational, parse_vector
 from .systems import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem, b0_signs,
                       random_point)
@@ -132,6 +132,10 @@ def register(sub):
     p.add_argument("--field", choices=["f", "g", "control"], default="f",
                    help="f (Hessian Hs), g (B Hs, see --signs) or control (A Hs; (2I+A) Hs for n = 2)")
     p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
+    p.add_argument("--method", choices=METHODS, default="auto",
+                   help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
+                        "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n = 2, 3, 4, "
+                        "6: 2x2 over each factor of t^n - 1); default auto: the fastest measured path")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=cmd_orbit)
 
@@ -145,18 +149,20 @@ def cmd_orbit(args):
     from .certify import expresses_omega  # a non-rational involution needs ω in the arithmetic
 
     fld = system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
-    phi = KahanMap(fld, eps, ar)
+    phi = KahanMap(fld, eps, ar, method=args.method)
     pts = phi.orbit(x0, args.steps)
     if args.json:
         write_json({"system": system_json(system), "field": fld.label, "signs": fld.signs,
                     "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
+                    "method": args.method, "path": phi.path,
                     "x0": [str(t) for t in x0],
                     "orbit": [[ar.format(t) for t in p] for p in pts],
                     "versions": library_versions()}, "-")
         return 0
     print(system.describe())
     kind = "exact" if ar.exact else f"{ar.prec}-bit floating point"
-    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind})")
+    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
+          f"method {args.method}: {phi.path}")
     if not (ar.rational or not ar.exact):  # Q(zeta), F_p: no real approximation to show
         for k, p in enumerate(pts):
             print(f"{k:>4}  (" + ", ".join(ar.format(t) for t in p) + ")")

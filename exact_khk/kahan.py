@@ -160,6 +160,15 @@ class KahanMap:
     def __repr__(self):
         return f"KahanMap({self.field.label}, eps={self.arith.format(self.eps)}, arith={self.arith.name})"
 
+    @property
+    def path(self) -> str:
+        """How the steps are solved: ``'dense'``, ``'structured'``, ``'split'``, or
+        e.g. ``'dense below 64 bits, then split'``."""
+        if self.structure is None and not self.split:
+            return "dense"
+        kind = "split" if self.split else "structured"
+        return f"dense below {self.dense_below} bits, then {kind}" if self.dense_below else kind
+
     def point(self, x, name="x"):
         """``x`` as a tuple of elements of this map's arithmetic."""
         return as_point(self.arith, x, self.field.dim, name)

@@ -170,14 +170,6 @@ def exact_table(ns, heights, log):
     return rows
 
 
-def path(phi):
-    """The path ``phi`` takes: dense, structured or split, or dense below a height."""
-    if phi.structure is None and not phi.split:
-        return "dense"
-    kind = "split" if phi.split else "structured"
-    return f"dense below {phi.dense_below} bits, then {kind}" if phi.dense_below else kind
-
-
 def advance(phi, x, bits):
     """Follow the orbit of x until its height reaches ``bits``."""
     while height(x) < bits:
@@ -203,7 +195,7 @@ def orbit_steps(ns, heights, log, steps=16):
                 for A, B in systems:
                     A.solve(B)
 
-            r = {"n": n, "bits": height(x), "steps": steps, "path": path(auto)}
+            r = {"n": n, "bits": height(x), "steps": steps, "path": auto.path}
             best = timed_together({"auto": lambda: auto.orbit(x, steps), "dense": lambda: dense.orbit(x, steps),
                                    "bare": bare}, min_total=1.0, max_reps=20)
             r.update({k: t / steps for k, t in best.items()})
@@ -373,7 +365,7 @@ def orbit_reach(ns, budget, log):
                 x = phi.step(x)
                 steps += 1
             height = max(max(int(t.p).bit_length(), int(t.q).bit_length()) for t in x)
-            rows.append((n, method, path(phi), steps, height))
+            rows.append((n, method, phi.path, steps, height))
             log(f"orbit n={n} {method}: {steps} steps in {budget} s, final height {height} bits")
     return rows
 

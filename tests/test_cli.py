@@ -78,3 +78,28 @@ def test_singular_step_exit_3(capsys):
                          "--eps", str(eps), "--steps", "3")
     assert code == 3
     assert "step 1" in err and str(eps) in err and len(err.strip().splitlines()) == 1
+
+
+def test_orbit_method_choice(capsys):
+    """--method picks how steps are solved; every exact method prints the same orbit, and
+    the output says which path ran."""
+    orbits = {}
+    for method in ("auto", "dense", "structured", "split"):
+        code, out, _ = run(capsys, "orbit", "--steps", "6", "--method", method, "--json")
+        assert code == 0
+        data = json.loads(out)
+        assert data["method"] == method
+        orbits[method] = data["orbit"]
+        assert data["path"] == {"auto": "dense below 64 bits, then split", "dense": "dense",
+                                "structured": "structured", "split": "split"}[method]
+    assert orbits["auto"] == orbits["dense"] == orbits["structured"] == orbits["split"]
+    code, out, _ = run(capsys, "orbit", "--steps", "1", "--method", "split")
+    assert code == 0 and "method split: split" in out
+
+
+def test_orbit_method_refused_exit_2(capsys):
+    code, out, err = run(capsys, "orbit", "--steps", "1", "--method", "split", "--arith", "float")
+    assert code == 2 and out == ""
+    assert "'split' needs" in err and len(err.strip().splitlines()) == 1
+    code, out, err = run(capsys, "orbit", "--method", "fastest")
+    assert code == 2 and "--method" in err
