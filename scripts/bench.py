@@ -134,7 +134,8 @@ def integer_system(phi, x):
 
 
 def height(x):
-    return max(max(int(t.p).bit_length(), int(t.q).bit_length()) for t in x)
+    """Bits of the largest numerator or denominator (python-flint fmpq or gmpy2 mpq)."""
+    return max(max(int(t.numerator).bit_length(), int(t.denominator).bit_length()) for t in x)
 
 
 def exact_table(ns, heights, log):
@@ -224,10 +225,6 @@ def crossover(ns, heights, log, steps=8):
     return rows
 
 
-def height_any(x):
-    return max(max(int(t.numerator).bit_length(), int(t.denominator).bit_length()) for t in x)
-
-
 def split_crossover(ns, ariths, orbit_heights, random_heights, log):
     """dense / split time by height, for 8 steps along the orbit of ``random_point(n, 1)``
     and for one step at random points: where ``SPLIT_MIN_BITS`` should switch."""
@@ -238,11 +235,11 @@ def split_crossover(ns, ariths, orbit_heights, random_heights, log):
             sp, de = (KahanMap(fld, EPS, arith, method=m) for m in ("split", "dense"))
             x, orbit = sp.point(random_point(n, 1)), []
             for target in orbit_heights:
-                while height_any(x) < target:
+                while height(x) < target:
                     x = sp.step(x)
                 r = timed_together({"split": lambda: sp.orbit(x, 8), "dense": lambda: de.orbit(x, 8)},
                                    min_total=0.3)
-                orbit.append((height_any(x), r["dense"] / r["split"]))
+                orbit.append((height(x), r["dense"] / r["split"]))
             rand = []
             for bits in random_heights:
                 xr = sp.point(point_of_height(n, bits, random.Random(bits * 100 + n)))
@@ -364,9 +361,8 @@ def orbit_reach(ns, budget, log):
             while time.perf_counter() - t0 < budget:
                 x = phi.step(x)
                 steps += 1
-            height = max(max(int(t.p).bit_length(), int(t.q).bit_length()) for t in x)
-            rows.append((n, method, phi.path, steps, height))
-            log(f"orbit n={n} {method}: {steps} steps in {budget} s, final height {height} bits")
+            rows.append((n, method, phi.path, steps, height(x)))
+            log(f"orbit n={n} {method}: {steps} steps in {budget} s, final height {rows[-1][4]} bits")
     return rows
 
 
