@@ -127,7 +127,7 @@ class IntegerKernel:
     form: ``column(x)`` makes one from a sequence, ``values(col)`` gives the
     tuple back, ``clear(col)`` is v = (xi, dx) (x = xi/dx).  ``tensor(rows)``
     stores a constant integer matrix W acting on [xi, dx] (sparse rows here),
-    ``apply(W, v)`` is W·[xi, dx] (``apply_flat``: as a list), ``square(S, v)`` the N×N matrix with
+    ``apply(W, v)`` is W·[xi, dx], ``square(S, v)`` the N×N matrix with
     vec = V·[xi, dx] (S = ``square_tensor(V)``), ``product(R, v)`` the column
     R·[xi, dx] and ``solve_column(M, b, small)`` the column M⁻¹b; ``small``
     says the answer is expected to be far below Cramer's bound (as along Kahan
@@ -155,14 +155,6 @@ class IntegerKernel:
     def apply(self, W, v):
         zero = v[0] * 0
         return [sum((c * v[k] for k, c in row), zero) for row in W]
-
-    def apply_flat(self, W, v):
-        """W·[xi, dx] as a list of integers."""
-        return self.apply(W, v)
-
-    def vector(self, ints):
-        """v = [ints, 0]: a column of integers as a point for tensors whose dx column is 0."""
-        return list(ints) + [0]
 
     def solve(self, M, B):
         from .linalg import bareiss_solve
@@ -207,7 +199,7 @@ class FlintKernel(IntegerKernel):
 
     def __init__(self, flint):
         self.flint = flint
-        super().__init__("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, lambda a, b: a.gcd(b))
+        super().__init__("flint", flint.fmpq, lambda e: e.p, lambda e: e.q, flint.fmpz.gcd)
 
     def tensor(self, rows):
         """(W without its last column, that column or None if it is zero), so that
@@ -219,11 +211,9 @@ class FlintKernel(IntegerKernel):
         (Wx, wd), (xi, d) = W, v
         return Wx * xi if wd is None else Wx * xi + wd * d
 
-    def apply_flat(self, W, v):
-        return self.apply(W, v).entries()
-
-    def vector(self, ints):
-        return self.flint.fmpz_mat(len(ints), 1, ints), 0
+    def split(self, v):
+        xi, d = self.flint.fmpq_mat(len(v), 1, v).numer_denom()
+        return xi.entries(), d
 
     def solve(self, M, B):
         X = self.flint.fmpz_mat(M).solve(self.flint.fmpz_mat(B))

@@ -39,8 +39,8 @@ by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n in 1, 2, 3, 4, 6,
 ``flint`` or ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of
 Q[t]/(tⁿ − 1) (:mod:`exact_khk.split`).  ``'auto'`` (default) takes, for
 Lie–Poisson fields whose Hessian blocks are cyclic Hankel, the split path for
-``flint`` and ``gmpy2`` when n is 2, 3, 4 or 6 (for ``flint`` at n = 2, 3 from
-the heights in :data:`SPLIT_MIN_BITS`); for other n the structured path for
+``flint`` and ``gmpy2`` when n is 2, 3, 4 or 6 (faster than the dense step along
+orbits at every height measured, docs/benchmarks.md); for other n the structured path for
 exact ``flint`` steps when n ≥ 16, and for 4 ≤ n < 16 once the point's height
 reaches :data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers
 measured along orbits, docs/benchmarks.md); otherwise dense.  Every path gives
@@ -84,14 +84,6 @@ METHODS = ("auto", "dense", "structured", "split")
 #: rule simple, at up to about 1.5× near it.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
 STRUCTURED_MIN_BITS = 1024
-
-#: ``method='auto'`` takes the split step (:mod:`exact_khk.split`) for Lie–Poisson
-#: fields with n in {2, 3, 4, 6} in these arithmetics, from the point height (bits)
-#: given per n (default 0).  Measured against the dense step (docs/benchmarks.md):
-#: with python-flint the split step is faster along orbits from about 220 bits
-#: (n = 2) and 40 bits (n = 3), at random points from about 450 and 128 bits, and
-#: from the start for n = 4, 6; with gmpy2 it beats Bareiss everywhere measured (1.35–16×).
-SPLIT_MIN_BITS = {"flint": {2: 256, 3: 64}, "gmpy2": {}}
 
 #: dense orbit steps from this height on may solve output-sensitively (see
 #: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
@@ -163,7 +155,7 @@ class KahanMap:
     @property
     def path(self) -> str:
         """How the steps are solved: ``'dense'``, ``'structured'``, ``'split'``, or
-        e.g. ``'dense below 64 bits, then split'``."""
+        e.g. ``'dense below 1024 bits, then structured'``."""
         if self.structure is None and not self.split:
             return "dense"
         kind = "split" if self.split else "structured"
@@ -233,7 +225,7 @@ class KahanMap:
             K = ar.integers
             S = split_system(self.field, K, K.num(eps), K.den(eps))
             try:
-                return S.step(K.clear(K.column(x)))
+                return S.step(x)
             except ZeroDivisionError:
                 raise self._singular(x, eps) from None
         if ar.exact:
@@ -277,6 +269,21 @@ class KahanMap:
                 small = self._small_answers and height >= SMALL_ANSWER_MIN_BITS
             yield x
 
+    def _split_steps(self, x):
+        """Split steps from the point ``x`` (endless); the state between steps is the
+        last solution as kernel integers (s, L), x = s/L, so that no step clears
+        denominators again."""
+        K, eps = self.arith.integers, self.eps
+        S, make = split_system(self.field, K, K.num(eps), K.den(eps)), K.make
+        s, L = K.split(x)
+        while True:
+            try:
+                s, L = S.solve(s, L)
+            except ZeroDivisionError:
+                raise self._singular(x, eps) from None
+            x = tuple([make(t, L) for t in s])
+            yield x
+
     def step(self, x):
         """Φ_f(x, ε)."""
         with self.arith.local():  # e.g. the working precision of ball:P
@@ -311,6 +318,8 @@ class KahanMap:
                 yield x
                 if self._structured_at(x):
                     break
+        if self.split:
+            yield from self._split_steps(x)
         while True:
             x = self._step(x)
             yield x
@@ -368,8 +377,8 @@ def _choose_path(field, ar, method, eps):
                              "gmpy2) and a field of dimension 2n, n in 1, 2, 3, 4, 6, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
-    if method == "auto" and splits and ar.name in SPLIT_MIN_BITS and circulant.circulant_structure(field):
-        return True, None, SPLIT_MIN_BITS[ar.name].get(field.dim // 2, 0)  # Lie–Poisson, n in 2, 3, 4, 6
+    if method == "auto" and splits and circulant.circulant_structure(field):
+        return True, None, 0  # Lie–Poisson, n in 2, 3, 4, 6
     usable = circulant.flint is not None and (ar.rational or ar.fourier)
     st = circulant.circulant_structure(field) if usable else None
     if method == "structured":

@@ -9,7 +9,7 @@ Measures side by side in one run and writes docs/benchmarks.md:
   Fraction elimination and SymPy ``Matrix.LUsolve``;
 * exact orbit steps: ``KahanMap.orbit`` per step against a bare
   ``fmpz_mat.solve`` loop over the systems of the same orbit points;
-* where the split step (n = 2, 3, 4, 6) overtakes the dense one, flint and gmpy2;
+* the split step (n = 2, 3, 4, 6) against the dense one, flint and gmpy2;
 * structured against dense along an orbit at n = 32, and H̃ both ways;
 * floating step (``float``, ``mp:256``): dense LU, the DFT step, mpmath ``lu_solve``;
 * cost against n at fixed height, with the fitted log–log exponent;
@@ -47,7 +47,7 @@ import sympy  # noqa: E402
 
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
 from exact_khk.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
-from exact_khk.kahan import SPLIT_MIN_BITS, STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
+from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
 from exact_khk.split import SPLIT_N  # noqa: E402
 from exact_khk.systems import random_point  # noqa: E402
 
@@ -227,7 +227,7 @@ def crossover(ns, heights, log, steps=8):
 
 def split_crossover(ns, ariths, orbit_heights, random_heights, log):
     """dense / split time by height, for 8 steps along the orbit of ``random_point(n, 1)``
-    and for one step at random points: where ``SPLIT_MIN_BITS`` should switch."""
+    and for one step at random points (``method='auto'`` splits at these n from the start)."""
     rows = []
     for arith in ariths:
         for n in ns:
@@ -411,20 +411,18 @@ def write(path, info, args, res, elapsed):
     over = [f"n = {r['n']}, {r['bits']} bits ({ratio(r['auto'], r['bare'])})" for r in exact
             if r["auto"] > 1.3 * r["bare"]]
     L += ["", "Library steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
-    L += ["", f"\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = 2, 3, 4, 6, "
-          f"at n = 2, 3 from points of {SPLIT_MIN_BITS['flint'][2]} and {SPLIT_MIN_BITS['flint'][3]} bits on; "
+    L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = 2, 3, 4, 6; "
           f"structured for n ≥ {STRUCTURED_MIN_N['exact']}, and for other n ≥ {STRUCTURED_MIN_N['exact_tall']} "
           f"from points of {STRUCTURED_MIN_BITS} bits on). \"split\": one 2×2 system per cyclotomic factor "
           "of tⁿ − 1 (n = 2, 3, 4, 6 only). Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
           "\"—\": not run (a smaller case already took more than "
           f"{SLOW:g} s).", "",
-          "## Where the split step overtakes the dense one", "",
+          "## The split step against the dense one", "",
           "dense / split time (above 1: split faster) for 8 steps of `KahanMap.orbit` from points of the orbit "
           "of `random_point(n, 1)` (by the start point's height), and for one step at random points of height h "
-          "(answers of Cramer size). `auto` takes the split step at these n for flint from "
-          + ", ".join(f"{b} bits (n = {n})" for n, b in SPLIT_MIN_BITS["flint"].items())
-          + " and otherwise from the start; for gmpy2 always.", "",
+          "(answers of Cramer size). `auto` takes the split step at these n from the start, for flint "
+          "and gmpy2.", "",
           "| arith | n | along the orbit | random points |", "|---|---|---|---|"]
     L += [f"| {a} | {n} | " + ", ".join(f"{h} bits: {q:.2f}" for h, q in orbit) + " | "
           + ", ".join(f"{h} bits: {q:.2f}" for h, q in rand) + " |" for a, n, orbit, rand in res["split"]]
@@ -484,7 +482,8 @@ def main(argv=None):
     t0 = time.perf_counter()
     quick = args.quick
     res = {
-        "orbit": orbit_steps((2, 3, 4, 8) if quick else range(2, 9), (0, 1000) if quick else (0, 1000, 10000), log),
+        "orbit": orbit_steps((2, 3, 4, 8) if quick else range(2, 9), (0, 64, 1000) if quick else (0, 64, 1000, 10000),
+                             log),
         "exact": exact_table((2, 3, 4, 8) if quick else range(2, 9),
                              (64, 10000) if quick else (64, 1000, 10000, 100000), log),
         "split": split_crossover((2, 3) if quick else (2, 3, 4, 6), ("flint", "gmpy2"), (0, 50, 100, 200, 400),

@@ -90,7 +90,7 @@ def test_orbit_method_choice(capsys):
         data = json.loads(out)
         assert data["method"] == method
         orbits[method] = data["orbit"]
-        assert data["path"] == {"auto": "dense below 64 bits, then split", "dense": "dense",
+        assert data["path"] == {"auto": "split", "dense": "dense",
                                 "structured": "structured", "split": "split"}[method]
     assert orbits["auto"] == orbits["dense"] == orbits["structured"] == orbits["split"]
     code, out, _ = run(capsys, "orbit", "--steps", "1", "--method", "split")

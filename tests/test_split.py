@@ -6,6 +6,7 @@ the step's defining equation (I − εf'(x)) x̃ = x evaluated in Fraction arith
 """
 
 import random
+import re
 from fractions import Fraction
 
 import pytest
@@ -15,7 +16,6 @@ from hypothesis import strategies as st
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
                        get_arith, rational_sign_patterns)
 from exact_khk import split as split_mod
-from exact_khk.kahan import SPLIT_MIN_BITS, _height
 from exact_khk.split import SPLIT_N, split_system
 from exact_khk.systems import random_point
 
@@ -127,26 +127,32 @@ def test_split_rejects_non_circulant_blocks():
         KahanMap(fld, "1/3", "flint", method="split")
 
 
-def test_auto_takes_split_from_its_height(monkeypatch):
-    """flint at n = 3: dense below SPLIT_MIN_BITS, split from there on; gmpy2 at
-    n = 2 splits from the start.  The orbits are the dense orbits exactly."""
+@pytest.mark.parametrize("arith", KERNELS)
+def test_auto_takes_split_from_the_start(monkeypatch, arith):
+    """Every step of an auto orbit at n = 2, 3, 4, 6 is a split solve, and the orbit
+    is the dense orbit exactly; at n = 5 auto does not split."""
     calls = []
-    real = split_mod.SplitSystem.step
-    monkeypatch.setattr(split_mod.SplitSystem, "step", lambda self, v: calls.append(v) or real(self, v))
+    real = split_mod.SplitSystem.solve
+    monkeypatch.setattr(split_mod.SplitSystem, "solve", lambda self, s, L: calls.append(L) or real(self, s, L))
+    for n in (2, 3, 4, 6):
+        fld = LiePoissonSystem.random(n, 1).field("f")
+        auto = KahanMap(fld, "1/10", arith)
+        assert auto.split and auto.path == "split"
+        calls.clear()
+        assert auto.orbit(random_point(n, 1), 5) == KahanMap(fld, "1/10", arith, method="dense").orbit(
+            random_point(n, 1), 5)
+        assert len(calls) == 5
+    assert not KahanMap(LiePoissonSystem.random(5, 1).field("f"), "1/10", arith).split
+
+
+def test_split_source_uses_characters():
+    """The generated step computes the characters χ_d(x) once and writes the
+    factors' entries in them."""
     fld = LiePoissonSystem.random(3, 1).field("f")
-    auto = KahanMap(fld, "1/10", "flint")
-    assert auto.split and auto.dense_below == SPLIT_MIN_BITS["flint"][3] > 0
-    pts = auto.orbit(random_point(3, 1), 8)  # heights 2, 21, 57, 79, …
-    assert pts == KahanMap(fld, "1/10", "flint", method="dense").orbit(random_point(3, 1), 8)
-    tall = [p for p in pts[:-1] if _height(auto.arith, p) >= auto.dense_below]
-    assert 0 < len(tall) < 8 and len(calls) == len(tall)
-    calls.clear()
-    fld2 = LiePoissonSystem.random(2, 1).field("f")
-    gm = KahanMap(fld2, "1/10", "gmpy2")
-    assert gm.split and gm.dense_below == 0
-    assert gm.orbit(random_point(2, 1), 4) == KahanMap(fld2, "1/10", "gmpy2", method="dense").orbit(
-        random_point(2, 1), 4)
-    assert len(calls) == 4
+    src = split_system(fld, get_arith("flint").integers, 1, 10).source
+    assert "h0_0 = x0 + x1 + x2" in src and "h1_0 = x0 - x2" in src and "h1_1 = x1 - x2" in src
+    body = [line for line in src.splitlines()[1:] if not line.lstrip().startswith("h")]
+    assert body and not any(re.search(r"\bx\d", line) for line in body)  # x only through the characters
 
 
 tall = st.fractions(min_value=-10 ** 30, max_value=10 ** 30, max_denominator=10 ** 30)
