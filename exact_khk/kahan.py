@@ -35,14 +35,15 @@ python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
 are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
 plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
-by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n in 1, 2, 3, 4, 6,
-``flint`` or ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of
-Q[t]/(tⁿ − 1) (:mod:`exact_khk.split`).  ``'auto'`` (default) takes, for
-Lie–Poisson fields whose Hessian blocks are cyclic Hankel, the split path for
-``flint`` and ``gmpy2`` when n is 2, 3, 4 or 6 (faster than the dense step along
-orbits at every height measured, docs/benchmarks.md); for other n the structured path for
-exact ``flint`` steps when n ≥ 16, and for 4 ≤ n < 16 once the point's height
-reaches :data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers
+by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n < 16, ``flint`` or
+``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
+(:mod:`exact_khk.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
+whose Hessian blocks are cyclic Hankel, the split path for ``flint`` and
+``gmpy2`` when every factor has degree ≤ 4 (:data:`~exact_khk.split.AUTO_SPLIT_N`:
+n = 2, 3, 4, 5, 6, 8, 10, 12; faster than the dense and structured steps along
+orbits at every height measured, docs/benchmarks.md); for other n the structured
+path for exact ``flint`` steps when n ≥ 16, and for 4 ≤ n < 16 once the point's
+height reaches :data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers
 measured along orbits, docs/benchmarks.md); otherwise dense.  Every path gives
 the same rational point.  ``gmpy2`` and ``fraction`` may ask for the
 structured path explicitly.
@@ -69,7 +70,7 @@ from .arith import get_arith
 from .errors import InputError, NearSingularWarning, SingularStepError
 from .linalg import SingularMatrix, solve
 from .parsing import parse_rational
-from .split import split_system
+from .split import AUTO_SPLIT_N, split_system
 
 METHODS = ("auto", "dense", "structured", "split")
 
@@ -79,9 +80,10 @@ METHODS = ("auto", "dense", "structured", "split")
 #: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
 #: orbits against the dense orbit step (docs/benchmarks.md, "Where the
 #: structured step overtakes"): about 250 bits for n = 12, 650–800 for
-#: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start (n = 4
-#: and 6 now take the split step instead).  One threshold for all n keeps the
-#: rule simple, at up to about 1.5× near it.
+#: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start.  Of
+#: these n, only 7, 9, 11, 13, 14 and 15 still use the rule (the others take the
+#: split step).  One threshold for all n keeps the rule simple, at up to about
+#: 1.5× near it.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
 STRUCTURED_MIN_BITS = 1024
 
@@ -374,11 +376,11 @@ def _choose_path(field, ar, method, eps):
     if method == "split":
         if not splits:
             raise InputError("method: 'split' needs a rational arithmetic with an integer kernel (flint, "
-                             "gmpy2) and a field of dimension 2n, n in 1, 2, 3, 4, 6, whose Jacobian "
+                             "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
-    if method == "auto" and splits and circulant.circulant_structure(field):
-        return True, None, 0  # Lie–Poisson, n in 2, 3, 4, 6
+    if method == "auto" and splits and field.dim // 2 in AUTO_SPLIT_N and circulant.circulant_structure(field):
+        return True, None, 0  # Lie–Poisson, every factor of degree ≤ 4
     usable = circulant.flint is not None and (ar.rational or ar.fourier)
     st = circulant.circulant_structure(field) if usable else None
     if method == "structured":

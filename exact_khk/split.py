@@ -1,4 +1,4 @@
-"""Exact Kahan steps split over the cyclotomic factors of tⁿ − 1 (n = 1, 2, 3, 4, 6).
+"""Exact Kahan steps split over the cyclotomic factors of tⁿ − 1 (n < 16).
 
 By the Chinese remainder theorem Q[t]/(tⁿ − 1) ≅ ∏_{d | n} Q(ζ_d), t ↦ ζ_d.  When
 the four n×n blocks C of the step's system M = I − εf'(x) are circulant,
@@ -10,25 +10,25 @@ divisor d of n,
     [c11(ζ_d^{−1})  c12(ζ_d^{−1})] [χ_d(z_u)]   [χ_d(r_u)]
     [c21(ζ_d^{−1})  c22(ζ_d^{−1})] [χ_d(z_v)] = [χ_d(r_v)],
 
-and z comes back by z_i = (1/n) Σ_{d | n} Tr_{Q(ζ_d)/Q}(ζ_d^{−i} χ_d(z)).  For n
-in :data:`SPLIT_N` every factor has degree at most 2: Q (d = 1, 2) or Q(θ) with
-θ = ζ_d, θ² = pθ + q (d = 3, 4, 6).  A step is then Cramer's rule over Z or
-Z[θ] in each factor, one division by the determinant's norm, and an integer
-recombination; det M = 0 exactly when a factor's determinant is 0.  With
-circulant blocks the Hessian is cyclic Hankel, so each factor's entries are
-integer forms in χ_d(x_u), χ_d(x_v) and the common denominator D of x alone,
-and a step needs only those few sums of the point.  The whole
-solve is generated once per field and ε as straight-line Python over the
-kernel's integers (``SplitSystem.source``), so that a step costs its integer
-operations and nothing else: no matrix is built.
+and z comes back by z_i = (1/n) Σ_{d | n} Tr_{Q(ζ_d)/Q}(ζ_d^{−i} χ_d(z)), where
+Tr(ζ_d^m) is the Ramanujan sum c_d(m).  Elements of Q(ζ_d) are coefficient
+vectors in the basis 1, θ, …, θ^{φ(d)−1} of Z[θ] = Z[t]/Φ_d(t).  Each factor is
+solved by Cramer's rule over Z[θ]; numerators and determinant are multiplied
+by det* = ∏ σ_k(det), the product of det's other conjugates (θ ↦ θ^k, k prime
+to d), so that the denominator is the norm N(det) ∈ Z.  det M = 0 exactly when
+some factor's determinant is 0.  With circulant blocks the Hessian is cyclic
+Hankel, so each factor's entries are integer forms in χ_d(x_u), χ_d(x_v) and
+the common denominator D of x alone, and a step needs only those few sums of
+the point.  The whole solve is generated once per field and ε as straight-line
+Python over the kernel's integers (``SplitSystem.source``), so that a step
+costs its integer operations and nothing else: no matrix is built.
 
 Why it pays: χ_d(z) has (a divisor of) the denominator of z, and along Kahan
 orbits z has far fewer bits than Cramer's bound (heights grow by tens of bits
 a step).  Each factor's solution is reduced by its own gcd before the factors
-are combined, so the gcds run on numbers of about 2h bits (Q) or 4h bits
-(Z[θ]) for entries of h bits, where a dense solve reduces numbers of 2n·h
-bits, and the recombination runs on small numbers.  Measured in
-docs/benchmarks.md.
+are combined, so the gcds run on numbers of about 2h·φ(d) bits for entries of
+h bits, where a dense solve reduces numbers of 2n·h bits, and the
+recombination runs on small numbers.  Measured in docs/benchmarks.md.
 
 >>> from exact_khk import LiePoissonSystem, KahanMap
 >>> fld = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1").field("f")
@@ -39,27 +39,34 @@ True
 
 from __future__ import annotations
 
-#: the n for which every cyclotomic factor of tⁿ − 1 has degree ≤ 2
-SPLIT_N = (1, 2, 3, 4, 6)
+import math
 
-_THETA = {3: (-1, -1), 4: (0, -1), 6: (1, -1)}  # ζ_d² = p·ζ_d + q
+from .systems import ramanujan_sum
 
+#: the n for which the split step is generated (the code grows like the cube of
+#: the largest degree φ(d), and for n ≥ 16 the structured step is as fast)
+SPLIT_N = tuple(range(1, 16))
+
+#: the n where ``method='auto'`` takes it: every factor Q(ζ_d), d | n, has degree
+#: φ(d) ≤ 4.  Measured along orbits (docs/benchmarks.md) it is then faster than
+#: the dense and the structured step at every height; with a factor of degree 6
+#: (n = 7, 9) or more it loses to the structured step at large heights.
+AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 10, 12)
 
 def _factors(n):
-    """Per divisor d of n: (d, degree, p, q, ζ_d^j for j < d as (a, b) = a + bθ)."""
+    """Per divisor d of n: (d, deg = φ(d), θ^j for j < d as coefficient lists in the
+    basis 1, θ, …, θ^{deg−1} of Z[θ] = Z[t]/Φ_d(t), θ = ζ_d)."""
+    import flint
+
     out = []
-    for d in range(1, n + 1):
-        if n % d:
-            continue
-        if d <= 2:
-            out.append((d, 1, 0, 0, [((-1) ** (j * (d - 1)), 0) for j in range(d)]))
-        else:
-            p, q = _THETA[d]
-            powers = [(1, 0)]
-            for _ in range(d - 1):  # (a + bθ)θ = bq + (a + bp)θ
-                a, b = powers[-1]
-                powers.append((b * q, a + b * p))
-            out.append((d, 2, p, q, powers))
+    for d in (d for d in range(1, n + 1) if n % d == 0):
+        phi = flint.fmpz_poly.cyclotomic(d)
+        deg = phi.degree()
+        powers = []
+        for j in range(d):
+            c = [int(v) for v in (flint.fmpz_poly([0] * j + [1]) % phi).coeffs()]
+            powers.append(c + [0] * (deg - len(c)))
+        out.append((d, deg, powers))
     return out
 
 
@@ -115,7 +122,7 @@ def _source(rows, n):
     solve of :class:`SplitSystem` for these rows; see the module docstring."""
     args = [f"x{i}" for i in range(2 * n)] + ["D"]
     code, k, factors, back = [], 0, _factors(n), [[] for _ in range(2 * n)]
-    for j, (d, deg, p, q, powers) in enumerate(factors):
+    for j, (d, deg, powers) in enumerate(factors):
         block, k = rows[k:k + 6 * deg], k + 6 * deg
         names = [f"h{j}_{c}" for c in range(2 * deg)]  # χ_d(x_u), then χ_d(x_v)
         code += [f"{h} = {_lin([powers[i % d][c % deg] if i // n == c // deg else 0 for i in range(2 * n)], args)}"
@@ -125,34 +132,40 @@ def _source(rows, n):
         for m, name in enumerate("abcdrs"):
             e[name] = [f"{name}{j}_{c}" for c in range(deg)]
             code += [f"{v} = {_lin(block[m * deg + c], names)}" for c, v in enumerate(e[name])]
-        y = [f"y{j}_{c}" for c in range(2 * deg)]  # χ_d(z): the u coefficients, then the v ones
         a, b, c_, d_, r, s = (e[name] for name in "abcdrs")
-        den = f"den{j}"
-        if deg == 1:
-            code += [f"{den} = {a[0]} * {d_[0]} - {b[0]} * {c_[0]}",
-                     f"{y[0]} = {d_[0]} * {r[0]} - {b[0]} * {s[0]}",
-                     f"{y[1]} = {a[0]} * {s[0]} - {c_[0]} * {r[0]}"]
-        else:  # over Z[θ], θ² = pθ + q: Cramer's rule times the conjugate of det
-            code += _cross(f"m{j}", a, d_, b, c_, p, q)  # det = a·d − b·c
-            code += [f"k{j}_0 = m{j}_0{_term(p, f'm{j}_1')}", f"k{j}_1 = -m{j}_1",  # its conjugate
-                     f"{den} = m{j}_0 * k{j}_0{_term(q, f'm{j}_1 * k{j}_1')}"]  # its norm
-            code += _cross(f"u{j}", d_, r, b, s, p, q) + _times(y[:2], f"u{j}", f"k{j}", p, q)
-            code += _cross(f"v{j}", a, s, c_, r, p, q) + _times(y[2:], f"v{j}", f"k{j}", p, q)
+        y = [f"y{j}_{c}" for c in range(2 * deg)]  # χ_d(z): the u coefficients, then the v ones
+        den, field = f"den{j}", (d, deg, powers)
+        # Cramer's rule over Z[θ], then numerators and det times det* = the product of
+        # the other conjugates σ_k(det) (θ ↦ θ^k, k prime to d), so that den = N(det) ∈ Z
+        m, u, v = ([f"{w}{j}_{c}" for c in range(deg)] for w in "muv")
+        code += _product(m, [(1, a, d_), (-1, b, c_)], field)
+        code += _product(u, [(1, d_, r), (-1, b, s)], field) + _product(v, [(1, a, s), (-1, c_, r)], field)
+        units = [k for k in range(2, d) if math.gcd(k, d) == 1]
+        conj, sk = ([f"{w}{j}_{c}" for c in range(deg)] for w in "kw")
+        for i, unit in enumerate(units):
+            code += [f"{w} = {_lin([powers[unit * c2 % d][c] for c2 in range(deg)], m)}"
+                     for c, w in enumerate(sk if i else conj)]
+            if i:
+                code += _product(conj, [(1, conj, sk)], field)
+        if not units:  # d = 1, 2: the factor is Q
+            code += [f"{den} = {m[0]}"] + [f"{t} = {w}" for t, w in zip(y, u + v)]
+        else:  # N(det) is det·det*'s constant coefficient (the others are 0)
+            code += _product([den] + [None] * (deg - 1), [(1, m, conj)], field)
+            code += _product(y[:deg], [(1, u, conj)], field) + _product(y[deg:], [(1, v, conj)], field)
         g = f"g{j}"
         code += [f"if not {den}:", "    raise ZeroDivisionError('singular Kahan system')",
                  # reduce this factor's solution y/den on its own (see the module docstring)
                  f"{g} = {den}"] + [f"{g} = gcd({g}, {t})" for t in y] + [
                  f"{g} = -{g} if {den} < 0 else {g}", f"{den} //= {g}"] + [f"{t} //= {g}" for t in y]
         # the inverse transform: n·z_{blk·n + i} is the sum over the factors of
-        # Tr(ζ^{−i} χ_d(z_blk)); for ζ^{−i} = z0 + z1·θ and χ_d(z_blk) = y0 + y1·θ,
-        # Tr(ζ^{−i}) = 2·z0 + p·z1 and Tr(ζ^{−i}·θ) = 2q·z1 + p(z0 + p·z1)
+        # Tr(ζ^{−i} χ_d(z_blk)) = Σ_c y_c Tr(ζ^{c − i}), and Tr(ζ_d^m) is the
+        # Ramanujan sum c_d(m)
         for blk in range(2):
             for i in range(n):
-                z0, z1 = powers[-i % d]
-                traces = [z0] if deg == 1 else [2 * z0 + p * z1, 2 * q * z1 + p * (z0 + p * z1)]
+                traces = [ramanujan_sum(d, (c - i) % d) for c in range(deg)]
                 back[blk * n + i].append((y[blk * deg:(blk + 1) * deg], traces))
     dens = [f"den{j}" for j in range(len(factors))]
-    for j, (_, deg, *_) in enumerate(factors):  # bring every factor to the denominator L
+    for j, (_, deg, _) in enumerate(factors):  # bring every factor to the denominator L
         others = " * ".join(dens[:j] + dens[j + 1:])
         if others:
             code += [f"{t} *= {others}" for t in (f"y{j}_{c}" for c in range(2 * deg))]
@@ -179,19 +192,24 @@ def _in_characters(rows, n, d, deg, powers):
     return out
 
 
-def _cross(out, x, y, z, w, p, q):
-    """Source for out = x·y − z·w in Z[θ], θ² = pθ + q (``out_0``, ``out_1``; the
-    arguments are coefficient-name pairs)."""
-    return [f"t = {x[1]} * {y[1]} - {z[1]} * {w[1]}",
-            f"{out}_0 = {x[0]} * {y[0]} - {z[0]} * {w[0]}{_term(q, 't')}",
-            f"{out}_1 = {x[0]} * {y[1]} + {x[1]} * {y[0]} - {z[0]} * {w[1]} - {z[1]} * {w[0]}{_term(p, 't')}"]
-
-
-def _times(out, x, y, p, q):
-    """Source for out = x·y in Z[θ] (``out``: two names; x, y: name prefixes)."""
-    return [f"t = {x}_1 * {y}_1",
-            f"{out[0]} = {x}_0 * {y}_0{_term(q, 't')}",
-            f"{out[1]} = {x}_0 * {y}_1 + {x}_1 * {y}_0{_term(p, 't')}"]
+def _product(out, terms, field):
+    """Source for out = Σ ± x·y in Z[θ] = Z[t]/Φ_d(t) (``terms``: (sign, x, y) with x, y
+    lists of coefficient names; ``field``: (d, deg, powers) of :func:`_factors`;
+    coefficients whose name in ``out`` is None are not computed)."""
+    d, deg, powers = field
+    wanted = [c for c, o in enumerate(out) if o is not None]
+    code, tmp = [], []  # the coefficients of t^0 … t^{2deg−2} before reduction
+    for m in range(2 * deg - 1):
+        if not any(powers[m % d][c] for c in wanted):
+            tmp.append("0")
+            continue
+        parts = [f"{'-' if sign < 0 else '+'} {x[i]} * {y[m - i]}"
+                 for sign, x, y in terms for i in range(max(0, m - deg + 1), min(m, deg - 1) + 1)]
+        tmp.append(f"t{m}")
+        code.append(f"t{m} = {' '.join(parts).removeprefix('+ ')}")
+    if deg == 1:
+        return [f"{out[0]} = {code[0].split(' = ', 1)[1]}"]
+    return code + [f"{out[c]} = {_lin([powers[m % d][c] for m in range(len(tmp))], tmp)}" for c in wanted]
 
 
 def split_system(field, kernel, p, q):
@@ -213,7 +231,7 @@ def _build(field, kernel, p, q):
            for bi in range(2) for bj in range(2) for i in range(n) for j in range(n)):
         return None
     width, rows = len(R[0]), []
-    for d, deg, _, _, powers in _factors(n):
+    for d, deg, powers in _factors(n):
         block = []
         for bi in range(2):  # entries c_{bi,bj}(ζ^{−1}) = Σ_m c_m ζ^{−m}
             for bj in range(2):

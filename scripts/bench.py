@@ -9,7 +9,7 @@ Measures side by side in one run and writes docs/benchmarks.md:
   Fraction elimination and SymPy ``Matrix.LUsolve``;
 * exact orbit steps: ``KahanMap.orbit`` per step against a bare
   ``fmpz_mat.solve`` loop over the systems of the same orbit points;
-* the split step (n = 2, 3, 4, 6) against the dense one, flint and gmpy2;
+* the split step against the dense one, flint and gmpy2;
 * structured against dense along an orbit at n = 32, and H̃ both ways;
 * floating step (``float``, ``mp:256``): dense LU, the DFT step, mpmath ``lu_solve``;
 * cost against n at fixed height, with the fitted log–log exponent;
@@ -48,7 +48,7 @@ import sympy  # noqa: E402
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
 from exact_khk.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
 from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
-from exact_khk.split import SPLIT_N  # noqa: E402
+from exact_khk.split import AUTO_SPLIT_N, SPLIT_N  # noqa: E402
 from exact_khk.systems import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
@@ -411,10 +411,11 @@ def write(path, info, args, res, elapsed):
     over = [f"n = {r['n']}, {r['bits']} bits ({ratio(r['auto'], r['bare'])})" for r in exact
             if r["auto"] > 1.3 * r["bare"]]
     L += ["", "Library steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
-    L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = 2, 3, 4, 6; "
+    L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = "
+          + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + "; "
           f"structured for n ≥ {STRUCTURED_MIN_N['exact']}, and for other n ≥ {STRUCTURED_MIN_N['exact_tall']} "
           f"from points of {STRUCTURED_MIN_BITS} bits on). \"split\": one 2×2 system per cyclotomic factor "
-          "of tⁿ − 1 (n = 2, 3, 4, 6 only). Random points of height h have no special structure, so "
+          "of tⁿ − 1. Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
           "\"—\": not run (a smaller case already took more than "
           f"{SLOW:g} s).", "",
@@ -432,7 +433,7 @@ def write(path, info, args, res, elapsed):
           "solves output-sensitively once its answers are known to be small; the timed calls repeat one "
           "orbit, so after the warm-up call it does so from the first step. `auto` switches at "
           f"{STRUCTURED_MIN_BITS} bits for {STRUCTURED_MIN_N['exact_tall']} ≤ n < {STRUCTURED_MIN_N['exact']} "
-          "(n = 4, 6 take the split step instead).", "",
+          "where it does not take the split step (n = 7, 9, 11, 13, 14, 15).", "",
           "| n | " + " | ".join(f"from ≥ {t} bits" for t, _, _ in res["crossover"][0][1]) + " |",
           "|---|" + "---|" * len(res["crossover"][0][1])]
     L += [f"| {n} | " + " | ".join(f"{q:.2f} ({h} bits)" for _, h, q in cells) + " |" for n, cells in res["crossover"]]
@@ -486,7 +487,7 @@ def main(argv=None):
                              log),
         "exact": exact_table((2, 3, 4, 8) if quick else range(2, 9),
                              (64, 10000) if quick else (64, 1000, 10000, 100000), log),
-        "split": split_crossover((2, 3) if quick else (2, 3, 4, 6), ("flint", "gmpy2"), (0, 50, 100, 200, 400),
+        "split": split_crossover((2, 3) if quick else (2, 3, 4, 5, 6, 8), ("flint", "gmpy2"), (0, 50, 100, 200, 400),
                                  (16, 64, 128, 256, 512), log),
         "crossover": crossover((4, 8) if quick else (4, 5, 6, 7, 8, 12), (0, 100, 200, 400, 800, 1600), log),
         "along": structured_along_orbit(32, (0, 24) if quick else (0, 24, 50), log),

@@ -5,6 +5,7 @@ one 2n×2n integer solve) and to the plain Fraction elimination, and checked in
 the step's defining equation (I − εf'(x)) x̃ = x evaluated in Fraction arithmetic.
 """
 
+import math
 import random
 import re
 from fractions import Fraction
@@ -16,7 +17,7 @@ from hypothesis import strategies as st
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
                        get_arith, rational_sign_patterns)
 from exact_khk import split as split_mod
-from exact_khk.split import SPLIT_N, split_system
+from exact_khk.split import AUTO_SPLIT_N, SPLIT_N, split_system
 from exact_khk.systems import random_point
 
 KERNELS = ["flint", "gmpy2"]
@@ -44,7 +45,7 @@ def _residual_zero(fld, x, y, eps):
     return [sum(a * b for a, b in zip(row, ys)) for row in M] == xs
 
 
-@pytest.mark.parametrize("n", [2, 3, 4, 6])
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6, 7, 8])
 @pytest.mark.parametrize("arith", KERNELS)
 def test_split_equals_dense(n, arith):
     rng = random.Random(n)
@@ -61,7 +62,18 @@ def test_split_equals_dense(n, arith):
                 assert got[1] != got[0]  # negative control: the step moved the point
 
 
-@pytest.mark.parametrize("n", [2, 3, 4, 6])
+@pytest.mark.parametrize("n", [9, 10, 12, 15])
+def test_split_equals_dense_with_larger_factors(n):
+    """Factors Q(ζ_d) of degree 6 (n = 9), 4 (n = 10, 12) and 8 (n = 15), where det*
+    is a product of 3 to 7 conjugates."""
+    s = LiePoissonSystem.random(n, seed=1)
+    for fld in (s.field("f"), s.field("g", rational_sign_patterns(n)[1])):
+        x = random_point(n, 1)
+        got = KahanMap(fld, "-2/9", "flint", method="split").orbit(x, 3)
+        assert got == KahanMap(fld, "-2/9", "flint", method="dense").orbit(x, 3)
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6, 8])
 def test_split_equals_fraction_reference(n):
     fld = LiePoissonSystem.random(n, seed=7).field("f")
     x = [Fraction(3, 7), Fraction(-2, 5)] + [Fraction(k, 3) for k in range(2 * n - 2)]
@@ -108,12 +120,18 @@ def test_split_two_dimensional_field():
 
 def test_split_refuses_what_it_cannot_do():
     with pytest.raises(InputError, match="split"):
-        KahanMap(LiePoissonSystem.random(5, 1).field("f"), "1/3", "flint", method="split")
+        KahanMap(LiePoissonSystem.random(16, 1).field("f"), "1/3", "flint", method="split")
     for arith in ("fraction", "float", "mp:60"):
         with pytest.raises(InputError, match="split"):
             KahanMap(LiePoissonSystem.random(3, 1).field("f"), "1/3", arith, method="split")
-    assert split_system(LiePoissonSystem.random(5, 1).field("f"), get_arith("flint").integers, 1, 3) is None
-    assert 5 not in SPLIT_N
+    assert split_system(LiePoissonSystem.random(16, 1).field("f"), get_arith("flint").integers, 1, 3) is None
+    assert 16 not in SPLIT_N
+
+
+def test_auto_split_n_are_the_n_with_factors_of_degree_at_most_4():
+    """AUTO_SPLIT_N is the rule it states: every φ(d), d | n, at most 4."""
+    phi = lambda d: sum(1 for k in range(1, d + 1) if math.gcd(k, d) == 1)  # noqa: E731
+    assert AUTO_SPLIT_N == tuple(n for n in SPLIT_N if all(phi(d) <= 4 for d in range(1, n + 1) if n % d == 0))
 
 
 def test_split_rejects_non_circulant_blocks():
@@ -129,12 +147,12 @@ def test_split_rejects_non_circulant_blocks():
 
 @pytest.mark.parametrize("arith", KERNELS)
 def test_auto_takes_split_from_the_start(monkeypatch, arith):
-    """Every step of an auto orbit at n = 2, 3, 4, 6 is a split solve, and the orbit
-    is the dense orbit exactly; at n = 5 auto does not split."""
+    """Every step of an auto orbit at the n of AUTO_SPLIT_N is a split solve, and the orbit
+    is the dense orbit exactly; at n = 7 (a factor of degree 6) auto does not split."""
     calls = []
     real = split_mod.SplitSystem.solve
     monkeypatch.setattr(split_mod.SplitSystem, "solve", lambda self, s, L: calls.append(L) or real(self, s, L))
-    for n in (2, 3, 4, 6):
+    for n in (2, 3, 4, 5, 6, 8, 10, 12):
         fld = LiePoissonSystem.random(n, 1).field("f")
         auto = KahanMap(fld, "1/10", arith)
         assert auto.split and auto.path == "split"
@@ -142,7 +160,7 @@ def test_auto_takes_split_from_the_start(monkeypatch, arith):
         assert auto.orbit(random_point(n, 1), 5) == KahanMap(fld, "1/10", arith, method="dense").orbit(
             random_point(n, 1), 5)
         assert len(calls) == 5
-    assert not KahanMap(LiePoissonSystem.random(5, 1).field("f"), "1/10", arith).split
+    assert not KahanMap(LiePoissonSystem.random(7, 1).field("f"), "1/10", arith).split
 
 
 def test_split_source_uses_characters():
@@ -159,8 +177,8 @@ tall = st.fractions(min_value=-10 ** 30, max_value=10 ** 30, max_denominator=10 
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
-@given(st.sampled_from([2, 3, 4, 6]), st.integers(0, 10_000), st.sampled_from(["f", "g", "control"]),
-       st.lists(tall, min_size=12, max_size=12), st.fractions(-5, 5, max_denominator=7).filter(bool))
+@given(st.sampled_from([2, 3, 4, 5, 6, 8]), st.integers(0, 10_000), st.sampled_from(["f", "g", "control"]),
+       st.lists(tall, min_size=16, max_size=16), st.fractions(-5, 5, max_denominator=7).filter(bool))
 def test_split_equals_dense_at_tall_points(n, seed, kind, coords, eps):
     """Random points with 100-bit entries (answers of Cramer size, no small-answer luck)."""
     fld = LiePoissonSystem.random(n, seed).field(kind)

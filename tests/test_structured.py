@@ -199,9 +199,10 @@ def test_auto_choice_and_fallbacks():
 
 
 def test_auto_switches_to_structured_with_height(monkeypatch):
-    """For 4 ≤ n < 16 (other than the split n = 4, 6), ``auto`` steps dense from low points and structured from points
-    of height ≥ STRUCTURED_MIN_BITS; the orbit is the dense orbit exactly."""
-    n, steps = 5, 32  # heights 2, 38, 75, …, 905 at step 24 (n = 4, 6 take the split step)
+    """For 4 ≤ n < 16 where ``auto`` does not split (n = 7, 9, 11, 13, 14, 15), it steps dense
+    from low points and structured from points of height ≥ STRUCTURED_MIN_BITS; the orbit
+    is the dense orbit exactly."""
+    n, steps = 7, 20  # heights 2, 71, 144, …, 1020 at step 14, 1091, …
     fld = LiePoissonSystem.random(n, 1).field("f")
     auto, dense = KahanMap(fld, "1/10", "flint"), KahanMap(fld, "1/10", "flint", method="dense")
     assert auto.structure is not None and auto.dense_below == STRUCTURED_MIN_BITS
