@@ -41,10 +41,11 @@ by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n < 16, ``flint`` or
 whose Hessian blocks are cyclic Hankel, the split path for ``flint`` and
 ``gmpy2`` when every factor has degree ≤ 4 (:data:`~exact_khk.split.AUTO_SPLIT_N`:
 n = 2, 3, 4, 5, 6, 8, 10, 12; faster than the dense and structured steps along
-orbits at every height measured, docs/benchmarks.md); for other n the structured
-path for exact ``flint`` steps when n ≥ 16, and for 4 ≤ n < 16 once the point's
-height reaches :data:`STRUCTURED_MIN_BITS` (:data:`STRUCTURED_MIN_N`: the crossovers
-measured along orbits, docs/benchmarks.md); otherwise dense.  Every path gives
+orbits at every height measured: docs/benchmarks.md, README "Known limitations");
+for other n the structured path for exact ``flint`` steps when n ≥ 16, and for
+4 ≤ n < 16 once the point's height reaches :data:`STRUCTURED_MIN_BITS`
+(:data:`STRUCTURED_MIN_N`: the crossovers measured along orbits,
+docs/benchmarks.md); otherwise dense.  Every path gives
 the same rational point.  ``gmpy2`` and ``fraction`` may ask for the
 structured path explicitly.
 

@@ -48,9 +48,10 @@ from .systems import ramanujan_sum
 SPLIT_N = tuple(range(1, 16))
 
 #: the n where ``method='auto'`` takes it: every factor Q(ζ_d), d | n, has degree
-#: φ(d) ≤ 4.  Measured along orbits (docs/benchmarks.md) it is then faster than
-#: the dense and the structured step at every height; with a factor of degree 6
-#: (n = 7, 9) or more it loses to the structured step at large heights.
+#: φ(d) ≤ 4.  Measured along orbits (docs/benchmarks.md; README, "Known
+#: limitations") it is then faster than the dense and the structured step at every
+#: height tried; with larger factors it is not always (n = 7 loses to the structured
+#: step at 5000 bits, n = 11 everywhere).
 AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 10, 12)
 
 def _factors(n):
