@@ -113,11 +113,6 @@ def _lin(coeffs, names):
     return out or "0"
 
 
-def _term(c, name):
-    """`` + c·name`` as source (empty for c = 0)."""
-    return "" if not c else f" {'-' if c < 0 else '+'} " + (name if abs(c) == 1 else f"{abs(c)} * {name}")
-
-
 def _source(rows, n):
     """The source of ``solve(x_0, …, x_{2n−1}, D, gcd) → ((s_0, …), L)``, the split
     solve of :class:`SplitSystem` for these rows; see the module docstring."""
