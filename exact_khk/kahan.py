@@ -277,14 +277,13 @@ class KahanMap:
         last solution as kernel integers (s, L), x = s/L, so that no step clears
         denominators again."""
         K, eps = self.arith.integers, self.eps
-        S, make = split_system(self.field, K, K.num(eps), K.den(eps)), K.make
+        S = split_system(self.field, K, K.num(eps), K.den(eps))
         s, L = K.split(x)
         while True:
             try:
-                s, L = S.solve(s, L)
+                s, L, x = S.solve(s, L)
             except ZeroDivisionError:
                 raise self._singular(x, eps) from None
-            x = tuple([make(t, L) for t in s])
             yield x
 
     def step(self, x):
@@ -334,20 +333,21 @@ class KahanMap:
     def orbit(self, x0, steps: int, progress=None):
         """[x0, Φ(x0), …, Φ^steps(x0)]; a singular step raises with its step number.
 
-        ``progress``, if given, is called as ``progress(k)`` after step k.
+        ``progress``, if given, is called as ``progress(k)`` after step k (inside the
+        arithmetic's working context, e.g. the precision of ``ball:P``).
         """
         if not isinstance(steps, int) or steps < 0:
             raise InputError(f"steps: expected a non-negative integer, got {steps!r}")
         pts = [self.point(x0, "x0")]
         it = self._steps(pts[0])
-        for k in range(1, steps + 1):
-            try:
-                with self.arith.local():
+        with self.arith.local():
+            for k in range(1, steps + 1):
+                try:
                     pts.append(next(it))
-            except SingularStepError as exc:
-                raise exc.at_step(k) from None
-            if progress is not None:
-                progress(k)
+                except SingularStepError as exc:
+                    raise exc.at_step(k) from None
+                if progress is not None:
+                    progress(k)
         return pts
 
     def jacobian(self, x):

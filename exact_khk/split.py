@@ -78,97 +78,152 @@ class SplitSystem:
     entries and right-hand side, coefficient by coefficient (see :func:`_build`).
     The whole solve is generated once as straight-line Python (``source``: the
     linear forms, Cramer's rule per factor, the gcd reductions and the inverse
-    transform), so that a step costs only its integer operations; the integers
-    are the kernel's own (python-flint ``fmpz`` or gmpy2 ``mpz``).  Build it with
+    transform), so that a step costs only its integer operations, on the kernel's
+    integers (python-flint ``fmpz`` or gmpy2 ``mpz``).  Build it with
     :func:`split_system`.
     """
 
     def __init__(self, kernel, rows, n):
         self.kernel, self.n = kernel, n
-        self.source = _source(rows, n)
-        namespace = {}
+        self.source, consts = _source(rows, n)
+        integer = lambda c: kernel.num(kernel.make(c, 1))  # noqa: E731  (c as a kernel integer)
+        namespace = {k: integer(c) for k, c in consts.items()} | {"gcd": kernel.gcd, "Q": kernel.make}
         exec(compile(self.source, f"<split step, n = {n}>", "exec"), namespace)
-        self._solve = namespace["solve"]
-
-    def solve(self, xi, d):
-        """(s, L) with z = s/L the solution at the point x = xi/d (kernel integers);
-        raises ZeroDivisionError if the system is singular."""
-        return self._solve(*xi, d, self.kernel.gcd)
+        #: solve(xi, d) → (s, L, z): the solution z (a tuple of the kernel's rationals)
+        #: at the point x = xi/d, and z = s/L as kernel integers (L may be negative);
+        #: raises ZeroDivisionError if the system is singular
+        self.solve = namespace["solve"]
 
     def step(self, x):
         """The solution at the point ``x`` (a sequence of the kernel's rationals), as
         a tuple of them."""
-        s, L = self.solve(*self.kernel.split(x))
-        make = self.kernel.make
-        return tuple([make(t, L) for t in s])
+        return self.solve(*self.kernel.split(x))[2]
 
 
-def _lin(coeffs, names):
-    """The integer linear form Σ c·name as Python source."""
-    out = ""
-    for c, name in zip(coeffs, names):
-        if c:
-            sign = "-" if c < 0 else ("+" if out else "")
-            out += (f" {sign} " if out else sign) + (name if abs(c) == 1 else f"{abs(c)} * {name}")
-    return out or "0"
+class _Emitter:
+    """Straight-line code in fresh names.  Integer constants are named (``C12``,
+    ``Cm3``) so that they can be bound to the kernel's integers (python-flint
+    multiplies an fmpz by an fmpz about twice as fast as by an int); a value
+    that is identically 0 is ``None`` and its terms are dropped; an expression
+    already computed is not computed again."""
+
+    def __init__(self):
+        self.lines, self.consts, self.known = [], {}, {}
+
+    def const(self, c):
+        name = f"C{c}" if c > 0 else f"Cm{-c}"
+        self.consts[name] = c
+        return name
+
+    def form(self, terms):
+        """The expression Σ c·v over (c, v), v a name or None, or None if it is 0."""
+        terms = sorted([(c, v) for c, v in terms if c and v is not None], key=lambda t: t[0] < 0)
+        if not terms:
+            return None
+        c, v = terms[0]  # a positive term first: a leading minus would cost a negation
+        out = v if c == 1 else ("-" + v if c == -1 else f"{self.const(c)} * {v}")
+        for c, v in terms[1:]:
+            out += (" - " if c < 0 else " + ") + (v if abs(c) == 1 else f"{self.const(abs(c))} * {v}")
+        return out
+
+    def let(self, expr, prefix="t"):
+        """A name holding ``expr``: None for None, ``expr`` if it is a name, else a new
+        name (or the one that already holds this expression)."""
+        if expr is None or expr.isidentifier():
+            return expr
+        if expr not in self.known:
+            self.known[expr] = name = f"{prefix}{len(self.known)}"
+            self.lines.append(f"{name} = {expr}")
+        return self.known[expr]
 
 
 def _source(rows, n):
-    """The source of ``solve(x_0, …, x_{2n−1}, D, gcd) → ((s_0, …), L)``, the split
-    solve of :class:`SplitSystem` for these rows; see the module docstring."""
+    """(source of ``solve((x_0, …, x_{2n−1}), D) → ((s_0, …), L, (s_0/L, …))``, its
+    constants) for the split solve of :class:`SplitSystem` with these rows; see the
+    module docstring.  The source's globals are the constants, ``gcd`` and ``Q``
+    (the kernel's rationals)."""
     args = [f"x{i}" for i in range(2 * n)] + ["D"]
-    code, k, factors, back = [], 0, _factors(n), [[] for _ in range(2 * n)]
-    for j, (d, deg, powers) in enumerate(factors):
+    out, k, factors, back = _Emitter(), 0, _factors(n), [[] for _ in range(2 * n)]
+    # per factor, the characters χ_d(x_u), χ_d(x_v) and the entries' rows over them and D
+    forms = []
+    for d, deg, powers in factors:
         block, k = rows[k:k + 6 * deg], k + 6 * deg
-        names = [f"h{j}_{c}" for c in range(2 * deg)]  # χ_d(x_u), then χ_d(x_v)
-        code += [f"{h} = {_lin([powers[i % d][c % deg] if i // n == c // deg else 0 for i in range(2 * n)], args)}"
-                 for c, h in enumerate(names)]
-        names.append("D")
-        e = {}  # entry name -> its coefficient names
-        for m, name in enumerate("abcdrs"):
-            e[name] = [f"{name}{j}_{c}" for c in range(deg)]
-            code += [f"{v} = {_lin(block[m * deg + c], names)}" for c, v in enumerate(e[name])]
-        a, b, c_, d_, r, s = (e[name] for name in "abcdrs")
-        y = [f"y{j}_{c}" for c in range(2 * deg)]  # χ_d(z): the u coefficients, then the v ones
-        den, field = f"den{j}", (d, deg, powers)
+        h = [out.let(out.form([(powers[i % d][c % deg] if i // n == c // deg else 0, x)
+                               for i, x in enumerate(args[:-1])]), "h") for c in range(2 * deg)]
+        forms.append([[(c, v) for c, v in zip(row, h + ["D"]) if c and v is not None] for row in block])
+    # a scaled term c·v that occurs in more than one entry is computed once
+    uses = {}
+    for row in {tuple(row) for block in forms for row in block}:
+        for c, v in row:
+            uses[abs(c), v] = uses.get((abs(c), v), 0) + 1
+    scaled = {key: out.let(f"{out.const(key[0])} * {key[1]}", "p")
+              for key, m in uses.items() if m > 1 and key[0] > 1}
+    dens, ys = [], []
+    for (d, deg, powers), block in zip(factors, forms):
+        e = [out.let(out.form([((c > 0) - (c < 0), scaled[abs(c), v]) if (abs(c), v) in scaled else (c, v)
+                               for c, v in row]), "e") for row in block]
+        a, b, c_, d_, r, s = (e[m * deg:(m + 1) * deg] for m in range(6))
+        field = (d, deg, powers)
         # Cramer's rule over Z[θ], then numerators and det times det* = the product of
         # the other conjugates σ_k(det) (θ ↦ θ^k, k prime to d), so that den = N(det) ∈ Z
-        m, u, v = ([f"{w}{j}_{c}" for c in range(deg)] for w in "muv")
-        code += _product(m, [(1, a, d_), (-1, b, c_)], field)
-        code += _product(u, [(1, d_, r), (-1, b, s)], field) + _product(v, [(1, a, s), (-1, c_, r)], field)
-        units = [k for k in range(2, d) if math.gcd(k, d) == 1]
-        conj, sk = ([f"{w}{j}_{c}" for c in range(deg)] for w in "kw")
-        for i, unit in enumerate(units):
-            code += [f"{w} = {_lin([powers[unit * c2 % d][c] for c2 in range(deg)], m)}"
-                     for c, w in enumerate(sk if i else conj)]
-            if i:
-                code += _product(conj, [(1, conj, sk)], field)
-        if not units:  # d = 1, 2: the factor is Q
-            code += [f"{den} = {m[0]}"] + [f"{t} = {w}" for t, w in zip(y, u + v)]
-        else:  # N(det) is det·det*'s constant coefficient (the others are 0)
-            code += _product([den] + [None] * (deg - 1), [(1, m, conj)], field)
-            code += _product(y[:deg], [(1, u, conj)], field) + _product(y[deg:], [(1, v, conj)], field)
-        g = f"g{j}"
-        code += [f"if not {den}:", "    raise ZeroDivisionError('singular Kahan system')",
-                 # reduce this factor's solution y/den on its own (see the module docstring)
-                 f"{g} = {den}"] + [f"{g} = gcd({g}, {t})" for t in y] + [
-                 f"{g} = -{g} if {den} < 0 else {g}", f"{den} //= {g}"] + [f"{t} //= {g}" for t in y]
+        m = _product(out, [(1, a, d_), (-1, b, c_)], field)
+        u = _product(out, [(1, d_, r), (-1, b, s)], field)
+        v = _product(out, [(1, a, s), (-1, c_, r)], field)
+        y, den, conj = u + v, m[0], None  # y = χ_d(z): the u coefficients, then the v ones
+        for unit in (k for k in range(2, d) if math.gcd(k, d) == 1):
+            sk = [out.let(out.form([(powers[unit * c2 % d][c], w) for c2, w in enumerate(m)]), "k")
+                  for c in range(deg)]
+            conj = sk if conj is None else _product(out, [(1, conj, sk)], field)
+        if conj is not None:  # N(det) is det·det*'s constant coefficient (the others are 0)
+            den = _product(out, [(1, m, conj)], field, wanted=1)[0]
+            y = _product(out, [(1, u, conj)], field) + _product(out, [(1, v, conj)], field)
+        den = out.let(den or "0")  # 0: the system is singular at every point
+        out.lines += [f"if not {den}:", "    raise ZeroDivisionError('singular Kahan system')"]
+        # reduce this factor's solution y/den on its own (see the module docstring)
+        g = den
+        for t in y:
+            if t is not None:
+                g = out.let(f"gcd({g}, {t})", "g")
+        dens.append(out.let(f"{den} // {g}", "den"))
+        ys.append([out.let(f"{t} // {g}", "y") if t is not None else None for t in y])
         # the inverse transform: n·z_{blk·n + i} is the sum over the factors of
         # Tr(ζ^{−i} χ_d(z_blk)) = Σ_c y_c Tr(ζ^{c − i}), and Tr(ζ_d^m) is the
         # Ramanujan sum c_d(m)
         for blk in range(2):
             for i in range(n):
-                traces = [ramanujan_sum(d, (c - i) % d) for c in range(deg)]
-                back[blk * n + i].append((y[blk * deg:(blk + 1) * deg], traces))
-    dens = [f"den{j}" for j in range(len(factors))]
-    for j, (_, deg, _) in enumerate(factors):  # bring every factor to the denominator L
-        others = " * ".join(dens[:j] + dens[j + 1:])
-        if others:
-            code += [f"{t} *= {others}" for t in (f"y{j}_{c}" for c in range(2 * deg))]
-    code.append(f"L = {' * '.join([str(n)] + dens)}")
-    outs = [_lin([t for _, tr in terms for t in tr], [v for ys, _ in terms for v in ys]) for terms in back]
-    code.append(f"return ({', '.join(outs)},), L")
-    return f"def solve({', '.join(args)}, gcd):\n" + "".join(f"    {line}\n" for line in code)
+                back[blk * n + i] += [(ramanujan_sum(d, (c - i) % d), len(ys) - 1, blk * deg + c)
+                                      for c in range(deg)]
+    for j, y in enumerate(ys):  # bring every factor to the common denominator L
+        others = out.let(" * ".join(dens[:j] + dens[j + 1:]) or None, "o")
+        if others is not None:
+            ys[j] = [out.let(f"{t} * {others}", "z") if t is not None else None for t in y]
+    L = out.let(" * ".join(([out.const(n)] if n > 1 else []) + dens), "L")
+    outs = [out.let(out.form([(tr, ys[j][c]) for tr, j, c in terms]) or "0", "s") for terms in back]
+    point = ", ".join(f"Q({t}, {L})" for t in outs)
+    return _text(args, out.lines + [f"return ({', '.join(outs)},), {L}, ({point},)"]), out.consts
+
+
+def _text(args, lines):
+    lines = [f"{', '.join(args[:-1])}, = xi"] + lines
+    return "def solve(xi, D):\n" + "".join(f"    {line}\n" for line in lines)
+
+
+def _product(out, terms, field, wanted=None):
+    """Names (or None for 0) of the coefficients of Σ ± x·y in Z[θ] = Z[t]/Φ_d(t)
+    (``terms``: (sign, x, y), x and y lists of names or None; ``field``: (d, deg,
+    powers) of :func:`_factors`); only the first ``wanted`` coefficients if given."""
+    d, deg, powers = field
+    wanted = range(deg if wanted is None else wanted)
+    tmp = []  # the coefficients of t^0 … t^{2deg−2} before reduction
+    for m in range(2 * deg - 1):
+        if not any(powers[m % d][c] for c in wanted):
+            tmp.append(None)
+            continue
+        parts = [(sign, f"{x[i]} * {y[m - i]}") for sign, x, y in terms
+                 for i in range(max(0, m - deg + 1), min(m, deg - 1) + 1)
+                 if x[i] is not None and y[m - i] is not None]
+        tmp.append(out.let(out.form(parts)))
+    return [out.let(out.form([(powers[m % d][c], t) for m, t in enumerate(tmp)])) for c in wanted]
 
 
 def _in_characters(rows, n, d, deg, powers):
@@ -186,26 +241,6 @@ def _in_characters(rows, n, d, deg, powers):
             return None
         out.append(alpha + [row[-1]])
     return out
-
-
-def _product(out, terms, field):
-    """Source for out = Σ ± x·y in Z[θ] = Z[t]/Φ_d(t) (``terms``: (sign, x, y) with x, y
-    lists of coefficient names; ``field``: (d, deg, powers) of :func:`_factors`;
-    coefficients whose name in ``out`` is None are not computed)."""
-    d, deg, powers = field
-    wanted = [c for c, o in enumerate(out) if o is not None]
-    code, tmp = [], []  # the coefficients of t^0 … t^{2deg−2} before reduction
-    for m in range(2 * deg - 1):
-        if not any(powers[m % d][c] for c in wanted):
-            tmp.append("0")
-            continue
-        parts = [f"{'-' if sign < 0 else '+'} {x[i]} * {y[m - i]}"
-                 for sign, x, y in terms for i in range(max(0, m - deg + 1), min(m, deg - 1) + 1)]
-        tmp.append(f"t{m}")
-        code.append(f"t{m} = {' '.join(parts).removeprefix('+ ')}")
-    if deg == 1:
-        return [f"{out[0]} = {code[0].split(' = ', 1)[1]}"]
-    return code + [f"{out[c]} = {_lin([powers[m % d][c] for m in range(len(tmp))], tmp)}" for c in wanted]
 
 
 def split_system(field, kernel, p, q):
