@@ -38,15 +38,15 @@ system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), 
 by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n < 16, ``flint`` or
 ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
 (:mod:`exact_khk.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
-whose Hessian blocks are cyclic Hankel, the split path for ``flint`` and
-``gmpy2`` when every factor has degree ≤ 4 (:data:`~exact_khk.split.AUTO_SPLIT_N`:
-n = 2, 3, 4, 5, 6, 8, 10, 12; faster than the dense and structured steps along
-orbits at every height measured: docs/benchmarks.md, README "Known limitations");
-for other n the structured path for exact ``flint`` steps when n ≥ 16, and for
-4 ≤ n < 16 once the point's height reaches :data:`STRUCTURED_MIN_BITS`
-(:data:`STRUCTURED_MIN_N`: the crossovers measured along orbits,
-docs/benchmarks.md); otherwise dense.  Every path gives
-the same rational point.  ``gmpy2`` and ``fraction`` may ask for the
+whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
+n < 16, and for ``flint`` when n = 2, 3, 4, 5, 6, 8, 9, 10, 12
+(:data:`~exact_khk.split.AUTO_SPLIT_N`) and, below a height where the
+structured path overtakes it, n = 7, 14, 15 (:data:`~exact_khk.split.AUTO_SPLIT_BELOW`);
+otherwise the structured path for exact ``flint`` steps when n ≥ 16, and at
+n = 11, 13 once the point's height reaches :data:`STRUCTURED_MIN_BITS`
+(:data:`STRUCTURED_MIN_N`); otherwise dense.  The rules follow the crossovers
+measured along orbits (docs/benchmarks.md).  Every path gives the same
+rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and ``fraction`` may ask for the
 structured path explicitly.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
@@ -71,22 +71,19 @@ from .arith import get_arith
 from .errors import InputError, NearSingularWarning, SingularStepError
 from .linalg import SingularMatrix, solve
 from .parsing import parse_rational
-from .split import AUTO_SPLIT_N, split_system
+from .split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, split_system
 
 METHODS = ("auto", "dense", "structured", "split")
 
 #: ``method='auto'`` for exact flint steps: structured for n ≥ ``["exact"]``;
-#: for ``["exact_tall"]`` ≤ n < ``["exact"]`` structured once the point's height
-#: (bits of its largest numerator or denominator) reaches
-#: :data:`STRUCTURED_MIN_BITS`, dense below.  Measured crossovers along exact
-#: orbits against the dense orbit step (docs/benchmarks.md, "Where the
-#: structured step overtakes"): about 250 bits for n = 12, 650–800 for
-#: n = 7, 8, 1300 for n = 6 and 1600 for n = 4, 5; n = 16 from the start.  Of
-#: these n, only 7, 9, 11, 13, 14 and 15 still use the rule (the others take the
-#: split step).  One threshold for all n keeps the rule simple, at up to about
-#: 1.5× near it.
+#: for ``["exact_tall"]`` ≤ n < ``["exact"]`` where it does not split (n = 11, 13:
+#: :mod:`exact_khk.split`) structured once the point's height (bits of its
+#: largest numerator or denominator) reaches :data:`STRUCTURED_MIN_BITS`, dense
+#: below.  Measured along exact orbits against the dense orbit step
+#: (docs/benchmarks.md, "Where the structured step overtakes"): the crossovers
+#: are near 420 bits for n = 11 and 330 for n = 13; n = 16 from the start.
 STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
-STRUCTURED_MIN_BITS = 1024
+STRUCTURED_MIN_BITS = 384
 
 #: dense orbit steps from this height on may solve output-sensitively (see
 #: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
@@ -128,13 +125,14 @@ class KahanMap:
     the arithmetic; ``arith`` a name (see :func:`exact_khk.arith.get_arith`) or
     context, default the fastest exact one; ``method`` one of :data:`METHODS`
     (see the module docstring).  ``structure`` is the
-    :class:`~exact_khk.circulant.CirculantStructure` the step may use, or None;
-    ``split`` whether it takes the split step (:mod:`exact_khk.split`) instead;
-    ``dense_below`` the point height in bits under which an exact step stays
-    dense anyway (0: never).
+    :class:`~exact_khk.circulant.CirculantStructure` the structured step uses, or
+    None; ``split`` whether exact steps take the split step (:mod:`exact_khk.split`)
+    instead of the dense one; ``switch_bits`` the point height in bits from which
+    the structured step takes over (0: the structured step, if any, everywhere).
+    See :attr:`path`.
     """
 
-    method, split, structure, dense_below = "dense", False, None, 0  # for maps built without __init__
+    method, split, structure, switch_bits = "dense", False, None, 0  # for maps built without __init__
     #: whether this map's last dense step found a small answer (see ``_integer_steps``)
     _small_answers = False
 
@@ -150,7 +148,7 @@ class KahanMap:
             self.eps = ar.convert(self.eps_exact)
         if ar.is_zero(self.eps) is True:
             raise InputError("eps: the step size must be nonzero")
-        self.split, self.structure, self.dense_below = _choose_path(field, ar, method, self.eps)
+        self.split, self.structure, self.switch_bits = _choose_path(field, ar, method, self.eps)
 
     def __repr__(self):
         return f"KahanMap({self.field.label}, eps={self.arith.format(self.eps)}, arith={self.arith.name})"
@@ -158,11 +156,11 @@ class KahanMap:
     @property
     def path(self) -> str:
         """How the steps are solved: ``'dense'``, ``'structured'``, ``'split'``, or
-        e.g. ``'dense below 1024 bits, then structured'``."""
-        if self.structure is None and not self.split:
-            return "dense"
-        kind = "split" if self.split else "structured"
-        return f"dense below {self.dense_below} bits, then {kind}" if self.dense_below else kind
+        e.g. ``'split below 2048 bits, then structured'``."""
+        low = "split" if self.split else "dense"
+        if self.structure is None:
+            return low
+        return f"{low} below {self.switch_bits} bits, then structured" if self.switch_bits else "structured"
 
     def point(self, x, name="x"):
         """``x`` as a tuple of elements of this map's arithmetic."""
@@ -173,8 +171,8 @@ class KahanMap:
         out = KahanMap.__new__(KahanMap)
         out.field, out.arith, out.eps = self.field, self.arith, eps
         # the split step's blocks are circulant for every ε ≠ 0 if for one (split.py)
-        out.method, out.split, out.structure, out.dense_below = (self.method, self.split, self.structure,
-                                                                 self.dense_below)
+        out.method, out.split, out.structure, out.switch_bits = (self.method, self.split, self.structure,
+                                                                 self.switch_bits)
         out.eps_exact = self.arith.to_fraction(eps) if self.arith.rational else None
         return out
 
@@ -221,16 +219,8 @@ class KahanMap:
         return SingularStepError([ar.format(t) for t in x], ar.format(eps))
 
     def _structured_step(self, x):
-        """The 2×2-over-circulants step (split over the factors of tⁿ − 1, exact in
-        Q[t]/(tⁿ − 1), or by the DFT)."""
+        """The 2×2-over-circulants step (exact in Q[t]/(tⁿ − 1), or by the DFT)."""
         ar, eps = self.arith, self.eps
-        if self.split:
-            K = ar.integers
-            S = split_system(self.field, K, K.num(eps), K.den(eps))
-            try:
-                return S.step(x)
-            except ZeroDivisionError:
-                raise self._singular(x, eps) from None
         if ar.exact:
             try:
                 return circulant.exact_step(self.structure, x, eps, ar)
@@ -291,15 +281,19 @@ class KahanMap:
         with self.arith.local():  # e.g. the working precision of ball:P
             return self._step(self.point(x))
 
-    def _structured_at(self, x) -> bool:
-        """Whether the step at x takes the structured path."""
-        return ((self.split or self.structure is not None)
-                and (not self.dense_below or _height(self.arith, x) >= self.dense_below))
+    def _kind_at(self, x) -> str:
+        """How the step at x is solved: ``'structured'``, ``'split'`` or ``'dense'``."""
+        if self.structure is not None and (not self.switch_bits or _height(self.arith, x) >= self.switch_bits):
+            return "structured"
+        return "split" if self.split else "dense"
 
     def _step(self, x):
         ar, eps = self.arith, self.eps
-        if self._structured_at(x):
+        kind = self._kind_at(x)
+        if kind == "structured":
             return self._structured_step(x)
+        if kind == "split":
+            return next(self._split_steps(x))
         if ar.integers is not None:
             return next(self._integer_steps(x))
         M = self.system_matrix(x)
@@ -312,19 +306,19 @@ class KahanMap:
         return tuple(xi + two_eps * row[0] for xi, row in zip(x, X))
 
     def _steps(self, x):
-        """Φ(x), Φ²(x), … (endless); the dense exact path keeps its state as a
-        kernel column between steps instead of re-reading the point, until the
-        height makes the structured path pay (``method='auto'``)."""
-        if self.arith.integers is not None and not self._structured_at(x):
-            for x in self._integer_steps(x):
-                yield x
-                if self._structured_at(x):
-                    break
-        if self.split:
-            yield from self._split_steps(x)
+        """Φ(x), Φ²(x), … (endless); the exact dense and split paths keep their
+        integer state between steps instead of re-reading the point, until the
+        height makes the structured path pay (``switch_bits``)."""
         while True:
-            x = self._step(x)
-            yield x
+            kind = self._kind_at(x)
+            if kind == "structured" or self.arith.integers is None:
+                x = self._step(x)
+                yield x
+                continue
+            for x in self._split_steps(x) if kind == "split" else self._integer_steps(x):
+                yield x
+                if self.switch_bits and self._kind_at(x) != kind:
+                    break
 
     def inverse(self, x):
         """Φ_f(x, −ε) = Φ_f^{-1}(x, ε)."""
@@ -367,7 +361,7 @@ def _height(ar, x) -> int:
 
 
 def _choose_path(field, ar, method, eps):
-    """(split, circulant structure the step may use or None, ``dense_below``)."""
+    """(split, circulant structure the step may use or None, ``switch_bits``)."""
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
     if method == "dense":
@@ -380,10 +374,14 @@ def _choose_path(field, ar, method, eps):
                              "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
-    if method == "auto" and splits and field.dim // 2 in AUTO_SPLIT_N and circulant.circulant_structure(field):
-        return True, None, 0  # Lie–Poisson, every factor of degree ≤ 4
     usable = circulant.flint is not None and (ar.rational or ar.fourier)
     st = circulant.circulant_structure(field) if usable else None
+    n = field.dim // 2
+    if method == "auto" and splits and st is not None:  # Lie–Poisson (split.py: AUTO_SPLIT_N)
+        if ar.name != "flint" or n in AUTO_SPLIT_N:  # gmpy2's other exact step is Bareiss elimination
+            return True, None, 0
+        if n in AUTO_SPLIT_BELOW:
+            return True, st, AUTO_SPLIT_BELOW[n]
     if method == "structured":
         if st is None:
             raise InputError("method: 'structured' needs python-flint, a Lie–Poisson field whose "

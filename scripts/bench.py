@@ -48,7 +48,7 @@ import sympy  # noqa: E402
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
 from exact_khk.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
 from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
-from exact_khk.split import AUTO_SPLIT_N, SPLIT_N  # noqa: E402
+from exact_khk.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
 from exact_khk.systems import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
@@ -206,30 +206,30 @@ def orbit_steps(ns, heights, log, steps=16):
     return rows
 
 
-def crossover(ns, heights, log, steps=8):
-    """dense / structured time of ``steps`` orbit steps from points of one exact
-    orbit, by height: where ``method='auto'`` should switch (the rule in
-    :mod:`exact_khk.kahan`)."""
+def crossover(ns, heights, log, steps=4):
+    """dense / structured and split / structured time of ``steps`` orbit steps from
+    points of one exact orbit, by height: where ``method='auto'`` should switch to the
+    structured step (the rules in :mod:`exact_khk.kahan` and :mod:`exact_khk.split`)."""
     rows = []
     for n in ns:
         fld = LiePoissonSystem.random(n, seed=1).field("f")
-        st, de = (KahanMap(fld, EPS, "flint", method=m) for m in ("structured", "dense"))
-        x, cells = de.point(random_point(n, 1)), []
+        maps = {m: KahanMap(fld, EPS, "flint", method=m) for m in ("structured", "dense", "split")}
+        x, cells = maps["dense"].point(random_point(n, 1)), []
         for target in heights:
-            x = advance(st, x, target)
-            r = timed_together({"structured": lambda: st.orbit(x, steps), "dense": lambda: de.orbit(x, steps)},
-                               min_total=0.3)
-            cells.append((target, height(x), r["dense"] / r["structured"]))
+            x = advance(maps["structured"], x, target)
+            r = timed_together({m: (lambda p=p: p.orbit(x, steps)) for m, p in maps.items()}, min_total=0.3)
+            cells.append((target, height(x), r["dense"] / r["structured"], r["split"] / r["structured"]))
         rows.append((n, cells))
-        log(f"crossover n={n}: " + ", ".join(f"{h} bits {q:.2f}" for _, h, q in cells))
+        log(f"crossover n={n}: " + ", ".join(f"{h} bits {a:.2f}/{b:.2f}" for _, h, a, b in cells))
     return rows
 
 
-def split_crossover(ns, ariths, orbit_heights, random_heights, log):
+def split_crossover(cases, orbit_heights, random_heights, log):
     """dense / split time by height, for 8 steps along the orbit of ``random_point(n, 1)``
-    and for one step at random points (``method='auto'`` splits at these n from the start)."""
+    and for one step at random points, for the (arith, ns) in ``cases`` (``method='auto'``
+    splits at these n from the start)."""
     rows = []
-    for arith in ariths:
+    for arith, ns in cases:
         for n in ns:
             fld = LiePoissonSystem.random(n, seed=1).field("f")
             sp, de = (KahanMap(fld, EPS, arith, method=m) for m in ("split", "dense"))
@@ -412,8 +412,9 @@ def write(path, info, args, res, elapsed):
             if r["auto"] > 1.3 * r["bare"]]
     L += ["", "Library steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
     L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = "
-          + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + "; "
-          f"structured for n ≥ {STRUCTURED_MIN_N['exact']}, and for other n ≥ {STRUCTURED_MIN_N['exact_tall']} "
+          + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + ", and for n = "
+          + ", ".join(f"{n} below {b} bits" for n, b in AUTO_SPLIT_BELOW.items()) + "; "
+          f"structured for n ≥ {STRUCTURED_MIN_N['exact']}, above those heights, and for n = 11, 13 "
           f"from points of {STRUCTURED_MIN_BITS} bits on). \"split\": one 2×2 system per cyclotomic factor "
           "of tⁿ − 1. Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
@@ -422,21 +423,24 @@ def write(path, info, args, res, elapsed):
           "## The split step against the dense one", "",
           "dense / split time (above 1: split faster) for 8 steps of `KahanMap.orbit` from points of the orbit "
           "of `random_point(n, 1)` (by the start point's height), and for one step at random points of height h "
-          "(answers of Cramer size). `auto` takes the split step at these n from the start, for flint "
-          "and gmpy2.", "",
+          "(answers of Cramer size). `auto` takes the split step at these n from the start: for flint at "
+          "n = " + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + ", for gmpy2 at every n < 16 "
+          "(its dense step is Bareiss elimination).", "",
           "| arith | n | along the orbit | random points |", "|---|---|---|---|"]
     L += [f"| {a} | {n} | " + ", ".join(f"{h} bits: {q:.2f}" for h, q in orbit) + " | "
           + ", ".join(f"{h} bits: {q:.2f}" for h, q in rand) + " |" for a, n, orbit, rand in res["split"]]
-    L += ["", "## Where the structured step overtakes the dense one (exact orbits)", "",
-          "dense / structured time of 8 steps of `KahanMap.orbit` from points of the orbit of "
-          "`random_point(n, 1)`, by the start point's height (above 1: structured faster). The dense map "
-          "solves output-sensitively once its answers are known to be small; the timed calls repeat one "
-          "orbit, so after the warm-up call it does so from the first step. `auto` switches at "
-          f"{STRUCTURED_MIN_BITS} bits for {STRUCTURED_MIN_N['exact_tall']} ≤ n < {STRUCTURED_MIN_N['exact']} "
-          "where it does not take the split step (n = 7, 9, 11, 13, 14, 15).", "",
-          "| n | " + " | ".join(f"from ≥ {t} bits" for t, _, _ in res["crossover"][0][1]) + " |",
+    L += ["", "## Where the structured step overtakes the dense and the split one (exact orbits)", "",
+          "dense / structured and split / structured time (above 1: structured faster) of 4 steps of "
+          "`KahanMap.orbit` from points of the orbit of `random_point(n, 1)`, by the start point's height, "
+          "at the n where `auto` does not split at every height. The dense map solves output-sensitively "
+          "once its answers are known to be small; the timed calls repeat one orbit, so after the warm-up "
+          f"call it does so from the first step. `auto` (flint) switches to the structured step at "
+          + ", ".join(f"{b} bits for n = {n}" for n, b in AUTO_SPLIT_BELOW.items())
+          + f" (split below), and at {STRUCTURED_MIN_BITS} bits for n = 11, 13 (dense below).", "",
+          "| n | " + " | ".join(f"from ≥ {t} bits" for t, *_ in res["crossover"][0][1]) + " |",
           "|---|" + "---|" * len(res["crossover"][0][1])]
-    L += [f"| {n} | " + " | ".join(f"{q:.2f} ({h} bits)" for _, h, q in cells) + " |" for n, cells in res["crossover"]]
+    L += [f"| {n} | " + " | ".join(f"{a:.2f} / {b:.2f} ({h} bits)" for _, h, a, b in cells) + " |"
+          for n, cells in res["crossover"]]
     L += ["", "## Structured against dense along one exact orbit", "",
           "| n | step | height (bits) | structured | dense | dense / structured |", "|---|---|---|---|---|---|"]
     L += [f"| {n} | {k} | {h} | {fmt(a)} | {fmt(b)} | {ratio(b, a)} |" for n, k, h, a, b in along]
@@ -487,9 +491,12 @@ def main(argv=None):
                              log),
         "exact": exact_table((2, 3, 4, 8) if quick else range(2, 9),
                              (64, 10000) if quick else (64, 1000, 10000, 100000), log),
-        "split": split_crossover((2, 3) if quick else (2, 3, 4, 5, 6, 8), ("flint", "gmpy2"), (0, 50, 100, 200, 400),
+        "split": split_crossover((("flint", (2, 3, 9)), ("gmpy2", (2, 11))) if quick else
+                                 (("flint", (2, 3, 4, 5, 6, 8, 9, 10, 12)), ("gmpy2", (2, 3, 4, 5, 6, 7, 8, 11, 15))),
+                                 (0, 50, 100, 200, 400),
                                  (16, 64, 128, 256, 512), log),
-        "crossover": crossover((4, 8) if quick else (4, 5, 6, 7, 8, 12), (0, 100, 200, 400, 800, 1600), log),
+        "crossover": crossover((7, 11) if quick else (7, 9, 11, 13, 14, 15), (0, 250, 500, 1000, 1500, 2000, 3000),
+                               log),
         "along": structured_along_orbit(32, (0, 24) if quick else (0, 24, 50), log),
         "htilde": htilde_table(((3, 50), (8, 20)) if quick else ((3, 50), (8, 20), (16, 10)), log),
         "numeric": numeric_table((2, 4, 8), log),

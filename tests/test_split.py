@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
                        get_arith, rational_sign_patterns)
 from exact_khk import split as split_mod
-from exact_khk.split import AUTO_SPLIT_N, SPLIT_N, split_system
+from exact_khk.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N, split_system
 from exact_khk.systems import random_point
 
 KERNELS = ["flint", "gmpy2"]
@@ -128,10 +128,26 @@ def test_split_refuses_what_it_cannot_do():
     assert 16 not in SPLIT_N
 
 
-def test_auto_split_n_are_the_n_with_factors_of_degree_at_most_4():
-    """AUTO_SPLIT_N is the rule it states: every φ(d), d | n, at most 4."""
-    phi = lambda d: sum(1 for k in range(1, d + 1) if math.gcd(k, d) == 1)  # noqa: E731
-    assert AUTO_SPLIT_N == tuple(n for n in SPLIT_N if all(phi(d) <= 4 for d in range(1, n + 1) if n % d == 0))
+@pytest.mark.parametrize("n, flint_path, gmpy2_path", [
+    (2, "split", "split"), (9, "split", "split"), (12, "split", "split"),
+    (7, "split below 2048 bits, then structured", "split"),
+    (15, "split below 512 bits, then structured", "split"),
+    (11, "dense below 384 bits, then structured", "split"),
+    (16, "structured", "dense"),
+])
+def test_auto_paths(n, flint_path, gmpy2_path):
+    """The auto rule as documented (split.AUTO_SPLIT_N, AUTO_SPLIT_BELOW; kahan.STRUCTURED_MIN_*)."""
+    fld = LiePoissonSystem.random(n, 1).field("f")
+    assert KahanMap(fld, "1/10", "flint").path == flint_path
+    assert KahanMap(fld, "1/10", "gmpy2").path == gmpy2_path
+    assert KahanMap(fld, "1/10", "fraction").path == "dense"
+
+
+def test_auto_split_tables_cover_split_n():
+    """Every n of SPLIT_N except 11 and 13 (factors of degree 10, 12) is split by auto with
+    python-flint, always or below a height."""
+    assert set(AUTO_SPLIT_N).isdisjoint(AUTO_SPLIT_BELOW)
+    assert set(AUTO_SPLIT_N) | set(AUTO_SPLIT_BELOW) == set(SPLIT_N) - {11, 13}
 
 
 def test_split_rejects_non_circulant_blocks():
@@ -145,10 +161,11 @@ def test_split_rejects_non_circulant_blocks():
         KahanMap(fld, "1/3", "flint", method="split")
 
 
-@pytest.mark.parametrize("arith", KERNELS)
-def test_auto_takes_split_from_the_start(monkeypatch, arith):
-    """Every step of an auto orbit at the n of AUTO_SPLIT_N is a split solve, and the orbit
-    is the dense orbit exactly; at n = 7 (a factor of degree 6) auto does not split."""
+@pytest.mark.parametrize("arith, ns", [("flint", AUTO_SPLIT_N[1:]), ("gmpy2", (2, 7, 11, 13, 15))])
+def test_auto_takes_split_from_the_start(monkeypatch, arith, ns):
+    """Every step of an auto orbit from a low point is a split solve where auto splits
+    (flint: AUTO_SPLIT_N; gmpy2: every n < 16), and the orbit is the dense orbit exactly;
+    with flint at n = 11 (a factor of degree 10) auto does not split."""
     calls, real = [], split_mod.SplitSystem.__init__
 
     def spy(self, *args):  # count the calls of every generated solve
@@ -157,7 +174,7 @@ def test_auto_takes_split_from_the_start(monkeypatch, arith):
         self.solve = lambda xi, d: calls.append(d) or solve(xi, d)
 
     monkeypatch.setattr(split_mod.SplitSystem, "__init__", spy)
-    for n in (2, 3, 4, 5, 6, 8, 10, 12):
+    for n in ns:
         fld = LiePoissonSystem.random(n, 1).field("f")
         auto = KahanMap(fld, "1/10", arith)
         assert auto.split and auto.path == "split"
@@ -165,7 +182,7 @@ def test_auto_takes_split_from_the_start(monkeypatch, arith):
         assert auto.orbit(random_point(n, 1), 5) == KahanMap(fld, "1/10", arith, method="dense").orbit(
             random_point(n, 1), 5)
         assert len(calls) == 5
-    assert not KahanMap(LiePoissonSystem.random(7, 1).field("f"), "1/10", arith).split
+    assert not KahanMap(LiePoissonSystem.random(11, 1).field("f"), "1/10", "flint").split
 
 
 def test_split_source_uses_characters():

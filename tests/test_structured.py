@@ -21,6 +21,8 @@ from exact_khk.circulant import (circulant_structure, exact_htilde, exact_step, 
 from exact_khk.invariants import Htilde
 from exact_khk import circulant
 from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N, _height
+from exact_khk import split as split_mod
+from exact_khk.split import AUTO_SPLIT_BELOW
 from exact_khk.systems import random_point
 
 from .conftest import EXACT
@@ -198,22 +200,32 @@ def test_auto_choice_and_fallbacks():
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
 
 
-def test_auto_switches_to_structured_with_height(monkeypatch):
-    """For 4 ≤ n < 16 where ``auto`` does not split (n = 7, 9, 11, 13, 14, 15), it steps dense
-    from low points and structured from points of height ≥ STRUCTURED_MIN_BITS; the orbit
-    is the dense orbit exactly."""
-    n, steps = 7, 20  # heights 2, 71, 144, …, 1020 at step 14, 1091, …
+@pytest.mark.parametrize("n, low, switch", [(11, "dense", STRUCTURED_MIN_BITS), (15, "split", AUTO_SPLIT_BELOW[15])])
+def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch):
+    """Where ``auto`` does not split at every height (flint, n = 7, 11, 13, 14, 15), it
+    steps dense (n = 11, 13) or split (n = 7, 14, 15) from low points and structured from
+    points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly."""
+    steps = 8  # heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …
+    calls, solves = [], []
+    real_init = split_mod.SplitSystem.__init__
+
+    def spy(self, *args):  # count the split solves (the system is built with the map)
+        real_init(self, *args)
+        solve = self.solve
+        self.solve = lambda xi, d: solves.append(d) or solve(xi, d)
+
+    monkeypatch.setattr(split_mod.SplitSystem, "__init__", spy)
     fld = LiePoissonSystem.random(n, 1).field("f")
     auto, dense = KahanMap(fld, "1/10", "flint"), KahanMap(fld, "1/10", "flint", method="dense")
-    assert auto.structure is not None and auto.dense_below == STRUCTURED_MIN_BITS
-    calls = []
+    assert auto.structure is not None and auto.switch_bits == switch and auto.split == (low == "split")
     real = circulant.exact_step
     monkeypatch.setattr(circulant, "exact_step", lambda st, x, *a: calls.append(x) or real(st, x, *a))
     pts = auto.orbit(random_point(n, 1), steps)
     assert pts == dense.orbit(random_point(n, 1), steps)
-    tall = [p for p in pts[:-1] if _height(auto.arith, p) >= STRUCTURED_MIN_BITS]
+    tall = [p for p in pts[:-1] if _height(auto.arith, p) >= switch]
     assert 0 < len(tall) < steps  # the orbit crosses the threshold
     assert calls == tall  # structured exactly from the tall points on
+    assert len(solves) == (steps - len(tall) if low == "split" else 0)
     calls.clear()
     assert auto.step(pts[0]) == pts[1] and calls == []
     assert auto.step(pts[-2]) == pts[-1] and calls == [pts[-2]]
