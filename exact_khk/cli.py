@@ -14,7 +14,6 @@ import argparse
 import importlib
 import json
 import sys
-from fractions import Fraction
 
 from . import __version__
 from .arith import arith_names, get_arith

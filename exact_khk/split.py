@@ -48,17 +48,18 @@ from .systems import ramanujan_sum
 SPLIT_N = tuple(range(1, 16))
 
 #: where ``method='auto'`` takes the split step with python-flint (with gmpy2 it
-#: takes it for every n in SPLIT_N: its other exact step, Bareiss elimination, was
-#: 7–130× slower at n = 7, 9, 11, 14, 15).  At these n the split step is faster than
-#: the dense and the structured step along orbits at every height measured
-#: (docs/benchmarks.md: up to 10 000 bits; every factor Q(ζ_d), d | n, has degree
-#: φ(d) ≤ 4, or 6 for n = 9) ...
+#: takes it for every n in SPLIT_N: its other exact step, Bareiss elimination,
+#: was 1.9–100× slower in docs/benchmarks.md).  At these n the split step was
+#: faster along orbits at every height measured than the dense step (to 10 000
+#: bits for n ≤ 8) and than the structured step (to 3000 bits for n = 9, 10, 12);
+#: every factor Q(ζ_d), d | n, has degree φ(d) ≤ 4, or 6 for n = 9 ...
 AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 9, 10, 12)
 #: ... and at these n below the given point height in bits, where the structured
-#: step overtakes it (docs/benchmarks.md, "Split against structured").  At
-#: n = 11, 13 (a factor of degree 10, 12) it is slower than the dense step
+#: step overtakes it (docs/benchmarks.md, "Where the structured step overtakes").
+#: At n = 11, 13 (a factor of degree 10, 12) it is slower than the dense step
 #: already at small heights, and ``auto`` does not take it.
 AUTO_SPLIT_BELOW = {7: 2048, 14: 2560, 15: 512}
+
 
 def _factors(n):
     """Per divisor d of n: (d, deg = φ(d), θ^j for j < d as coefficient lists in the

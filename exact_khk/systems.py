@@ -268,7 +268,7 @@ class LiePoissonSystem:
     # fields --------------------------------------------------------------
     def field_from_hessian(self, M, label="f") -> "LiePoissonField":
         """The field f(x) = J(x) M x for any 2n×2n matrix M (no admissibility check)."""
-        n, N = self.n, self.dim
+        N = self.dim
         if len(M) != N or any(len(r) != N for r in M):
             raise InputError(f"hessian: expected a {N}x{N} matrix")
         # The quadratic terms are built on first use (LiePoissonField.terms):

@@ -19,7 +19,6 @@ AssertionError: not conserved by KahanMap(f, eps=1/10, arith=fraction): first no
 from __future__ import annotations
 
 from .certify import (commute_items, compare, conserved_items, poisson_map_items, reversible_items)
-from .kahan import KahanMap
 
 
 def _assert(phi, items, what, tol):

@@ -435,7 +435,7 @@ def write(path, info, args, res, elapsed):
           "for n = 7..15 except 8 (`auto` splits at n = 9, 10, 12 at every height; the others are the n where "
           "it switches). The dense map solves output-sensitively "
           "once its answers are known to be small; the timed calls repeat one orbit, so after the warm-up "
-          f"call it does so from the first step. `auto` (flint) switches to the structured step at "
+          "call it does so from the first step. `auto` (flint) switches to the structured step at "
           + ", ".join(f"{b} bits for n = {n}" for n, b in AUTO_SPLIT_BELOW.items())
           + f" (split below), and at {STRUCTURED_MIN_BITS} bits for n = 11, 13 (dense below).", "",
           "| n | " + " | ".join(f"from ≥ {t} bits" for t, *_ in res["crossover"][0][1]) + " |",

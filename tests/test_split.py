@@ -5,7 +5,6 @@ one 2n×2n integer solve) and to the plain Fraction elimination, and checked in
 the step's defining equation (I − εf'(x)) x̃ = x evaluated in Fraction arithmetic.
 """
 
-import math
 import random
 import re
 from fractions import Fraction
