@@ -46,8 +46,8 @@ otherwise the structured path for exact ``flint`` steps when n ≥ 16, and at
 n = 11, 13 once the point's height reaches :data:`STRUCTURED_MIN_BITS`
 (:data:`STRUCTURED_MIN_N`); otherwise dense.  The rules follow the crossovers
 measured along orbits (docs/benchmarks.md).  Every path gives the same
-rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and ``fraction`` may ask for the
-structured path explicitly.
+rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
+``fraction`` may ask for the structured path explicitly.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
 results are what p-bit arithmetic gives.  ``method='structured'`` with them

@@ -101,11 +101,6 @@ class SplitSystem:
         #: raises ZeroDivisionError if the system is singular
         self.solve = namespace["solve"]
 
-    def step(self, x):
-        """The solution at the point ``x`` (a sequence of the kernel's rationals), as
-        a tuple of them."""
-        return self.solve(*self.kernel.split(x))[2]
-
 
 class _Emitter:
     """Straight-line code in fresh names.  Integer constants are named (``C12``,
