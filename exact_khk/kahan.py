@@ -315,9 +315,12 @@ class KahanMap:
                 x = self._step(x)
                 yield x
                 continue
-            for x in self._split_steps(x) if kind == "split" else self._integer_steps(x):
+            steps = self._split_steps(x) if kind == "split" else self._integer_steps(x)
+            if not self.switch_bits:
+                yield from steps  # endless: this path at every height
+            for x in steps:
                 yield x
-                if self.switch_bits and self._kind_at(x) != kind:
+                if self._kind_at(x) != kind:
                     break
 
     def inverse(self, x):
