@@ -178,6 +178,23 @@ def advance(phi, x, bits):
     return x
 
 
+def orbit_timing(auto, dense, x, steps, **timing):
+    """Per-step times of ``steps`` steps of ``auto.orbit`` and ``dense.orbit`` from x
+    (checked equal) and of a bare ``fmpz_mat.solve`` loop over the systems of the
+    same orbit points, timed together (``timing``: options of :func:`timed_together`)."""
+    pts = dense.orbit(x, steps)
+    assert auto.orbit(x, steps) == pts
+    systems = [integer_system(dense, p) for p in pts[:-1]]
+
+    def bare():
+        for A, B in systems:
+            A.solve(B)
+
+    best = timed_together({"auto": lambda: auto.orbit(x, steps), "dense": lambda: dense.orbit(x, steps),
+                           "bare": bare}, **timing)
+    return {k: t / steps for k, t in best.items()}
+
+
 def orbit_steps(ns, heights, log, steps=16):
     """Per-step cost of ``KahanMap.orbit`` (auto and dense) over ``steps`` steps
     against a bare ``fmpz_mat.solve`` loop over the systems of the same orbit points."""
@@ -188,18 +205,8 @@ def orbit_steps(ns, heights, log, steps=16):
         x = auto.point(random_point(n, 1))
         for bits in heights:
             x = advance(auto, x, bits)
-            pts = dense.orbit(x, steps)
-            assert auto.orbit(x, steps) == pts
-            systems = [integer_system(dense, p) for p in pts[:-1]]
-
-            def bare():
-                for A, B in systems:
-                    A.solve(B)
-
             r = {"n": n, "bits": height(x), "steps": steps, "path": auto.path}
-            best = timed_together({"auto": lambda: auto.orbit(x, steps), "dense": lambda: dense.orbit(x, steps),
-                                   "bare": bare}, min_total=1.0, max_reps=20)
-            r.update({k: t / steps for k, t in best.items()})
+            r.update(orbit_timing(auto, dense, x, steps, min_total=1.0, max_reps=20))
             rows.append(r)
             log(f"orbit steps n={n} from {r['bits']} bits: auto={fmt(r['auto'])} "
                 f"dense={fmt(r['dense'])} bare={fmt(r['bare'])}")

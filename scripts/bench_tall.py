@@ -23,7 +23,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench.py: its timing and table helpers
 
-from bench import EPS, fmt, height, integer_system, machine, ratio, timed_together  # noqa: E402
+from bench import EPS, fmt, height, machine, orbit_timing, ratio  # noqa: E402
 
 from exact_khk import KahanMap, LiePoissonSystem  # noqa: E402
 from exact_khk.systems import random_point  # noqa: E402
@@ -49,19 +49,8 @@ def tall_orbit_steps(ns, bits, steps, log):
         log(f"n = {n}: climbing to {bits} bits ({auto.path})")
         t0 = time.perf_counter()
         x = climb(auto, auto.point(random_point(n, 1)), bits, log)
-        climb_s = time.perf_counter() - t0
-        pts = dense.orbit(x, steps)
-        assert auto.orbit(x, steps) == pts
-        systems = [integer_system(dense, p) for p in pts[:-1]]
-
-        def bare():
-            for A, B in systems:
-                A.solve(B)
-
-        best = timed_together({"auto": lambda: auto.orbit(x, steps), "dense": lambda: dense.orbit(x, steps),
-                               "bare": bare}, min_total=1.0, max_reps=5, batch=0)
-        r = {"n": n, "bits": height(x), "steps": steps, "path": auto.path, "climb": climb_s}
-        r.update({k: t / steps for k, t in best.items()})
+        r = {"n": n, "bits": height(x), "steps": steps, "path": auto.path, "climb": time.perf_counter() - t0}
+        r.update(orbit_timing(auto, dense, x, steps, min_total=1.0, max_reps=5, batch=0))
         rows.append(r)
         log(f"n = {n} from {r['bits']} bits: auto={fmt(r['auto'])} dense={fmt(r['dense'])} "
             f"bare={fmt(r['bare'])} (auto / bare {ratio(r['auto'], r['bare'])})")
