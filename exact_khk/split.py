@@ -49,7 +49,7 @@ SPLIT_N = tuple(range(1, 16))
 
 #: where ``method='auto'`` takes the split step with python-flint (with gmpy2 it
 #: takes it for every n in SPLIT_N: its other exact step, Bareiss elimination,
-#: was 1.9–100× slower in docs/benchmarks.md).  At these n the split step was
+#: was 1.7–100× slower in docs/benchmarks.md).  At these n the split step was
 #: faster along orbits at every height measured than the dense step (to 10 000
 #: bits for n ≤ 8) and than the structured step (to 3000 bits for n = 9, 10, 12);
 #: every factor Q(ζ_d), d | n, has degree φ(d) ≤ 4, or 6 for n = 9 ...
