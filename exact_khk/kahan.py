@@ -88,6 +88,11 @@ STRUCTURED_MIN_BITS = 384
 #: dense orbit steps from this height on may solve output-sensitively (see
 #: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
 SMALL_ANSWER_MIN_BITS = 128
+#: ... and below DIXON_BITS·(N − 6) bits: Dixon's lifting needs more steps as the
+#: entries grow, and along orbits ``fmpz_mat.solve`` overtakes it near 18 000,
+#: 40 000 and 60 000 bits for N = 8, 10, 12 and above 100 000 for N = 14
+#: (docs/benchmarks_tall.md)
+DIXON_BITS = 10_000
 
 
 def as_point(ar, x, dim: int, name: str = "x"):
@@ -239,7 +244,8 @@ class KahanMap:
         then one solve over Z (``fmpz_mat.solve``, or Bareiss for gmpy2).  Once a
         step's answer reaches :data:`SMALL_ANSWER_MIN_BITS` with less than twice
         the height of its point, as along orbits, the next solve is told that the
-        answer is small (python-flint then uses Dixon's solve for 8 ≤ N < 16).
+        answer is small (python-flint then uses Dixon's solve for 8 ≤ N < 16),
+        up to the height where ``fmpz_mat.solve`` is faster again (:data:`DIXON_BITS`).
         The map remembers this between calls, so that single steps at orbit
         points (e.g. the commutation checks) profit too.
         """
@@ -247,8 +253,8 @@ class KahanMap:
         V, R = self.field.integer_system(K, K.num(eps), K.den(eps))
         col = K.column(x)
         track = self.field.dim in K.small_answer_dims
-        height = _height(ar, x) if track else 0
-        small = track and self._small_answers and height >= SMALL_ANSWER_MIN_BITS
+        height, top = (_height(ar, x) if track else 0), DIXON_BITS * (self.field.dim - 6)
+        small = track and self._small_answers and SMALL_ANSWER_MIN_BITS <= height < top
         while True:
             v = K.clear(col)
             try:
@@ -259,7 +265,7 @@ class KahanMap:
             if track:
                 grown, height = height, _height(ar, x)
                 self._small_answers = height < 2 * grown
-                small = self._small_answers and height >= SMALL_ANSWER_MIN_BITS
+                small = self._small_answers and SMALL_ANSWER_MIN_BITS <= height < top
             yield x
 
     def _split_steps(self, x):

@@ -9,6 +9,7 @@ import pytest
 import sympy as sp
 
 from exact_khk import InputError, KahanMap, LiePoissonSystem, SingularStepError, get_arith
+from exact_khk import kahan
 from exact_khk.kahan import SMALL_ANSWER_MIN_BITS
 from exact_khk.quadratic import QuadraticField
 from exact_khk.systems import random_point
@@ -207,7 +208,7 @@ def test_orbit_solves_small_answers_output_sensitively(monkeypatch):
     assert len(flags) == 16 and not flags[0] and sum(flags) >= 8
     heights = [max(max(abs(t.p).bit_length(), t.q.bit_length()) for t in p) for p in a]
     assert all(small == (SMALL_ANSWER_MIN_BITS <= heights[k] < 2 * heights[k - 1])
-               for k, small in enumerate(flags) if k > 0)
+               for k, small in enumerate(flags) if k > 0)  # heights far below DIXON_BITS·(N − 6)
     gm = KahanMap(fld, "1/10", "gmpy2", method="dense")
     same = lambda p, q: _as_fractions(get_arith("flint"), [p]) == _as_fractions(get_arith("gmpy2"), [q])  # noqa: E731
     # the map remembers: a single step at an orbit point is solved as small ...
@@ -232,3 +233,20 @@ def test_output_sensitive_solve_refuses_singular_systems():
             K.solve_column(M, b, small)
     A = M + flint.fmpz_mat([[int(i == j) * (i + 1) ** 3 for j in range(N)] for i in range(N)])
     assert A * K.solve_column(A, b, True) == b
+
+
+def test_dense_orbit_stops_dixon_above_its_crossover(monkeypatch):
+    """Above DIXON_BITS·(N − 6) bits the dense flint orbit step goes back to
+    ``fmpz_mat.solve`` (Dixon loses there); here the threshold is lowered so that
+    a short orbit at n = 5 (N = 10) crosses it.  The orbit is unchanged."""
+    K = get_arith("flint").integers
+    flags, solve = [], K.solve_column
+    monkeypatch.setattr(K, "solve_column", lambda M, b, small=False: flags.append(small) or solve(M, b, small))
+    monkeypatch.setattr(kahan, "DIXON_BITS", 100)  # N = 10: Dixon from 128 to 400 bits
+    fld, x = LiePoissonSystem.random(5, seed=1).field("f"), random_point(5, 1)
+    a = KahanMap(fld, "1/10", "flint", method="dense").orbit(x, 16)
+    assert a == KahanMap(fld, "1/10", "flint", method="split").orbit(x, 16)
+    heights = [max(max(abs(t.p).bit_length(), t.q.bit_length()) for t in p) for p in a]
+    assert flags[1:] == [SMALL_ANSWER_MIN_BITS <= heights[k] < 400 and heights[k] < 2 * heights[k - 1]
+                         for k in range(1, 16)]
+    assert any(flags) and heights[15] >= 400 and not flags[-1]
