@@ -89,9 +89,10 @@ STRUCTURED_MIN_BITS = 384
 #: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
 SMALL_ANSWER_MIN_BITS = 128
 #: ... and below DIXON_BITS·(N − 6) bits: Dixon's lifting needs more steps as the
-#: entries grow, and along orbits ``fmpz_mat.solve`` overtakes it near 18 000,
-#: 40 000 and 60 000 bits for N = 8, 10, 12 and above 100 000 for N = 14
-#: (docs/benchmarks_tall.md)
+#: entries grow, and along orbits ``fmpz_mat.solve`` overtakes it near 16 000,
+#: 40 000 and 60 000 bits for N = 8, 10, 12 and beyond 100 000 for N = 14
+#: (docs/benchmarks_tall.md; for N = 14 the rule gives up Dixon's last 5–20 %
+#: between 80 000 and 100 000 bits)
 DIXON_BITS = 10_000
 
 
