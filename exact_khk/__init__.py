@@ -14,18 +14,18 @@ True
 
 __version__ = "0.1.0"
 
-from .arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
-from . import ball  # noqa: E402,F401  (registers the ball:P arithmetic)
-from . import cyclo  # noqa: E402,F401  (registers the cyclo:N and gf:P arithmetics)
-from .errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
+from exact_khk.arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
+from exact_khk.arith import ball  # noqa: E402,F401  (registers the ball:P arithmetic)
+from exact_khk.arith import cyclotomic as cyclo  # noqa: E402,F401  (registers the cyclo:N and gf:P arithmetics)
+from exact_khk.errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
                      PoleError, SingularStepError, UndecidedError)
-from .kahan import KahanMap, kahan_step, map_jacobian, orbit
-from .parsing import parse_rational, parse_signs, parse_vector
-from .quadratic import QuadraticField
-from .systems import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
+from exact_khk.kahan.map import KahanMap, kahan_step, map_jacobian, orbit
+from exact_khk.parsing import parse_rational, parse_signs, parse_vector
+from exact_khk.systems.quadratic import QuadraticField
+from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
                       rational_sign_patterns)
-from .invariants import Htilde
-from .certify import Certificate, Check, certify
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.certification.lie_poisson import Certificate, Check, certify
 
 __all__ = [
     "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",

@@ -1,3 +1,3 @@
-from .cli import entry_point
+from exact_khk.cli.main import entry_point
 
 entry_point()

@@ -6,7 +6,7 @@ occurred) when the property fails.  In a floating arithmetic, pass ``tol``: the
 measured largest |difference| must not exceed it.
 
 >>> from exact_khk import KahanMap, LiePoissonSystem
->>> from exact_khk.invariants import Htilde
+>>> from exact_khk.systems.lie_poisson.invariants import Htilde
 >>> s = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
 >>> phi = KahanMap(s.field("f"), "1/10", "fraction")
 >>> assert_conserved(phi, lambda x: Htilde(s.field("f"), x, "1/10", phi.arith), ["1", "0", "0", "0", "1", "0"], 5)
@@ -18,7 +18,7 @@ AssertionError: not conserved by KahanMap(f, eps=1/10, arith=fraction): first no
 
 from __future__ import annotations
 
-from .certify import (commute_items, compare, conserved_items, poisson_map_items, reversible_items)
+from exact_khk.certification.lie_poisson import (commute_items, compare, conserved_items, poisson_map_items, reversible_items)
 
 
 def _assert(phi, items, what, tol):

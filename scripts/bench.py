@@ -46,10 +46,10 @@ import mpmath  # noqa: E402
 import sympy  # noqa: E402
 
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
-from exact_khk.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
-from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
-from exact_khk.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
-from exact_khk.systems import random_point  # noqa: E402
+from exact_khk.linalg.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
+from exact_khk.kahan.map import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
+from exact_khk.linalg.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
+from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
 SLOW = 0.5  # seconds: a reference solver slower than this is not run at larger sizes
@@ -216,7 +216,7 @@ def orbit_steps(ns, heights, log, steps=16):
 def crossover(ns, heights, log, steps=4):
     """dense / structured and split / structured time of ``steps`` orbit steps from
     points of one exact orbit, by height: where ``method='auto'`` should switch to the
-    structured step (the rules in :mod:`exact_khk.kahan` and :mod:`exact_khk.split`)."""
+    structured step (the rules in :mod:`exact_khk.kahan.map` and :mod:`exact_khk.linalg.split`)."""
     rows = []
     for n in ns:
         fld = LiePoissonSystem.random(n, seed=1).field("f")

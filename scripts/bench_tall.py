@@ -28,8 +28,8 @@ from bench import EPS, fmt, height, integer_system, machine, orbit_timing, ratio
 import flint  # noqa: E402
 
 from exact_khk import KahanMap, LiePoissonSystem  # noqa: E402
-from exact_khk.kahan import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
-from exact_khk.systems import random_point  # noqa: E402
+from exact_khk.kahan.map import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
+from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 
 #: heights (bits) of the climb at which the Dixon table is measured (n = 4..7)

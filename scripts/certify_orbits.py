@@ -22,7 +22,7 @@ import time
 from tqdm import tqdm
 
 from exact_khk import InputError, LiePoissonSystem, SingularStepError, certify, parse_rational
-from exact_khk.systems import random_point
+from exact_khk.systems.lie_poisson.system import random_point
 
 
 def int_range(text: str) -> list[int]:

@@ -9,7 +9,7 @@ Writes hard_cases.md (markdown table) and prints it.
 import argparse
 import pathlib
 
-from exact_khk.hard import DEFAULT_ARITHS, catalogue, markdown_table, run_catalogue
+from exact_khk.studies.hard import DEFAULT_ARITHS, catalogue, markdown_table, run_catalogue
 
 
 def main():

@@ -12,8 +12,8 @@ and fits the precision rule bits = D*log2(10) + c*K + const for D digits.
 
 import argparse
 
-from exact_khk.scaling import DEFAULT_ARITHS, precision_rule, scaling_study, write_study
-from exact_khk.systems import DEFAULT_EPS, DEFAULT_X0, default_system
+from exact_khk.studies.scaling import DEFAULT_ARITHS, precision_rule, scaling_study, write_study
+from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system
 
 
 def main():

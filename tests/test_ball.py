@@ -6,9 +6,9 @@ import flint
 import pytest
 
 from exact_khk import InputError, KahanMap, UndecidedError, get_arith
-from exact_khk.ball import BallArith, ball_mid, ball_rad, contains_exact
-from exact_khk.invariants import Htilde
-from exact_khk.systems import DEFAULT_X0, LiePoissonSystem, default_system
+from exact_khk.arith.ball import BallArith, ball_mid, ball_rad, contains_exact
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.systems.lie_poisson.system import DEFAULT_X0, LiePoissonSystem, default_system
 
 
 def test_registered_and_flags():

@@ -9,9 +9,9 @@ import sympy as sp
 
 from exact_khk import (Arith, Certificate, Check, InputError, KahanMap, LiePoissonSystem,
                        SingularStepError, certify, get_arith)
-from exact_khk.certify import compare, default_signs, non_admissible_hessian
-from exact_khk.invariants import Pi
-from exact_khk.systems import DEFAULT_EPS, DEFAULT_X0, default_system, random_point
+from exact_khk.certification.lie_poisson import compare, default_signs, non_admissible_hessian
+from exact_khk.systems.lie_poisson.invariants import Pi
+from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system, random_point
 from exact_khk.testing import (assert_certificate_valid, assert_commute, assert_conserved,
                                assert_poisson_map, assert_reversible)
 
@@ -277,7 +277,7 @@ def test_testing_helpers_pass_and_fail_with_exact_residual():
 def test_testing_helpers_floating_need_tol():
     s = default_system()
     phi = KahanMap(s.field("f"), DEFAULT_EPS, "float")
-    from exact_khk.invariants import Htilde
+    from exact_khk.systems.lie_poisson.invariants import Htilde
 
     H = lambda x: Htilde(s.field("f"), x, DEFAULT_EPS, phi.arith)  # noqa: E731
     with pytest.raises(TypeError, match="tol"):

@@ -5,7 +5,7 @@ import json
 import pytest
 
 from exact_khk import KahanMap, LiePoissonSystem
-from exact_khk.cli import main
+from exact_khk.cli.main import main
 
 
 def run(capsys, *argv):

@@ -5,9 +5,9 @@ import time
 from fractions import Fraction as F
 
 from exact_khk import LiePoissonSystem, get_arith
-from exact_khk.cli import main
-from exact_khk.invariants import Htilde
-from exact_khk.systems import DEFAULT_EPS, DEFAULT_X0, default_system, random_point
+from exact_khk.cli.main import main
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system, random_point
 
 
 def run(capsys, *argv):

@@ -8,8 +8,8 @@ import sympy as sp
 
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, NotRationalError,
                        SingularStepError, get_arith, involution_circulant, rational_sign_patterns)
-from exact_khk.linalg import matmul
-from exact_khk.systems import default_system, DEFAULT_X0, DEFAULT_EPS
+from exact_khk.linalg.dense import matmul
+from exact_khk.systems.lie_poisson.system import default_system, DEFAULT_X0, DEFAULT_EPS
 
 from .conftest import EXACT
 

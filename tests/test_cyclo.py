@@ -6,12 +6,12 @@ import pytest
 
 from exact_khk import InputError, KahanMap, LiePoissonSystem, NotRationalError, get_arith
 from .conftest import EXACT
-from exact_khk.cyclo import CycloNumber, cyclotomic_field
-from exact_khk.invariants import grad_Htilde
-from exact_khk.identities import (integral_patterns, involution_patterns,
+from exact_khk.arith.cyclotomic import CycloNumber, cyclotomic_field
+from exact_khk.systems.lie_poisson.invariants import grad_Htilde
+from exact_khk.certification.identities import (integral_patterns, involution_patterns,
                                   liouville_at_points)
-from exact_khk.invariants import Htilde
-from exact_khk.systems import (DEFAULT_X0, default_system, involution_circulant,
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.systems.lie_poisson.system import (DEFAULT_X0, default_system, involution_circulant,
                                involution_circulant_cyclotomic, rational_sign_patterns, random_point)
 
 # --- the field ---------------------------------------------------------------
@@ -251,7 +251,7 @@ def test_n2_liouville_in_every_exact_arithmetic(name):
 def test_cli_liouville_cyclo(capsys):
     import json
 
-    from exact_khk.cli import main
+    from exact_khk.cli.main import main
 
     assert main(["liouville", "--arith", "cyclo:3", "--involutions", "basis", "--steps", "1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)

@@ -18,8 +18,8 @@ from fractions import Fraction
 import pytest
 
 from exact_khk import KahanMap, LiePoissonSystem, get_arith
-from exact_khk.linalg import lu_factor, solve
-from exact_khk.systems import DEFAULT_EPS, DEFAULT_X0, default_system
+from exact_khk.linalg.dense import lu_factor, solve
+from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system
 
 STEPS = 15
 

@@ -6,9 +6,9 @@ import flint
 import pytest
 
 from exact_khk import InputError, KahanMap, LiePoissonSystem, SingularStepError, get_arith
-from exact_khk.cyclo import BadReductionError
-from exact_khk.identities import cross_check_mod_p, degree_bounds, liouville_identities
-from exact_khk.systems import DEFAULT_X0, default_system, random_point
+from exact_khk.arith.cyclotomic import BadReductionError
+from exact_khk.certification.identities import cross_check_mod_p, degree_bounds, liouville_identities
+from exact_khk.systems.lie_poisson.system import DEFAULT_X0, default_system, random_point
 
 P = 4611686018420360881            # prime, P ≡ 1 (mod 720720): ω exists for n ≤ 16
 
@@ -89,7 +89,7 @@ def test_cyclotomic_orbits_reduce_to_gf_orbits():
 
 def test_cross_check_detects_a_mismatch(monkeypatch):
     """Negative control: a gf computation with a perturbed step size must be caught."""
-    import exact_khk.identities as ident
+    import exact_khk.certification.identities as ident
 
     real = ident.KahanMap
 
@@ -163,7 +163,7 @@ def test_schwartz_zippel_needs_a_prime_field():
 
 
 def test_cli_liouville_gf(capsys):
-    from exact_khk.cli import main
+    from exact_khk.cli.main import main
 
     assert main(["liouville", "--n", "4", "--seed", "4", "--arith", f"gf:{P}", "--trials", "1"]) == 0
     assert "probabilistic over F_" in capsys.readouterr().out

@@ -7,11 +7,11 @@ import pytest
 import sympy
 
 from exact_khk import KahanMap, NearSingularWarning, SingularStepError
-from exact_khk.cli import main
-from exact_khk.hard import (catalogue, classify, det_polynomial, markdown_table, run_case,
+from exact_khk.cli.main import main
+from exact_khk.studies.hard import (catalogue, classify, det_polynomial, markdown_table, run_case,
                             run_catalogue, singular_step_sizes)
-from exact_khk.scaling import ArithRun, StepRow
-from exact_khk.systems import LiePoissonSystem
+from exact_khk.studies.scaling import ArithRun, StepRow
+from exact_khk.systems.lie_poisson.system import LiePoissonSystem
 
 S2 = LiePoissonSystem.from_vectors("1,2", "0,1", "3,1")
 X2 = ["1", "2", "-1", "1/2"]

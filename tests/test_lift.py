@@ -1,5 +1,5 @@
 """The p-adic division in Z[t]/(tⁿ − 1) behind the structured exact step
-(:meth:`exact_khk.circulant.CirculantRing.solve`), against python-flint's dense
+(:meth:`exact_khk.linalg.circulant.CirculantRing.solve`), against python-flint's dense
 ``fmpz_mat.solve`` of the n×n circulant system (an independent algorithm)."""
 
 import random
@@ -9,8 +9,8 @@ import pytest
 
 flint = pytest.importorskip("flint")
 
-from exact_khk.circulant import LIFT_PRIMES, CirculantRing, rational_reconstruction  # noqa: E402
-from exact_khk.linalg import SingularMatrix  # noqa: E402
+from exact_khk.linalg.circulant import LIFT_PRIMES, CirculantRing, rational_reconstruction  # noqa: E402
+from exact_khk.linalg.dense import SingularMatrix  # noqa: E402
 
 
 def _poly(rng, n, bits):

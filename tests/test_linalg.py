@@ -9,7 +9,7 @@ import pytest
 import sympy as sp
 
 from exact_khk import KahanMap, LiePoissonSystem, QuadraticField, SingularStepError, get_arith
-from exact_khk.linalg import SingularMatrix, bareiss_solve, lu_factor, lu_solve, solve
+from exact_khk.linalg.dense import SingularMatrix, bareiss_solve, lu_factor, lu_solve, solve
 
 from .conftest import EXACT
 

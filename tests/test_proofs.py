@@ -5,7 +5,7 @@ from fractions import Fraction
 import pytest
 
 from exact_khk import KahanMap, LiePoissonSystem, get_arith
-from exact_khk.proofs import (RationalFunctionArith, prove_all, prove_commutation, prove_conservation,
+from exact_khk.certification.proofs import (RationalFunctionArith, prove_all, prove_commutation, prove_conservation,
                               prove_jacobi)
 
 S2 = LiePoissonSystem.from_vectors("1,2", "0,1", "3,1")
@@ -27,7 +27,7 @@ def test_kahan_step_over_rational_functions_specialises_to_the_rational_step():
     """The symbolic step at x = (1, 0, 0, 1), ε = 1/3 equals the exact rational step."""
     ar = RationalFunctionArith(["x0", "x1", "x2", "x3", "eps"])
     *x, eps = ar.gens()
-    from exact_khk.proofs import _kmap
+    from exact_khk.certification.proofs import _kmap
 
     y = _kmap(S2.field("f"), eps, ar).step(x)
     point = [1, 0, 0, 1, Fraction(1, 3)]
@@ -67,7 +67,7 @@ def test_jacobi_identity_for_every_admissible_hessian(n):
 
 def test_jacobi_negative_control():
     """A perturbed tensor J + ε² (x_0 · constant antisymmetric) is not Poisson."""
-    from exact_khk.proofs import jacobi_residual
+    from exact_khk.certification.proofs import jacobi_residual
 
     ok, res, _ = jacobi_residual(S2, perturb=True)
     assert not ok and res != "0"
@@ -82,7 +82,7 @@ def test_prove_all_is_for_n2():
 
 def test_symbolic_results_agree_with_exact_arithmetic_at_a_point():
     """The symbolic H̃ specialised at a rational point equals H̃ computed in Q."""
-    from exact_khk.invariants import Htilde
+    from exact_khk.systems.lie_poisson.invariants import Htilde
 
     ar = RationalFunctionArith(["x0", "x1", "x2", "x3", "eps"])
     *x, eps = ar.gens()
@@ -92,7 +92,7 @@ def test_symbolic_results_agree_with_exact_arithmetic_at_a_point():
 
 
 def test_cli_prove(capsys):
-    from exact_khk.cli import main
+    from exact_khk.cli.main import main
 
     assert main(["prove", "--n", "2", "--seed", "1"]) == 0
     assert capsys.readouterr().out.count("symbolic proof") == 3

@@ -8,10 +8,10 @@ import flint
 import pytest
 
 from exact_khk import KahanMap, SingularStepError
-from exact_khk.cli import main
-from exact_khk.scaling import (DEFAULT_ARITHS, LOG10_2, exact_orbit, precision_needed,
+from exact_khk.cli.main import main
+from exact_khk.studies.scaling import (DEFAULT_ARITHS, LOG10_2, exact_orbit, precision_needed,
                                precision_rule, run_orbit, scaling_study, write_study)
-from exact_khk.systems import DEFAULT_X0, LiePoissonSystem, default_system
+from exact_khk.systems.lie_poisson.system import DEFAULT_X0, LiePoissonSystem, default_system
 
 K = 5
 EPS = Fraction(1, 10)

@@ -16,14 +16,14 @@ import sympy as sp
 
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, NearSingularWarning, QuadraticField,
                        SingularStepError, get_arith, rational_sign_patterns)
-from exact_khk.circulant import (circulant_structure, exact_htilde, exact_step, numeric_step,
+from exact_khk.linalg.circulant import (circulant_structure, exact_htilde, exact_step, numeric_step,
                                  structure_from_system)
-from exact_khk.invariants import Htilde
-from exact_khk import circulant
-from exact_khk.kahan import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N, _height
-from exact_khk import split as split_mod
-from exact_khk.split import AUTO_SPLIT_BELOW
-from exact_khk.systems import random_point
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.linalg import circulant
+from exact_khk.kahan.map import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N, _height
+from exact_khk.linalg import split as split_mod
+from exact_khk.linalg.split import AUTO_SPLIT_BELOW
+from exact_khk.systems.lie_poisson.system import random_point
 
 from .conftest import EXACT
 
@@ -144,7 +144,7 @@ def test_dft_step_through_kahanmap_matches_dense_float():
     assert dense.structure is None  # auto: floating arithmetic stays genuine p-bit arithmetic
     z1, z2 = fast.step(x), dense.step(x)
     M = KahanMap(fld, "1/10", "fraction").system_matrix([Fraction(t) for t in x])
-    from exact_khk.linalg import identity, norm1, solve
+    from exact_khk.linalg.dense import identity, norm1, solve
     fr = get_arith("fraction")
     Minv, _ = solve(fr, M, identity(fr, 12))
     kappa = norm1(fr, M) * norm1(fr, Minv)
@@ -235,7 +235,7 @@ def test_structured_step_at_n_256():
     """Exact step at n = 256 (the structure from the vectors: building the dense field
     would need (2n)³ tensor entries), checked against MATH.md's equivalent form
     Φ(x) = (I + εf'(Φ(x))) x, an equation the solver never used."""
-    from exact_khk.circulant import circulant_ring, kahan_system, reflect
+    from exact_khk.linalg.circulant import circulant_ring, kahan_system, reflect
 
     n = 256
     s = LiePoissonSystem.random(n, seed=3)
@@ -258,7 +258,7 @@ def test_structured_step_at_n_256():
 def test_large_n_structured_step_never_builds_the_dense_tensor():
     """The Lie–Poisson field builds its (2n)^3 quadratic terms only on demand; the
     structured step (auto for flint at n >= STRUCTURED_MIN_N) never needs them."""
-    from exact_khk.systems import random_point
+    from exact_khk.systems.lie_poisson.system import random_point
 
     s = LiePoissonSystem.random(32, 3)
     fld = s.field("f")

@@ -34,10 +34,10 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from math import gcd
 
-from .cyclo import cyclotomic_field
-from .errors import InputError, NotRationalError
-from .parsing import format_signs, parse_signs, parse_vector
-from .quadratic import QuadraticField
+from exact_khk.arith.cyclotomic import cyclotomic_field
+from exact_khk.errors import InputError, NotRationalError
+from exact_khk.parsing import format_signs, parse_signs, parse_vector
+from exact_khk.systems.quadratic import QuadraticField
 
 # --- small exact matrix helpers (Fractions, lists of rows) ------------------
 
@@ -153,7 +153,7 @@ def is_rational_pattern(n: int, signs) -> bool:
 
 def involution_circulant_cyclotomic(n: int, signs) -> tuple:
     """Coefficients α_k = (1/n) Σ_j s_j ω^{-jk} of B = Σ_k α_k P^k in Q(ω), ω = ζ_n,
-    for *every* sign pattern, as :class:`~exact_khk.cyclo.CycloNumber` (any
+    for *every* sign pattern, as :class:`~exact_khk.arith.cyclotomic.CycloNumber` (any
     ``cyclo:N`` with n | N, or ``gf:P`` with P ≡ 1 mod n, converts them).
 
     >>> [str(t) for t in involution_circulant_cyclotomic(3, "+-+")]

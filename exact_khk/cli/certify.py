@@ -6,14 +6,14 @@ and every negative control fails), 1 otherwise; 2 bad input; 3 singular step.
 
 from __future__ import annotations
 
-from .arith import get_arith
-from .certify import certify, default_signs
-from .cli import add_system_options, library_versions, system_from_args, system_json, write_json
-from .errors import InputError
-from .cyclo import DEFAULT_PRIME
-from .invariants import Htilde
-from .kahan import KahanMap
-from .parsing import format_signs, parse_signs
+from exact_khk.arith import get_arith
+from exact_khk.certification.lie_poisson import certify, default_signs
+from exact_khk.cli.main import add_system_options, library_versions, system_from_args, system_json, write_json
+from exact_khk.errors import InputError
+from exact_khk.arith.cyclotomic import DEFAULT_PRIME
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.kahan.map import KahanMap
+from exact_khk.parsing import format_signs, parse_signs
 
 
 def _signs(args, n, ar):

@@ -9,11 +9,11 @@ every record is as expected (claims hold, controls fail), 1 otherwise.
 
 from __future__ import annotations
 
-from .arith import get_arith
-from .cli import add_system_options, library_versions, system_from_args, system_json, write_json
-from .cyclo import GFArith
-from .errors import InputError, NotRationalError
-from .identities import (integral_patterns, involution_patterns, liouville_at_points,
+from exact_khk.arith import get_arith
+from exact_khk.cli.main import add_system_options, library_versions, system_from_args, system_json, write_json
+from exact_khk.arith.cyclotomic import GFArith
+from exact_khk.errors import InputError, NotRationalError
+from exact_khk.certification.identities import (integral_patterns, involution_patterns, liouville_at_points,
                          liouville_identities)
 
 
@@ -86,7 +86,7 @@ def cmd_liouville(args):
 
 
 def cmd_prove(args):
-    from .proofs import prove_all
+    from exact_khk.certification.proofs import prove_all
 
     system, _, _ = system_from_args(args)
     return _report(args, system, prove_all(system), {})

@@ -1,6 +1,6 @@
 """Quadratic vector fields f(x) = Q(x) + L x + c with exact coefficients.
 
-The Kahan machinery (:mod:`exact_khk.kahan`) accepts any
+The Kahan machinery (:mod:`exact_khk.kahan.map`) accepts any
 :class:`QuadraticField`; the Lie–Poisson family (:mod:`exact_khk.systems`) is
 one source of them.  Coefficients are exact (``Fraction``, or any value the
 arithmetic's ``convert`` accepts); they are converted into an arithmetic once
@@ -25,8 +25,8 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from math import lcm
 
-from .arith import _as_fraction
-from .errors import InputError
+from ..arith import _as_fraction
+from ..errors import InputError
 
 
 @dataclass(frozen=True, eq=False)

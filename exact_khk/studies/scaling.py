@@ -23,7 +23,7 @@ How every number is obtained (also stored in ``ScalingStudy.method``):
   exact values are 0), evaluated exactly; balls: |mid| + rad;
 * time per step: wall-clock time of the orbit step alone (``time.perf_counter``).
 
->>> from exact_khk.systems import default_system, DEFAULT_X0
+>>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
 >>> s = default_system()
 >>> st = scaling_study(s, DEFAULT_X0, "1/10", 5, ["float", "mp:113", "ball:113"], progress=False)
 >>> [r.arith for r in st.runs]
@@ -44,13 +44,13 @@ from fractions import Fraction
 
 import flint
 
-from .arith import get_arith
-from .ball import BallArith, ball_mid, ball_rad, contains_exact
-from .errors import InputError, NearSingularWarning, SingularStepError, UndecidedError
-from .invariants import Htilde, PoleError
-from .kahan import KahanMap
-from .parsing import parse_rational, parse_vector
-from .systems import b0_signs
+from exact_khk.arith import get_arith
+from exact_khk.arith.ball import BallArith, ball_mid, ball_rad, contains_exact
+from exact_khk.errors import InputError, NearSingularWarning, SingularStepError, UndecidedError
+from exact_khk.systems.lie_poisson.invariants import Htilde, PoleError
+from exact_khk.kahan.map import KahanMap
+from exact_khk.parsing import parse_rational, parse_vector
+from exact_khk.systems.lie_poisson.system import b0_signs
 
 DEFAULT_ARITHS = ("float", "mp:53", "mp:64", "mp:113", "mp:256", "mp:1024", "mp:4096",
                   "ball:64", "ball:256", "ball:1024", "ball:4096")
@@ -423,7 +423,7 @@ def precision_needed(system, x0, eps, steps, digits, kind="mp", exact=None) -> P
     """The smallest P such that ``kind:P`` keeps ``digits`` correct digits at every
     step 0..``steps`` (doubling from ⌈D·log2 10⌉, then bisection).
 
-    >>> from exact_khk.systems import default_system, DEFAULT_X0
+    >>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
     >>> r = precision_needed(default_system(), DEFAULT_X0, "1/10", 10, 20)
     >>> r.bits >= 67 and r.worst_log10 <= -20
     True
@@ -478,7 +478,7 @@ class PrecisionRule:
 def precision_rule(system, x0, eps, steps, digits, kind="mp", step_counts=None) -> PrecisionRule:
     """Fit the rule over K in ``step_counts`` (default K/4, K/2, 3K/4, K).
 
-    >>> from exact_khk.systems import default_system, DEFAULT_X0
+    >>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
     >>> rule = precision_rule(default_system(), DEFAULT_X0, "1/10", 8, 10)
     >>> math.isfinite(rule.c) and rule.predict(10, 8) > 33
     True

@@ -14,7 +14,7 @@ identity of rational functions, for all x and ε where both sides are defined.
 The system (its Hessian) is fixed by the caller; pass ``symbolic_hessian=True``
 to :func:`prove_jacobi` to prove it for every admissible Hessian at once (the
 composition proofs with a, b, c symbolic did not finish in 10 minutes for n = 2).
-Each returns a :class:`~exact_khk.certify.Check` with evidence
+Each returns a :class:`~exact_khk.certification.lie_poisson.Check` with evidence
 "symbolic proof".
 
 >>> from exact_khk import LiePoissonSystem
@@ -30,14 +30,14 @@ from fractions import Fraction
 
 import flint
 
-from .arith import Arith, _as_fraction
-from .errors import InputError
-from .certify import Check
-from .identities import _field
-from .invariants import Htilde
-from .kahan import KahanMap
-from .linalg import matmul
-from .systems import hankel
+from exact_khk.arith import Arith, _as_fraction
+from exact_khk.errors import InputError
+from exact_khk.certification.lie_poisson import Check
+from exact_khk.certification.identities import _field
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.kahan.map import KahanMap
+from exact_khk.linalg.dense import matmul
+from exact_khk.systems.lie_poisson.system import hankel
 
 
 class RatFunc:
@@ -275,7 +275,7 @@ def prove_all(system):
     and the Jacobi identity of Π (seconds).  For n = 3 the rational-function
     computation of H̃∘Φ_f did not finish in 13 minutes (7.6 CPU minutes, 1.1 GB),
     so it is refused; use :func:`prove_jacobi` (any n) and
-    :func:`~exact_khk.identities.liouville_identities`."""
+    :func:`~exact_khk.certification.identities.liouville_identities`."""
     if system.n != 2:
         raise InputError(f"n: symbolic proofs of conservation and commutation are offered for n = 2, "
                          f"got n = {system.n} (use prove_jacobi, or liouville_identities over gf:P)")

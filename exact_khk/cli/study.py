@@ -1,6 +1,6 @@
 """``exact-khk scale`` and ``exact-khk hard``: precision-scaling studies and hard cases.
 
-Thin views over :mod:`exact_khk.scaling` and :mod:`exact_khk.hard`.
+Thin views over :mod:`exact_khk.studies.scaling` and :mod:`exact_khk.hard`.
 """
 
 from __future__ import annotations
@@ -10,9 +10,10 @@ import math
 import pathlib
 import sys
 
-from .cli import add_system_options, library_versions, system_from_args
-from .errors import InputError
-from . import hard, scaling
+from exact_khk.cli.main import add_system_options, library_versions, system_from_args
+from exact_khk.errors import InputError
+from exact_khk.studies import hard
+from exact_khk.studies import scaling
 
 
 def register(sub):
@@ -54,7 +55,7 @@ def _ariths(text):
     names = [t.strip() for t in text.split(",") if t.strip()]
     if not names:
         raise InputError("--ariths: give at least one arithmetic")
-    from .arith import get_arith
+    from exact_khk.arith import get_arith
 
     out = []
     for name in names:

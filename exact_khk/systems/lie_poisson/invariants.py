@@ -8,7 +8,7 @@ field g):
 (= 2 H_M(x) + O(ε²), even in ε).  K̃ is the same with M = B Hs.
 
 >>> from exact_khk import LiePoissonSystem, get_arith
->>> from exact_khk.systems import default_system, DEFAULT_X0
+>>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
 >>> s = default_system(); ar = get_arith("fraction")
 >>> x = [ar(t) for t in (1, 0, 0, 0, 1, 0)]
 >>> Htilde(s.field("f"), x, "1/10", ar)
@@ -19,11 +19,11 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from . import circulant
-from .arith import get_arith
-from .errors import InputError, PoleError
-from .linalg import SingularMatrix, matmul, matvec, solve, transpose
-from .parsing import parse_rational
+from exact_khk.linalg import circulant
+from exact_khk.arith import get_arith
+from exact_khk.errors import InputError, PoleError
+from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
+from exact_khk.parsing import parse_rational
 
 
 def _eps(ar, eps):
@@ -53,7 +53,7 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     singular (there the integral has a pole).
 
     Exact rational arithmetics with python-flint solve the 2n×2n system as a
-    2×2 system over circulants (:func:`exact_khk.circulant.exact_htilde`) when
+    2×2 system over circulants (:func:`exact_khk.linalg.circulant.exact_htilde`) when
     the Hessian blocks are cyclic Hankel and n ≥ :data:`STRUCTURED_MIN_N`
     (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
     40×, 160× faster than the dense solve); the result is the same rational
@@ -108,13 +108,13 @@ def htilde_definition(field, x, eps, arith=None, x_next=None):
     Raises :class:`PoleError` where J((x+x̃)/2) is singular (for instance on every
     orbit with Σ u_i = 0, an invariant hyperplane of the Kahan map, where J is singular).
 
-    >>> from exact_khk.systems import default_system
+    >>> from exact_khk.systems.lie_poisson import default_system
     >>> ar = get_arith("fraction"); f = default_system().field("f")
     >>> x = [ar(t) for t in (1, 0, 0, 0, 1, 0)]
     >>> htilde_definition(f, x, "1/10", ar) == Htilde(f, x, "1/10", ar)
     True
     """
-    from .kahan import KahanMap
+    from exact_khk.kahan.map import KahanMap
 
     ar = get_arith(arith)
     e = _eps(ar, eps)
@@ -223,7 +223,7 @@ def grad_Htilde(field, x, eps, arith=None):
 def grad_Htilde_dual(field, x, eps, arith=None):
     """The exact gradient of :func:`Htilde` by forward-mode dual numbers (an
     independent route to :func:`grad_Htilde`; no differences)."""
-    from .dual import gradient
+    from exact_khk.arith.dual import gradient
 
     ar = get_arith(arith)
     e = _eps(ar, eps)

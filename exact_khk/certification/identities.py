@@ -5,17 +5,17 @@ For a system with n ≥ 2 the checked claims are (MATH.md):
 * ``conservation``  K̃_j(Φ(x), ε) = K̃_j(x, ε) for the n integrals and every map
   Φ ∈ {Φ_f} ∪ {Φ_{g_s} : s a sign pattern ≠ ±I};
 * ``commutation``   Φ∘Ψ = Ψ∘Φ for every pair of these maps (same ε);
-* ``gradients``     ∇K̃_j = B_j ∇H̃ (exact gradients, :func:`~exact_khk.invariants.grad_Htilde`);
+* ``gradients``     ∇K̃_j = B_j ∇H̃ (exact gradients, :func:`~exact_khk.systems.lie_poisson.invariants.grad_Htilde`);
 * ``involutivity``  {K̃_i, K̃_j} = ∇K̃_iᵀ P ∇K̃_j = 0 for P = J(x) and P = Π(x);
 * ``rank``          the n gradients ∇K̃_0, …, ∇K̃_{n−1} have rank n;
 * two negative controls that must fail: the control map Φ_c (Hessian A·Hs,
   (2I + A)·Hs for n = 2) commutes with Φ_f, and conserves H̃.
 
-The integrals are K̃_j = :func:`~exact_khk.invariants.Htilde` of the field
+The integrals are K̃_j = :func:`~exact_khk.systems.lie_poisson.invariants.Htilde` of the field
 g_j with involution B_j = I − 2Π_j (sign − at j only), j = 0..n−1; for n = 2,
 where B_1 = −B_0, they are H̃ and K̃_1 (:func:`integral_patterns`).
 
-Two drivers return lists of :class:`~exact_khk.certify.Check`:
+Two drivers return lists of :class:`~exact_khk.certification.lie_poisson.Check`:
 
 * :func:`liouville_at_points` — exact residuals at the points of an orbit, in
   ``cyclo:N`` (evidence "exact in Q(zeta_N)"), a rational arithmetic, or gf:P;
@@ -39,15 +39,15 @@ from __future__ import annotations
 import random
 import time
 
-from .arith import get_arith
-from .cyclo import DEFAULT_PRIME, CycloArith, GFArith
-from .errors import InputError, PoleError, SingularStepError
-from .certify import Check, rank
-from .invariants import Htilde, Pi, grad_Htilde
-from .kahan import KahanMap
-from .linalg import matvec
-from .parsing import format_signs, parse_signs
-from .systems import nontrivial_sign_patterns
+from exact_khk.arith import get_arith
+from exact_khk.arith.cyclotomic import DEFAULT_PRIME, CycloArith, GFArith
+from exact_khk.errors import InputError, PoleError, SingularStepError
+from exact_khk.certification.lie_poisson import Check, rank
+from exact_khk.systems.lie_poisson.invariants import Htilde, Pi, grad_Htilde
+from exact_khk.kahan.map import KahanMap
+from exact_khk.linalg.dense import matvec
+from exact_khk.parsing import format_signs, parse_signs
+from exact_khk.systems.lie_poisson.system import nontrivial_sign_patterns
 
 
 # --- sign patterns -----------------------------------------------------------
@@ -336,8 +336,8 @@ def cross_check_mod_p(system, x0, eps, exact_arith, gf_arith, steps=2, patterns=
     ``integral_signs``, default :func:`integral_patterns`), computed in ``exact_arith``
     (Q or Q(ζ_N)) and reduced mod P equal the same computed directly in ``gf_arith``.
 
-    Returns one :class:`~exact_khk.certify.Check` (``holds`` False names the first mismatch).
-    A :class:`~exact_khk.cyclo.BadReductionError` is raised where the reduction
+    Returns one :class:`~exact_khk.certification.lie_poisson.Check` (``holds`` False names the first mismatch).
+    A :class:`~exact_khk.arith.cyclotomic.BadReductionError` is raised where the reduction
     is undefined (a denominator divisible by P).
     """
     ex, gf = get_arith(exact_arith), get_arith(gf_arith)

@@ -41,15 +41,15 @@ import time
 from dataclasses import asdict, dataclass, field, replace
 from fractions import Fraction
 
-from .arith import get_arith
-from .dual import jacobian
-from .errors import InputError, SingularStepError, UndecidedError
-from .invariants import (Htilde, Pi, Pi_from_q, PoleError, grad_Htilde, htilde_definition,
+from exact_khk.arith import get_arith
+from exact_khk.arith.dual import jacobian
+from exact_khk.errors import InputError, SingularStepError, UndecidedError
+from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, PoleError, grad_Htilde, htilde_definition,
                          q_coefficients, shift_index)
-from .kahan import KahanMap
-from .linalg import matmul, matvec, transpose
-from .parsing import format_signs, parse_rational, parse_signs, parse_vector
-from .systems import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
+from exact_khk.kahan.map import KahanMap
+from exact_khk.linalg.dense import matmul, matvec, transpose
+from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
+from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
                       involution_circulant_cyclotomic, is_rational_pattern,
                       nontrivial_sign_patterns, rational_sign_patterns)
 
@@ -145,7 +145,7 @@ class Certificate:
         return "\n".join(lines)
 
     def to_json(self) -> dict:
-        from .cli import system_json
+        from exact_khk.cli.main import system_json
 
         return {"system": system_json(self.system), "x0": [str(t) for t in self.x0],
                 "eps": str(self.eps), "steps": self.steps, "arith": self.arith,
@@ -412,9 +412,9 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
 
     Further evidence, appended as checks of their own kind: ``identities`` (a
     ``gf:P`` name) adds the Schwartz–Zippel identity checks of
-    :func:`exact_khk.identities.liouville_identities` for every involution
+    :func:`exact_khk.certification.identities.liouville_identities` for every involution
     (probabilistic, with a stated failure bound); ``prove=True`` adds the
-    symbolic proofs of :func:`exact_khk.proofs.prove_all` (n = 2 only).
+    symbolic proofs of :func:`exact_khk.certification.proofs.prove_all` (n = 2 only).
     """
     t_start = time.perf_counter()
     system = default_system() if system is None else system
@@ -441,19 +441,19 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     with ar.local():  # e.g. the working precision of a ball arithmetic
         checks, heights = _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress)
     if identities is not None:
-        from .identities import liouville_identities
+        from exact_khk.certification.identities import liouville_identities
 
         if progress is not None:
             progress("identities (Schwartz–Zippel)")
         checks += [replace(r, name=f"identity: {r.name}")
                    for r in liouville_identities(system, identities, trials=2, seed=0)]
     if prove:
-        from .proofs import prove_all
+        from exact_khk.certification.proofs import prove_all
 
         if progress is not None:
             progress("symbolic proofs")
         checks += prove_all(system)
-    from .cli import library_versions
+    from exact_khk.cli.main import library_versions
 
     return Certificate(system, tuple(x0), eps, steps, ar.name, tuple(signs), tuple(checks),
                        library_versions(), time.perf_counter() - t_start, heights)
@@ -598,7 +598,7 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
 def orbit_height(ar, pts):
     """Largest bit length of a numerator or denominator on the points (None unless
     the arithmetic is exact and rational)."""
-    from .cli import height_bits
+    from exact_khk.cli.main import height_bits
 
     if not ar.exact:
         return None

@@ -13,7 +13,7 @@ characteristic polynomial of f′(x) (exact, python-flint); its real roots are
 isolated by SymPy in intervals with rational endpoints and refined to any
 width, so the distance of a chosen ε to the root is known to within that width.
 
->>> from exact_khk.systems import LiePoissonSystem
+>>> from exact_khk.systems.lie_poisson import LiePoissonSystem
 >>> s2 = LiePoissonSystem.from_vectors("1,2", "0,1", "3,1")
 >>> det_polynomial(s2.field("f"), ["1", "2", "-1", "1/2"])
 Poly(-1188*eps**4 + 402*eps**3 + 190*eps**2 + eps + 1, eps, domain='QQ')
@@ -30,11 +30,11 @@ from fractions import Fraction
 import flint
 import sympy
 
-from .arith import get_arith
-from .kahan import KahanMap
-from .parsing import parse_rational
-from .scaling import LOG10_2, exact_prefix, jsonable, precision_needed, run_orbit
-from .systems import DEFAULT_X0, LiePoissonSystem, default_system, random_point
+from exact_khk.arith import get_arith
+from exact_khk.kahan.map import KahanMap
+from exact_khk.parsing import parse_rational
+from exact_khk.studies.scaling import LOG10_2, exact_prefix, jsonable, precision_needed, run_orbit
+from exact_khk.systems.lie_poisson.system import DEFAULT_X0, LiePoissonSystem, default_system, random_point
 
 DEFAULT_ARITHS = ("float", "mp:113", "mp:256", "ball:128", "ball:512")
 DISTANCES = (3, 6, 10, 15, 20, 30)  # ε = ε* + 10^-d
@@ -206,7 +206,7 @@ class CaseResult:
 
 
 def classify(run, exact_failed_step=None):
-    """(flagged, silent_failure) of an :class:`~exact_khk.scaling.ArithRun` (see
+    """(flagged, silent_failure) of an :class:`~exact_khk.studies.scaling.ArithRun` (see
     :class:`CaseOutcome`); ``exact_failed_step``: where the exact map is undefined."""
     flagged = run.status != "ok"
     beyond = (exact_failed_step is not None and run.steps_done >= exact_failed_step

@@ -45,9 +45,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
 
-from .arith import _as_fraction
-from .errors import InputError
-from .linalg import SingularMatrix
+from exact_khk.arith import _as_fraction
+from exact_khk.errors import InputError
+from exact_khk.linalg.dense import SingularMatrix
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
@@ -90,7 +90,7 @@ def circulant_structure(field):
     """The :class:`CirculantStructure` of a Lie–Poisson field, or None.
 
     None for fields without a system and Hessian (a generic
-    :class:`~exact_khk.quadratic.QuadraticField`), non-homogeneous fields, or a
+    :class:`~exact_khk.systems.quadratic.QuadraticField`), non-homogeneous fields, or a
     Hessian with a block that is not cyclic Hankel.  Cached on the field.
     """
     cache = getattr(field, "_cache", None)
@@ -115,7 +115,7 @@ def structure_from_system(system, kind="f", signs=None, power=0) -> CirculantStr
 
     First rows: A^p X(w) = X(w shifted by p); B X(w) = X(Σ_k α_k w shifted by k).
     """
-    from .systems import b0_signs, involution_circulant
+    from exact_khk.systems.lie_poisson.system import b0_signs, involution_circulant
 
     n = system.n
 
@@ -178,7 +178,7 @@ def cramer(a, r, mul, divide):
     """Solve [[a11, a12], [a21, a22]] z = r over a commutative ring by Cramer's rule:
     ``divide(det, (r0', r1'))`` on the adjugate's numerators, returning what
     ``divide`` returns (e.g. (r0'/det, r1'/det)) and raising
-    :class:`~exact_khk.linalg.SingularMatrix` when det is not a unit."""
+    :class:`~exact_khk.linalg.dense.SingularMatrix` when det is not a unit."""
     a11, a12, a21, a22 = a
     det = mul(a11, a22) - mul(a12, a21)
     return divide(det, (mul(a22, r[0]) - mul(a12, r[1]), mul(a11, r[1]) - mul(a21, r[0])))
@@ -424,7 +424,7 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
     (:meth:`CirculantRing.solve`).  Raises :class:`SingularMatrix` exactly when
     det(I − εf'(x)) = 0.
     """
-    from .arith import get_arith
+    from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
     R, n = circulant_ring(st.n), st.n
@@ -440,13 +440,13 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
 def exact_htilde(st: CirculantStructure, x, eps, ar=None):
     """H̃(x, ε) = xᵀ (I − ε²(M J(x))²)^{-1} M x by a 2×2 solve over R (exact).
 
-    Equal (``==``) to :func:`exact_khk.invariants.Htilde`; raises
+    Equal (``==``) to :func:`exact_khk.systems.lie_poisson.invariants.Htilde`; raises
     :class:`SingularMatrix` where H̃ has a pole.  xᵀz is the constant
     coefficient of u(t) ẑ_u(t) + v(t) ẑ_v(t).  Denominators are cleared as in
     :func:`exact_step`: S = (q·dm·dx)² times the matrix, q²·dm·dx times the
     right-hand side.
     """
-    from .arith import get_arith
+    from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
     R, n = circulant_ring(st.n), st.n

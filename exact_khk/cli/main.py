@@ -15,15 +15,15 @@ import importlib
 import json
 import sys
 
-from . import __version__
-from .arith import arith_names, get_arith
-from .errors import InputError, PoleError, SingularStepError
-from .kahan import METHODS, KahanMap
-from .parsing import parse_rational, parse_vector
-from .systems import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem, b0_signs,
+from exact_khk import __version__
+from exact_khk.arith import arith_names, get_arith
+from exact_khk.errors import InputError, PoleError, SingularStepError
+from exact_khk.kahan.map import METHODS, KahanMap
+from exact_khk.parsing import parse_rational, parse_vector
+from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem, b0_signs,
                       random_point)
 
-COMMAND_MODULES = ["exact_khk.cli", "exact_khk.cli_certify", "exact_khk.cli_study", "exact_khk.cli_liouville"]
+COMMAND_MODULES = ["exact_khk.cli.main", "exact_khk.cli.certify", "exact_khk.cli.study", "exact_khk.cli.liouville"]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -145,7 +145,7 @@ def cmd_orbit(args):
     if args.signs is not None and args.field != "g":
         raise InputError("--signs applies only to --field g")
     signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
-    from .certify import expresses_omega  # a non-rational involution needs ω in the arithmetic
+    from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω in the arithmetic
 
     fld = system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
     phi = KahanMap(fld, eps, ar, method=args.method)

@@ -2,7 +2,7 @@
 
 By the Chinese remainder theorem Q[t]/(tⁿ − 1) ≅ ∏_{d | n} Q(ζ_d), t ↦ ζ_d.  When
 the four n×n blocks C of the step's system M = I − εf'(x) are circulant,
-C_ij = c_{(j − i) mod n} (Lie–Poisson fields, :mod:`exact_khk.circulant`), the
+C_ij = c_{(j − i) mod n} (Lie–Poisson fields, :mod:`exact_khk.linalg.circulant`), the
 character χ_d(u) = Σ_i ζ_d^i u_i satisfies χ_d(C u) = c(ζ_d^{−1}) χ_d(u) with
 c(s) = Σ_m c_m s^m.  So M z = r splits into one 2×2 system over Q(ζ_d) per
 divisor d of n,
@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 
-from .systems import ramanujan_sum
+from exact_khk.systems.lie_poisson.system import ramanujan_sum
 
 #: the n for which the split step is generated (the code grows like the cube of
 #: the largest degree φ(d), and for n ≥ 16 the structured step is as fast)

@@ -44,8 +44,8 @@ from functools import lru_cache
 
 import flint
 
-from .arith import Arith, _as_fraction, register_arith
-from .errors import InputError, NotRationalError
+from exact_khk.arith import Arith, _as_fraction, register_arith
+from exact_khk.errors import InputError, NotRationalError
 
 __all__ = ["CyclotomicField", "CycloNumber", "CycloArith", "GFArith", "BadReductionError",
            "cyclotomic_field", "DEFAULT_PRIME"]

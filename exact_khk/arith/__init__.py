@@ -34,7 +34,7 @@ from fractions import Fraction
 import mpmath
 from mpmath import libmp
 
-from .errors import InputError
+from exact_khk.errors import InputError
 
 
 class Arith:
@@ -157,7 +157,7 @@ class IntegerKernel:
         return [sum((c * v[k] for k, c in row), zero) for row in W]
 
     def solve(self, M, B):
-        from .linalg import bareiss_solve
+        from exact_khk.linalg.dense import bareiss_solve
 
         Y, d = bareiss_solve(M, B)
         return [[self.make(y, d) for y in row] for row in Y]

@@ -34,14 +34,14 @@ arithmetics with an integer kernel clear denominators once and solve over Z:
 python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
 are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
 plain-elimination reference); ``'structured'`` solves it as a 2×2
-system over circulants (:mod:`exact_khk.circulant`: exact in Q[t]/(tⁿ − 1), or
+system over circulants (:mod:`exact_khk.linalg.circulant`: exact in Q[t]/(tⁿ − 1), or
 by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n < 16, ``flint`` or
 ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
-(:mod:`exact_khk.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
+(:mod:`exact_khk.linalg.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
 whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
 n < 16, and for ``flint`` when n = 2, 3, 4, 5, 6, 8, 9, 10, 12
-(:data:`~exact_khk.split.AUTO_SPLIT_N`) and, below a height where the
-structured path overtakes it, n = 7, 14, 15 (:data:`~exact_khk.split.AUTO_SPLIT_BELOW`);
+(:data:`~exact_khk.linalg.split.AUTO_SPLIT_N`) and, below a height where the
+structured path overtakes it, n = 7, 14, 15 (:data:`~exact_khk.linalg.split.AUTO_SPLIT_BELOW`);
 otherwise the structured path for exact ``flint`` steps when n ≥ 16, and at
 n = 11, 13 once the point's height reaches :data:`STRUCTURED_MIN_BITS`
 (:data:`STRUCTURED_MIN_N`); otherwise dense.  The rules follow the crossovers
@@ -66,18 +66,18 @@ from __future__ import annotations
 import math
 import warnings
 
-from . import circulant
-from .arith import get_arith
-from .errors import InputError, NearSingularWarning, SingularStepError
-from .linalg import SingularMatrix, solve
-from .parsing import parse_rational
-from .split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, split_system
+from exact_khk.linalg import circulant
+from exact_khk.arith import get_arith
+from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
+from exact_khk.linalg.dense import SingularMatrix, solve
+from exact_khk.parsing import parse_rational
+from exact_khk.linalg.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, split_system
 
 METHODS = ("auto", "dense", "structured", "split")
 
 #: ``method='auto'`` for exact flint steps: structured for n ≥ ``["exact"]``;
 #: for ``["exact_tall"]`` ≤ n < ``["exact"]`` where it does not split (n = 11, 13:
-#: :mod:`exact_khk.split`) structured once the point's height (bits of its
+#: :mod:`exact_khk.linalg.split`) structured once the point's height (bits of its
 #: largest numerator or denominator) reaches :data:`STRUCTURED_MIN_BITS`, dense
 #: below.  Measured along exact orbits against the dense orbit step
 #: (docs/benchmarks.md, "Where the structured step overtakes"): the crossovers
@@ -125,14 +125,14 @@ def _is_element(ar, t) -> bool:
 
 
 class KahanMap:
-    """Φ_f(·, ε) for a :class:`~exact_khk.quadratic.QuadraticField` in one arithmetic.
+    """Φ_f(·, ε) for a :class:`~exact_khk.systems.quadratic.QuadraticField` in one arithmetic.
 
     ``eps`` is an exact rational (``'1/10'``, Fraction, int) or an element of
     the arithmetic; ``arith`` a name (see :func:`exact_khk.arith.get_arith`) or
     context, default the fastest exact one; ``method`` one of :data:`METHODS`
     (see the module docstring).  ``structure`` is the
-    :class:`~exact_khk.circulant.CirculantStructure` the structured step uses, or
-    None; ``split`` whether exact steps take the split step (:mod:`exact_khk.split`)
+    :class:`~exact_khk.linalg.circulant.CirculantStructure` the structured step uses, or
+    None; ``split`` whether exact steps take the split step (:mod:`exact_khk.linalg.split`)
     instead of the dense one; ``switch_bits`` the point height in bits from which
     the structured step takes over (0: the structured step, if any, everywhere).
     See :attr:`path`.
@@ -241,7 +241,7 @@ class KahanMap:
 
         The state is a kernel column (python-flint: an fmpq_mat); with v = [xi, dx]
         (x = xi/dx), D·(I − εf'(x)) and D·((I + εL)x + 2εc) are the contractions
-        V·v and R·v (:meth:`~exact_khk.quadratic.QuadraticField.integer_system`),
+        V·v and R·v (:meth:`~exact_khk.systems.quadratic.QuadraticField.integer_system`),
         then one solve over Z (``fmpz_mat.solve``, or Bareiss for gmpy2).  Once a
         step's answer reaches :data:`SMALL_ANSWER_MIN_BITS` with less than twice
         the height of its point, as along orbits, the next solve is told that the

@@ -18,8 +18,8 @@ be a dual number.
 
 from __future__ import annotations
 
-from .arith import Arith
-from .linalg import SingularMatrix, solve
+from exact_khk.arith import Arith
+from exact_khk.linalg.dense import SingularMatrix, solve
 
 
 class Dual:

@@ -14,7 +14,7 @@ pivots arb cannot certify nonzero raises
 :class:`~exact_khk.errors.UndecidedError` — never a wrong answer.
 
 >>> from exact_khk import get_arith, KahanMap
->>> from exact_khk.systems import default_system, DEFAULT_X0
+>>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
 >>> ar = get_arith("ball:128")
 >>> y = KahanMap(default_system().field("f"), "1/10", ar).step(DEFAULT_X0)
 >>> ar.format(y[0], digits=20)
@@ -29,8 +29,8 @@ from fractions import Fraction
 
 import flint
 
-from .arith import Arith, _as_fraction, register_arith
-from .errors import InputError, UndecidedError
+from exact_khk.arith import Arith, _as_fraction, register_arith
+from exact_khk.errors import InputError, UndecidedError
 
 
 def arb_to_fmpq(x) -> flint.fmpq:

@@ -1,0 +1,115 @@
+"""The one interface every system implements: what a quadratic system knows.
+
+A *system* is a quadratic vector field f on K^dim together with what is known
+about it.  Generic code (the Kahan map, the certificate, the diagnostics) asks
+a system; it never tests which family a system belongs to.
+
+* ``dim``, ``variables``, ``name``, :meth:`describe`, :meth:`to_json`;
+* :meth:`field` — the main field ``"f"`` and the other fields named in
+  :meth:`field_names`; every field other than ``"f"`` is claimed to commute
+  with f: Φ_f∘Φ_g = Φ_g∘Φ_f for the *same* ε;
+* :meth:`integrals` — rational functions I(x, ε) claimed conserved by Φ_f (and
+  by the Kahan map of every commuting field);
+* :meth:`poisson` — a Poisson tensor Π(x, ε) claimed to satisfy the Jacobi
+  identity and to be preserved, dΦ(x) Π(x) dΦ(x)ᵀ = Π(Φ(x)), or None;
+* :meth:`controls` — functions claimed **not** conserved (user-declared
+  negative controls, on top of the automatic ones);
+* :meth:`hamiltonian_form` — (K, H) when f = K∇H with K constant skew and H
+  cubic (Celledoni–McLachlan–Owren–Quispel: modified energy and invariant
+  measure), else None;
+* ``default_x0``, ``default_eps``, :meth:`random_point`.
+
+A :class:`Function` is evaluated in any arithmetic context ``ar``
+(:mod:`exact_khk.arith`): ``fn(ar, x, eps)`` returns an element of ``ar`` or
+raises :class:`~exact_khk.errors.PoleError` where its denominator vanishes;
+``fn.gradient(ar, x, eps)`` returns the list of its partial derivatives in x.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+
+class Function:
+    """A rational function of x (and ε) evaluated over an arithmetic context.
+
+    Subclasses implement :meth:`__call__` and :meth:`gradient`; ``name`` is a
+    short label, ``text`` a human-readable formula, ``depends_on_eps`` whether
+    ε occurs in it.
+    """
+
+    name = "?"
+    text = ""
+    depends_on_eps = True
+
+    def __call__(self, ar, x, eps):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def gradient(self, ar, x, eps):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def __repr__(self):
+        return f"{type(self).__name__}({self.name}: {self.text})"
+
+
+class Tensor:
+    """A bivector field Π(x, ε): ``matrix(ar, x, eps)`` (rows of elements of ``ar``)
+    and ``jacobiator(ar, x, eps)`` — the list of cyclic sums
+    Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k, all zero iff the
+    Jacobi identity holds at x."""
+
+    name = "Pi"
+    text = ""
+    depends_on_eps = True
+
+    def matrix(self, ar, x, eps):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def jacobiator(self, ar, x, eps):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class System:
+    """Base class of systems (see the module docstring).  Defaults: nothing is
+    known beyond the field."""
+
+    name = "system"
+    kind = "quadratic"
+    dim = 0
+    variables: tuple = ()
+    default_x0: tuple = ()
+    default_eps = Fraction(1, 10)
+
+    def describe(self) -> str:
+        return f"{self.name} (dimension {self.dim})"
+
+    def to_json(self) -> dict:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def field(self, name: str = "f"):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def field_names(self) -> tuple:
+        return ("f",)
+
+    def integrals(self) -> dict:
+        return {}
+
+    def poisson(self):
+        return None
+
+    def controls(self) -> dict:
+        return {}
+
+    def hamiltonian_form(self):
+        return None
+
+    def random_point(self, seed: int, bound: int = 3) -> tuple:
+        """A reproducible small-integer point (not all zero)."""
+        import random
+
+        rng = random.Random(f"x0-{seed}")
+        while True:
+            x = tuple(Fraction(rng.randint(-bound, bound)) for _ in range(self.dim))
+            if any(x):
+                return x
