@@ -18,7 +18,7 @@ AssertionError: not conserved by KahanMap(f, eps=1/10, arith=fraction): first no
 
 from __future__ import annotations
 
-from exact_khk.certification.lie_poisson import (commute_items, compare, conserved_items, poisson_map_items, reversible_items)
+from exact_khk.certification.checks import (commute_items, compare, conserved_items, poisson_map_items, reversible_items)
 
 
 def _assert(phi, items, what, tol):

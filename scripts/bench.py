@@ -46,9 +46,10 @@ import mpmath  # noqa: E402
 import sympy  # noqa: E402
 
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
-from exact_khk.linalg.circulant import exact_step, numeric_step, structure_from_system  # noqa: E402
-from exact_khk.kahan.map import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
-from exact_khk.linalg.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
+from exact_khk.linalg.circulant import exact_step, numeric_step
+from exact_khk.systems.lie_poisson.system import structure_from_system  # noqa: E402
+from exact_khk.linalg.paths import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
+from exact_khk.linalg.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
@@ -421,7 +422,7 @@ def write(path, info, args, res, elapsed):
     L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = "
           + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + ", and for n = "
           + ", ".join(f"{n} below {b} bits" for n, b in AUTO_SPLIT_BELOW.items()) + "; "
-          f"structured for n ≥ {STRUCTURED_MIN_N['exact']}, above those heights, and for n = 11, 13 "
+          f"structured for n ≥ {STRUCTURED_MIN_N}, above those heights, and for n = 11, 13 "
           f"from points of {STRUCTURED_MIN_BITS} bits on). \"split\": one 2×2 system per cyclotomic factor "
           "of tⁿ − 1. Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "

@@ -9,7 +9,8 @@ import sympy as sp
 
 from exact_khk import (Arith, Certificate, Check, InputError, KahanMap, LiePoissonSystem,
                        SingularStepError, certify, get_arith)
-from exact_khk.certification.lie_poisson import compare, default_signs, non_admissible_hessian
+from exact_khk.certification.checks import compare
+from exact_khk.certification.lie_poisson import default_signs, non_admissible_hessian
 from exact_khk.systems.lie_poisson.invariants import Pi
 from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system, random_point
 from exact_khk.testing import (assert_certificate_valid, assert_commute, assert_conserved,
@@ -164,12 +165,21 @@ def test_validity_needs_controls_to_fail(default_cert):
     i = next(i for i, k in enumerate(checks) if not k.expected)
     broken = dataclasses.replace(default_cert, checks=tuple(
         checks[:i] + [dataclasses.replace(checks[i], holds=True, residual="0")] + checks[i + 1:]))
-    assert not broken.valid and broken.verdict().startswith("INVALID") and checks[i].name in broken.verdict()
+    # a control that did not fail says nothing about the system: inconclusive, never INVALID
+    assert not broken.valid and broken.status == "INCONCLUSIVE" and checks[i].name in broken.verdict()
+    false_claim = dataclasses.replace(default_cert, checks=tuple(
+        [dataclasses.replace(checks[0], holds=False, residual="1")] + checks[1:]))
+    assert false_claim.status == "INVALID" and checks[0].name in false_claim.verdict()
     undecided = dataclasses.replace(default_cert, checks=tuple(
         [dataclasses.replace(checks[0], holds=None)] + checks[1:]))
-    assert not undecided.valid and undecided.verdict().startswith("NOT CERTIFIED")
-    with pytest.raises(AssertionError, match="INVALID"):
+    assert not undecided.valid and undecided.verdict().startswith("INCONCLUSIVE")
+    inapplicable = dataclasses.replace(default_cert, checks=tuple(
+        checks[:i] + [dataclasses.replace(checks[i], holds=True, applicable=False)] + checks[i + 1:]))
+    assert inapplicable.valid and "1 inapplicable" in inapplicable.verdict()
+    with pytest.raises(AssertionError, match="INCONCLUSIVE"):
         assert_certificate_valid(broken)
+    with pytest.raises(AssertionError, match="INVALID"):
+        assert_certificate_valid(false_claim)
     assert not dataclasses.replace(default_cert, checks=()).valid
 
 
@@ -181,7 +191,8 @@ def test_certificate_json_schema(default_cert):
     assert data["x0"] == list(DEFAULT_X0) and data["eps"] == "1/10" and data["steps"] == 20
     assert data["valid"] is True and data["versions"]["exact_khk"]
     for k in data["checks"]:
-        assert set(k) == {"name", "claim", "expected", "holds", "residual", "arith", "seconds", "evidence", "detail"}
+        assert set(k) == {"name", "claim", "expected", "holds", "residual", "arith", "seconds", "evidence", "detail",
+                          "applicable"}
         assert isinstance(k["expected"], bool) and k["holds"] in (True, False, None)
         assert isinstance(k["residual"], str) and isinstance(k["seconds"], float)
     assert sum(not k["expected"] for k in data["checks"]) == 4
@@ -189,7 +200,7 @@ def test_certificate_json_schema(default_cert):
 
 def test_floating_certificate_is_measured_not_decided():
     c = certify(steps=3, arith="mp:120", signs=["-++"])
-    assert not c.valid and c.verdict().startswith("NOT CERTIFIED")
+    assert not c.valid and c.verdict().startswith("INCONCLUSIVE")
     assert all(k.holds is None and k.evidence == "numeric (measured error)" for k in c.checks)
     claims = [float(k.residual) for k in c.checks if k.expected and not k.name.startswith("rank")]
     # the structural controls differ by O(1); the claims only by rounding (120 bits, a few dozen
@@ -248,7 +259,7 @@ def test_orbit_on_singular_hyperplane_is_not_certified():
     x0 = random_point(5, 2)
     assert sum(x0[:5]) == 0
     c = certify(s, x0, "1/7", steps=3)
-    assert not c.valid and c.verdict().startswith("NOT CERTIFIED")
+    assert not c.valid and c.verdict().startswith("INCONCLUSIVE")
     undecided = [k for k in c.checks if k.holds is None]
     assert [k.name for k in undecided] == [f"integral {i} (closed form = definition)"
                                            for i in ("H~", "K~[+----]", "K~[-++++]")]

@@ -48,7 +48,7 @@ def test_certify_json_stdout_and_file(capsys, tmp_path):
 
 def test_certify_exit_statuses(capsys):
     code, out, _ = run(capsys, "certify", "--steps", "2", "--arith", "float")
-    assert code == 1 and out.splitlines()[-1].startswith("NOT CERTIFIED")
+    assert code == 4 and out.splitlines()[-1].startswith("INCONCLUSIVE")
     code, _, err = run(capsys, "certify", "--signs", "+-+")
     assert code == 2 and "not a rational involution" in err and "cyclo:3" in err
     assert len(err.strip().splitlines()) == 1

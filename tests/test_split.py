@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
                        get_arith, rational_sign_patterns)
 from exact_khk.linalg import split as split_mod
-from exact_khk.linalg.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N, split_system
+from exact_khk.linalg.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N
+from exact_khk.linalg.split import split_system
 from exact_khk.systems.lie_poisson.system import random_point
 
 KERNELS = ["flint", "gmpy2"]

@@ -16,13 +16,14 @@ import sympy as sp
 
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, NearSingularWarning, QuadraticField,
                        SingularStepError, get_arith, rational_sign_patterns)
-from exact_khk.linalg.circulant import (circulant_structure, exact_htilde, exact_step, numeric_step,
-                                 structure_from_system)
+from exact_khk.linalg.circulant import circulant_structure, exact_htilde, exact_step, numeric_step
+from exact_khk.systems.lie_poisson.system import structure_from_system
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.linalg import circulant
-from exact_khk.kahan.map import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N, _height
+from exact_khk.arith import point_height as _height
+from exact_khk.linalg.paths import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N
 from exact_khk.linalg import split as split_mod
-from exact_khk.linalg.split import AUTO_SPLIT_BELOW
+from exact_khk.linalg.paths import AUTO_SPLIT_BELOW
 from exact_khk.systems.lie_poisson.system import random_point
 
 from .conftest import EXACT
@@ -173,7 +174,7 @@ def test_structured_float_condition_policy():
 
 
 def test_auto_choice_and_fallbacks():
-    big, small = LiePoissonSystem.random(STRUCTURED_MIN_N["exact"], 1), LiePoissonSystem.random(2, 1)
+    big, small = LiePoissonSystem.random(STRUCTURED_MIN_N, 1), LiePoissonSystem.random(2, 1)
     assert KahanMap(big.field("g"), "1/3", "flint").structure is not None
     assert KahanMap(big.field("g"), "1/3", "fraction").structure is None  # the reference stays dense
     assert KahanMap(small.field("f"), "1/3", "flint").structure is None  # n = 2: the split step

@@ -455,6 +455,20 @@ def get_arith(name=None) -> Arith:
     return ar
 
 
+def point_height(ar, x) -> int:
+    """Bits of the largest numerator or denominator of a point (or a single
+    number) of a rational arithmetic: the height that governs exact costs."""
+    if not isinstance(x, (list, tuple)):
+        x = (x,)
+    if hasattr(x[0], "height_bits"):  # python-flint fmpq: one call per coordinate
+        return max(t.height_bits() for t in x)
+    K = ar.integers
+    if K is not None:
+        return max(max(abs(K.num(t)).bit_length(), K.den(t).bit_length()) for t in x)
+    return max(max(abs(q.numerator).bit_length(), q.denominator.bit_length())
+               for q in map(ar.to_fraction, x))
+
+
 def default_arith() -> Arith:
     """The fastest exact arithmetic that is installed."""
     for name in ("flint", "gmpy2", "fraction"):

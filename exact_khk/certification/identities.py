@@ -42,7 +42,8 @@ import time
 from exact_khk.arith import get_arith
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME, CycloArith, GFArith
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.certification.lie_poisson import Check, rank
+from exact_khk.certification.checks import rank
+from exact_khk.certification.records import Check
 from exact_khk.systems.lie_poisson.invariants import Htilde, Pi, grad_Htilde
 from exact_khk.kahan.map import KahanMap
 from exact_khk.linalg.dense import matvec
@@ -68,12 +69,6 @@ def integral_patterns(n: int) -> list[str]:
     if n == 2:
         return ["++", "+-"]
     return ["+" * j + "-" + "+" * (n - 1 - j) for j in range(n)]
-
-
-def _field(system, signs):
-    if signs == "+" * system.n:
-        return system.field("f")
-    return system.field("g", signs, cyclotomic=True)
 
 
 # --- all residuals at one point --------------------------------------------------
@@ -120,7 +115,7 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
     n = system.n
     pats = _patterns(system, patterns)
     maps = {"f": KahanMap(system.field("f"), eps, ar)}
-    maps.update((f"g[{s}]", KahanMap(_field(system, s), eps, ar)) for s in pats)
+    maps.update((f"g[{s}]", KahanMap(system.field_for_signs(s), eps, ar)) for s in pats)
     control = KahanMap(system.field("control"), eps, ar)
     e = maps["f"].eps
     x = maps["f"].point(x)
@@ -134,7 +129,7 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
         return Htilde(fld, pt, e, ar)
 
     images = {k: step(m, x) for k, m in maps.items()}
-    ints = [_field(system, s) for s in integral_patterns(n)]
+    ints = [system.field_for_signs(s) for s in integral_patterns(n)]
     K0 = [integral(fld, x) for fld in ints]
     out = {name: [] for name in CLAIMS if name != "rank"}
     for k, y in images.items():
@@ -343,8 +338,8 @@ def cross_check_mod_p(system, x0, eps, exact_arith, gf_arith, steps=2, patterns=
     ex, gf = get_arith(exact_arith), get_arith(gf_arith)
     t0 = time.perf_counter()
     pats = _patterns(system, patterns)
-    fields = [system.field("f")] + [_field(system, s) for s in pats]
-    ints = [_field(system, s) for s in (integral_signs or integral_patterns(system.n))]
+    fields = [system.field("f")] + [system.field_for_signs(s) for s in pats]
+    ints = [system.field_for_signs(s) for s in (integral_signs or integral_patterns(system.n))]
     mismatch = ""
     for fld in fields:
         a = KahanMap(fld, eps, ex).orbit(x0, steps)

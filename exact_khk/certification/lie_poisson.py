@@ -38,16 +38,20 @@ left is undecided.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import replace
 from fractions import Fraction
 
-from exact_khk.arith import get_arith
+from exact_khk.arith import get_arith, point_height
 from exact_khk.arith.dual import jacobian
-from exact_khk.errors import InputError, SingularStepError, UndecidedError
-from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, PoleError, grad_Htilde, htilde_definition,
+from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare,
+                                            conserved_items, lazy_orbit, poisson_map_items, rank,
+                                            reversible_items, run_check)
+from exact_khk.certification.records import Certificate, Check, library_versions  # noqa: F401
+from exact_khk.errors import InputError, PoleError
+from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, _eps, grad_Htilde,
                          q_coefficients, shift_index)
 from exact_khk.kahan.map import KahanMap
-from exact_khk.linalg.dense import matmul, matvec, transpose
+from exact_khk.linalg.dense import SingularMatrix, matvec, solve
 from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
 from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
                       involution_circulant_cyclotomic, is_rational_pattern,
@@ -57,272 +61,6 @@ from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, defau
 #: "perturbed point" control, for exact arithmetics (floating ones use one ulp)
 PERTURBATION = Fraction(1, 2 ** 60)
 
-
-@dataclass(frozen=True)
-class Check:
-    """One certified statement.
-
-    ``expected`` is True for a claim and False for a negative control;
-    ``holds`` is True/False, or None when undecided; ``residual`` is the exact
-    first nonzero residual ('0' if none) for exact evidence, else the measured
-    largest |difference|; ``detail`` says where it was evaluated or failed.
-    """
-
-    name: str
-    claim: str
-    expected: bool
-    holds: bool | None
-    residual: str
-    arith: str
-    seconds: float
-    evidence: str = "exact in Q"
-    detail: str = ""
-
-    @property
-    def passed(self) -> bool:
-        """A claim that holds, or a control that fails (decided either way)."""
-        return self.holds is not None and self.holds == self.expected
-
-    def to_json(self) -> dict:
-        return asdict(self)
-
-
-@dataclass(frozen=True)
-class Certificate:
-    """All checks on one orbit: the system, x0, ε, steps, arithmetic, versions."""
-
-    system: object
-    x0: tuple
-    eps: Fraction
-    steps: int
-    arith: str
-    signs: tuple
-    checks: tuple
-    versions: dict = field(default_factory=dict)
-    seconds: float = 0.0
-    height_bits: int | None = None
-
-    @property
-    def valid(self) -> bool:
-        """True iff every claim holds and every control fails."""
-        return bool(self.checks) and all(c.passed for c in self.checks)
-
-    def check(self, name: str) -> Check:
-        """The check called ``name``."""
-        for c in self.checks:
-            if c.name == name:
-                return c
-        raise KeyError(name)
-
-    def verdict(self) -> str:
-        """One line: VALID / INVALID / NOT CERTIFIED, and why."""
-        claims = [c for c in self.checks if c.expected]
-        controls = [c for c in self.checks if not c.expected]
-        where = f"{self.arith} arithmetic, n = {self.system.n}, {self.steps} steps, {self.seconds:.2f} s"
-        if self.valid:
-            return (f"VALID: all {len(claims)} claims hold and all {len(controls)} negative controls "
-                    f"fail ({where})")
-        bad = [c.name for c in self.checks if c.holds is not None and not c.passed]
-        open_ = [c.name for c in self.checks if c.holds is None]
-        if bad:
-            return f"INVALID: {len(bad)} check(s) came out wrong: {'; '.join(bad)} ({where})"
-        return f"NOT CERTIFIED: {len(open_)} check(s) undecided, e.g. {open_[0]!r} ({where})"
-
-    def table(self) -> str:
-        """A readable table: check, expected, holds, abbreviated residual, time; the claim below."""
-        w = max(len(c.name) for c in self.checks)
-        kinds = [c.evidence for c in self.checks]
-        common = max(set(kinds), key=kinds.count)
-        lines = [f"{'check':<{w}}  {'expect':<6}  {'holds':<9}  {'residual':<24}  {'time':>7}"]
-        for c in self.checks:
-            holds = {True: "true", False: "false", None: "undecided"}[c.holds]
-            mark = "" if c.passed else "  <-- " + ("UNDECIDED" if c.holds is None else "WRONG")
-            lines.append(f"{c.name:<{w}}  {str(c.expected).lower():<6}  {holds:<9}  "
-                         f"{abbreviate(c.residual):<24}  {c.seconds:>6.3f}s{mark}")
-            lines.append(f"    {c.claim}" + (f" [{c.detail}]" if c.detail else "")
-                         + (f" (evidence: {c.evidence})" if c.evidence != common else ""))
-        lines.append(f"evidence, unless stated: {common}")
-        return "\n".join(lines)
-
-    def to_json(self) -> dict:
-        from exact_khk.cli.main import system_json
-
-        return {"system": system_json(self.system), "x0": [str(t) for t in self.x0],
-                "eps": str(self.eps), "steps": self.steps, "arith": self.arith,
-                "signs": list(self.signs), "valid": self.valid, "verdict": self.verdict(),
-                "seconds": self.seconds, "height_bits": self.height_bits, "versions": self.versions,
-                "checks": [c.to_json() for c in self.checks]}
-
-
-def abbreviate(text: str, width: int = 24) -> str:
-    """``text`` cut to ``width`` characters, saying how long it was."""
-    if len(text) <= width:
-        return text
-    tail = f"…({len(text)} ch)"
-    return text[:width - len(tail)] + tail
-
-
-# --- deciding equalities over a context ----------------------------------------
-
-
-def evidence_of(ar) -> str:
-    """The kind of evidence a check in ``ar`` gives: the context's own word
-    (e.g. "exact in Q(zeta_3)", "modular: …", "certified enclosure …"), else
-    "exact in Q" for exact contexts and "numeric (measured error)" for floating ones."""
-    return getattr(ar, "evidence", "exact in Q" if ar.exact else "numeric (measured error)")
-
-
-def _flatten(v):
-    if isinstance(v, (list, tuple)):
-        for t in v:
-            yield from _flatten(t)
-    else:
-        yield v
-
-
-def compare(ar, items, skip_undefined=True):
-    """Decide ``lhs == rhs`` for every ``(k, thunk)`` in ``items``, ``thunk() -> (lhs, rhs)``
-    (scalars or nested lists of the same shape; ``rhs = None`` means zero).
-
-    Returns ``(holds, residual, detail)``.  Exact (or rigorous) contexts stop at
-    the first nonzero difference and report it exactly; floating contexts
-    measure the largest |difference| and leave ``holds`` undecided.  A point
-    where a side is undefined (singular step, pole) is skipped and listed in
-    ``detail`` (``skip_undefined=False``: the error propagates); if no point
-    is left, the check is undecided.
-    """
-    decides = getattr(ar, "decides", ar.exact)
-    holds, worst, done, skipped, why = True, 0.0, [], [], ""
-    for k, thunk in items:
-        try:
-            lhs, rhs = thunk()
-        except (SingularStepError, PoleError) as exc:
-            if not skip_undefined:
-                raise
-            skipped.append(k)
-            why = why or str(exc)
-            continue
-        done.append(k)
-        left = list(_flatten(lhs))
-        right = [ar.zero] * len(left) if rhs is None else list(_flatten(rhs))
-        if len(left) != len(right):
-            raise ValueError(f"compare: shapes differ at x_{k}")
-        for a, b in zip(left, right):
-            d = a - b
-            if not decides:
-                worst = max(worst, ar.magnitude(d))
-                continue
-            z = ar.is_zero(d)
-            if z is False:
-                return False, ar.format(d), f"first nonzero residual at x_{k}"
-            if z is None:
-                holds = None
-    if not done:
-        return None, "n/a", f"undefined at every point: {why}"
-    span = f"{len(done)} orbit points" if len(done) != 1 else f"x_{done[0]}"
-    note = f"; skipped k = {skipped}, where undefined (first: {why})" if skipped else ""
-    if not decides:
-        return None, f"{worst:.3g}", f"max |difference| over {span} (measured, not decided){note}"
-    return holds, "0", f"checked at {span}{note}"
-
-
-def rank(ar, rows):
-    """Exact rank of a list of rows over ``ar`` (None if a pivot is undecided)."""
-    M = [list(r) for r in rows]
-    r = 0
-    for col in range(len(M[0]) if M else 0):
-        piv = None
-        for i in range(r, len(M)):
-            z = ar.is_zero(M[i][col])
-            if z is None:
-                return None
-            if z is False:
-                piv = i
-                break
-        if piv is None:
-            continue
-        M[r], M[piv] = M[piv], M[r]
-        for i in range(r + 1, len(M)):
-            m = M[i][col] / M[r][col]
-            M[i] = [a - m * b for a, b in zip(M[i], M[r])]
-        r += 1
-    return r
-
-
-def run_check(name, claim, ar, fn, expected=True) -> Check:
-    """Time ``fn() -> (holds, residual, detail)`` and wrap it in a :class:`Check`;
-    a singular step or an undecidable pivot makes it undecided."""
-    t0 = time.perf_counter()
-    try:
-        holds, residual, detail = fn()
-    except (SingularStepError, UndecidedError, PoleError) as exc:
-        holds, residual, detail = None, "n/a", f"not evaluable: {exc}"
-    return Check(name, claim, expected, holds, residual, ar.name, time.perf_counter() - t0,
-                 evidence_of(ar), detail)
-
-
-# --- item generators (lazy, so a failing control stops early) -------------------
-
-
-def lazy_orbit(phi, x0, steps):
-    """x0, Φ(x0), … (steps + 1 points), computed on demand."""
-    x = phi.point(x0, "x0")
-    yield x
-    for k in range(1, steps + 1):
-        try:
-            x = phi.step(x)
-        except SingularStepError as exc:
-            raise exc.at_step(k) from None
-        yield x
-
-
-def conserved_items(integral, pts):
-    """(k, I(x_k) vs I(x_0)) for k >= 1."""
-    pts = iter(pts)
-    v0 = integral(next(pts))
-    for k, x in enumerate(pts, 1):
-        yield k, lambda x=x: (integral(x), v0)
-
-
-def commute_items(phi, psi, pts):
-    """(k, Φ(Ψ(x_k)) vs Ψ(x_{k+1})) along an orbit x_k of Φ (Ψ(x_k) computed once)."""
-    ys = {}
-
-    def y(k):
-        if k not in ys:
-            ys[k] = psi.step(pts[k])
-        return ys[k]
-
-    for k in range(len(pts) - 1):
-        yield k, lambda k=k: (phi.step(y(k)), y(k + 1))
-
-
-def commute_points_items(phi, psi, pts):
-    """(k, Φ(Ψ(x_k)) vs Ψ(Φ(x_k))) at the given points (for maps with unrelated orbits)."""
-    for k, x in enumerate(pts):
-        yield k, lambda x=x: (phi.step(psi.step(x)), psi.step(phi.step(x)))
-
-
-def reversible_items(phi_inv, pts):
-    """(k, Φ(x_{k+1}, −ε) vs x_k)."""
-    for k in range(len(pts) - 1):
-        yield k, lambda k=k: (phi_inv.step(pts[k + 1]), pts[k])
-
-
-def poisson_map_items(phi, Pi_at, pts, ks):
-    """(k, dΦ(x_k) Π(x_k) dΦ(x_k)ᵀ vs Π(x_{k+1})) for k in ``ks``."""
-    def sides(k):
-        D = phi.jacobian(pts[k])
-        return matmul(matmul(D, Pi_at(k)), transpose(D)), Pi_at(k + 1)
-
-    for k in ks:
-        yield k, lambda k=k: sides(k)
-
-
-def bracket(u, P, v):
-    """{F, G}_P = ∇Fᵀ P ∇G."""
-    Pv = matvec(P, v)
-    return sum((a * b for a, b in zip(u, Pv)), u[0] * 0)
 
 
 def jacobiator(ar, system, x, eps):
@@ -341,6 +79,35 @@ def jacobiator(ar, system, x, eps):
 
 
 # --- the certificate ------------------------------------------------------------
+
+
+def htilde_definition(field, x, eps, arith=None, x_next=None):
+    """The integral by its definition: h(x, x̃) = (2ε)^{-1} xᵀ J((x+x̃)/2)^{-1} x̃,
+    x̃ = Φ(x, ε) the Kahan step of ``field`` (pass ``x_next`` if already known).
+
+    Raises :class:`PoleError` where J((x+x̃)/2) is singular (for instance on every
+    orbit with Σ u_i = 0, an invariant hyperplane of the Kahan map, where J is singular).
+
+    >>> from exact_khk.systems.lie_poisson import default_system
+    >>> from exact_khk.systems.lie_poisson.invariants import Htilde
+    >>> ar = get_arith("fraction"); f = default_system().field("f")
+    >>> x = [ar(t) for t in (1, 0, 0, 0, 1, 0)]
+    >>> htilde_definition(f, x, "1/10", ar) == Htilde(f, x, "1/10", ar)
+    True
+    """
+    ar = get_arith(arith)
+    e = _eps(ar, eps)
+    x = list(x)
+    y = list(KahanMap(field, e, ar).step(x) if x_next is None else x_next)
+    half = ar.one / ar.convert(2)
+    m = [(a + b) * half for a, b in zip(x, y)]
+    with ar.local():
+        try:
+            z, _ = solve(ar, field.system.J(m), [[t] for t in y])
+        except SingularMatrix:
+            raise PoleError("h(x, x~) is undefined: J((x+x~)/2) is singular at x = ("
+                            + ", ".join(ar.format(t) for t in x) + ")") from None
+    return sum((a * r[0] for a, r in zip(x, z)), ar.zero) / (e + e)
 
 
 def default_signs(n: int, arith=None) -> list[str]:
@@ -453,8 +220,6 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
         if progress is not None:
             progress("symbolic proofs")
         checks += prove_all(system)
-    from exact_khk.cli.main import library_versions
-
     return Certificate(system, tuple(x0), eps, steps, ar.name, tuple(signs), tuple(checks),
                        library_versions(), time.perf_counter() - t_start, heights)
 
@@ -598,14 +363,7 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
 def orbit_height(ar, pts):
     """Largest bit length of a numerator or denominator on the points (None unless
     the arithmetic is exact and rational)."""
-    from exact_khk.cli.main import height_bits
-
-    if not ar.exact:
-        return None
-    try:
-        return max(height_bits(ar, t) for p in pts for t in p)
-    except TypeError:
-        return None
+    return max(point_height(ar, p) for p in pts) if ar.rational else None
 
 
 def _perturb(ar, x, rel):

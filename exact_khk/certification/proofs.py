@@ -32,8 +32,7 @@ import flint
 
 from exact_khk.arith import Arith, _as_fraction
 from exact_khk.errors import InputError
-from exact_khk.certification.lie_poisson import Check
-from exact_khk.certification.identities import _field
+from exact_khk.certification.records import Check
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.kahan.map import KahanMap
 from exact_khk.linalg.dense import matmul
@@ -179,7 +178,7 @@ def _setup(system):
 
 
 def _named_field(system, kind, signs):
-    return _field(system, signs) if kind == "g" and signs is not None else system.field(kind, signs)
+    return system.field_for_signs(signs) if kind == "g" and signs is not None else system.field(kind, signs)
 
 
 def _kmap(field, eps, ar):

@@ -1,19 +1,26 @@
 """``exact-khk certify`` and ``exact-khk integrals`` (thin views of :mod:`exact_khk.certify`).
 
-Exit status of ``certify``: 0 iff the certificate is valid (every claim holds
-and every negative control fails), 1 otherwise; 2 bad input; 3 singular step.
+Exit status of ``certify``: 0 VALID (every claim holds and every applicable
+negative control fails), 1 INVALID (a claim is false), 4 INCONCLUSIVE (no claim
+is false, but a check is undecided or a control did not fail); 2 bad input;
+3 singular step.
 """
 
 from __future__ import annotations
 
 from exact_khk.arith import get_arith
 from exact_khk.certification.lie_poisson import certify, default_signs
-from exact_khk.cli.main import add_system_options, library_versions, system_from_args, system_json, write_json
+from exact_khk.cli.options import add_system_options, system_from_args, write_json
+from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.kahan.map import KahanMap
 from exact_khk.parsing import format_signs, parse_signs
+
+
+#: exit status by certificate status
+EXIT_STATUS = {"VALID": 0, "INVALID": 1, "INCONCLUSIVE": 4}
 
 
 def _signs(args, n, ar):
@@ -71,7 +78,7 @@ def cmd_certify(args):
         print(cert.verdict())
     if args.json is not None:
         write_json(cert.to_json(), args.json)
-    return 0 if cert.valid else 1
+    return EXIT_STATUS[cert.status]
 
 
 def cmd_integrals(args):
@@ -82,7 +89,7 @@ def cmd_integrals(args):
     H = ar.format(Htilde(system.field("f"), x, eps, ar))
     K = {s: ar.format(Htilde(system.field("g", s, cyclotomic=True), x, eps, ar)) for s in signs}
     if args.json:
-        write_json({"Htilde": H, "Ktilde": K, "system": system_json(system), "x": [ar.format(t) for t in x],
+        write_json({"Htilde": H, "Ktilde": K, "system": system.to_json(), "x": [ar.format(t) for t in x],
                     "step": args.steps, "eps": str(eps), "arith": ar.name, "exact": ar.exact,
                     "versions": library_versions()}, "-")
         return 0

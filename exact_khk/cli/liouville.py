@@ -10,7 +10,8 @@ every record is as expected (claims hold, controls fail), 1 otherwise.
 from __future__ import annotations
 
 from exact_khk.arith import get_arith
-from exact_khk.cli.main import add_system_options, library_versions, system_from_args, system_json, write_json
+from exact_khk.cli.options import add_system_options, system_from_args, write_json
+from exact_khk.certification.records import library_versions
 from exact_khk.arith.cyclotomic import GFArith
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.certification.identities import (integral_patterns, involution_patterns, liouville_at_points,
@@ -52,7 +53,7 @@ def _patterns(n, spec):
 
 def _report(args, system, recs, extra):
     if args.json is not None:
-        write_json({"system": system_json(system), **extra, "records": [r.to_json() for r in recs],
+        write_json({"system": system.to_json(), **extra, "records": [r.to_json() for r in recs],
                     "ok": all(r.passed for r in recs), "versions": library_versions()}, args.json)
     else:
         print(system.describe())

@@ -10,7 +10,8 @@ import math
 import pathlib
 import sys
 
-from exact_khk.cli.main import add_system_options, library_versions, system_from_args
+from exact_khk.cli.options import add_system_options, system_from_args
+from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.studies import hard
 from exact_khk.studies import scaling

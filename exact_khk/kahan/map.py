@@ -67,34 +67,14 @@ import math
 import warnings
 
 from exact_khk.linalg import circulant
-from exact_khk.arith import get_arith
+from exact_khk.arith import get_arith, point_height as _height
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
 from exact_khk.parsing import parse_rational
-from exact_khk.linalg.split import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, split_system
+from exact_khk.linalg.split import split_system
+from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 
 METHODS = ("auto", "dense", "structured", "split")
-
-#: ``method='auto'`` for exact flint steps: structured for n ≥ ``["exact"]``;
-#: for ``["exact_tall"]`` ≤ n < ``["exact"]`` where it does not split (n = 11, 13:
-#: :mod:`exact_khk.linalg.split`) structured once the point's height (bits of its
-#: largest numerator or denominator) reaches :data:`STRUCTURED_MIN_BITS`, dense
-#: below.  Measured along exact orbits against the dense orbit step
-#: (docs/benchmarks.md, "Where the structured step overtakes"): the crossovers
-#: are near 420 bits for n = 11 and 330 for n = 13; n = 16 from the start.
-STRUCTURED_MIN_N = {"exact": 16, "exact_tall": 4}
-STRUCTURED_MIN_BITS = 384
-
-#: dense orbit steps from this height on may solve output-sensitively (see
-#: ``KahanMap._integer_steps``): the crossover measured along orbits for N = 8..14
-SMALL_ANSWER_MIN_BITS = 128
-#: ... and below DIXON_BITS·(N − 6) bits: Dixon's lifting needs more steps as the
-#: entries grow, and along orbits ``fmpz_mat.solve`` overtakes it near 16 000,
-#: 40 000 and 60 000 bits for N = 8, 10, 12 and beyond 100 000 for N = 14
-#: (docs/benchmarks_tall.md; for N = 14 the rule gives up Dixon's last 5–20 %
-#: between 80 000 and 100 000 bits)
-DIXON_BITS = 10_000
-
 
 def as_point(ar, x, dim: int, name: str = "x"):
     """Convert a point (strings, ints, Fractions, backend rationals, or elements
@@ -362,16 +342,9 @@ class KahanMap:
             return self._solve(self.system_matrix(x), self.system_matrix(y, sign=-1), x, self.eps)
 
 
-def _height(ar, x) -> int:
-    """Bits of the largest numerator or denominator of a rational point."""
-    if hasattr(x[0], "height_bits"):  # python-flint fmpq: one call per coordinate
-        return max(t.height_bits() for t in x)
-    K = ar.integers
-    return max(max(abs(K.num(t)).bit_length(), K.den(t).bit_length()) for t in x)
-
-
 def _choose_path(field, ar, method, eps):
-    """(split, circulant structure the step may use or None, ``switch_bits``)."""
+    """(split, circulant structure the step may use or None, ``switch_bits``): the
+    field declares its structure, :func:`~exact_khk.linalg.paths.auto_path` decides."""
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
     if method == "dense":
@@ -384,22 +357,18 @@ def _choose_path(field, ar, method, eps):
                              "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
-    usable = circulant.flint is not None and (ar.rational or ar.fourier)
-    st = circulant.circulant_structure(field) if usable else None
-    n = field.dim // 2
-    if method == "auto" and splits and st is not None:  # Lie–Poisson (split.py: AUTO_SPLIT_N)
-        if ar.name != "flint" or n in AUTO_SPLIT_N:  # gmpy2's other exact step is Bareiss elimination
-            return True, None, 0
-        if n in AUTO_SPLIT_BELOW:
-            return True, st, AUTO_SPLIT_BELOW[n]
+    usable = ar.rational or ar.fourier
+    st = field.circulant_structure() if usable else None
     if method == "structured":
         if st is None:
-            raise InputError("method: 'structured' needs python-flint, a Lie–Poisson field whose "
-                             "Hessian blocks are cyclic Hankel, and a rational, float or mp:P arithmetic")
+            raise InputError("method: 'structured' needs a field whose Jacobian blocks are circulant "
+                             "(Lie–Poisson fields with cyclic Hankel Hessian blocks) and a rational, "
+                             "float or mp:P arithmetic")
         return False, st, 0
-    if st is None or ar.name != "flint" or st.n < STRUCTURED_MIN_N["exact_tall"]:
+    if not ar.exact or K is None:
         return False, None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
-    return False, st, (0 if st.n >= STRUCTURED_MIN_N["exact"] else STRUCTURED_MIN_BITS)
+    split, structured, bits = auto_path(field.dim // 2, K.name, splits, st is not None)
+    return split, (st if structured else None), bits
 
 
 def kahan_step(field, x, eps, arith=None):

@@ -109,33 +109,6 @@ def circulant_structure(field):
     return out
 
 
-def structure_from_system(system, kind="f", signs=None, power=0) -> CirculantStructure:
-    """The structure of ``system.field(kind, signs, power)`` computed from the vectors a, b, c
-    alone, in O(n²) (building the field itself costs O((2n)³) memory).
-
-    First rows: A^p X(w) = X(w shifted by p); B X(w) = X(Σ_k α_k w shifted by k).
-    """
-    from exact_khk.systems.lie_poisson.system import b0_signs, involution_circulant
-
-    n = system.n
-
-    def left(coeffs, w):  # first row of (Σ_k coeffs[k] P^k) X(w)
-        return tuple(sum((c * w[(j + k) % n] for k, c in enumerate(coeffs) if c), Fraction(0))
-                     for j in range(n))
-
-    unit = lambda k: [Fraction(int(i == k % n)) for i in range(n)]  # noqa: E731
-    if kind == "f":
-        coeffs = unit(power)
-    elif kind == "g":
-        coeffs = involution_circulant(n, signs if signs is not None else b0_signs(n))
-    elif kind == "control":
-        coeffs = unit(1) if n >= 3 else [2 * a + b for a, b in zip(unit(0), unit(1))]
-    else:
-        raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
-    a, b, c = system.a, system.b, system.c
-    return CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))
-
-
 def reflect(w):
     """Coefficients of ŵ(t) = Σ w_i t^{−i} mod tⁿ − 1 (an involution)."""
     n = len(w)

@@ -41,25 +41,8 @@ from __future__ import annotations
 
 import math
 
-from exact_khk.systems.lie_poisson.system import ramanujan_sum
-
-#: the n for which the split step is generated (the code grows like the cube of
-#: the largest degree φ(d), and for n ≥ 16 the structured step is as fast)
-SPLIT_N = tuple(range(1, 16))
-
-#: where ``method='auto'`` takes the split step with python-flint (with gmpy2 it
-#: takes it for every n in SPLIT_N: its other exact step, Bareiss elimination,
-#: was 1.7–100× slower in docs/benchmarks.md).  At these n the split step was
-#: faster along orbits at every height measured than the dense step (to 10 000
-#: bits for n ≤ 8) and than the structured step (to 3000 bits for n = 9, 10, 12);
-#: every factor Q(ζ_d), d | n, has degree φ(d) ≤ 4, or 6 for n = 9 ...
-AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 9, 10, 12)
-#: ... and at these n below the given point height in bits, where the structured
-#: step overtakes it (docs/benchmarks.md, "Where the structured step overtakes").
-#: At n = 11, 13 (a factor of degree 10, 12) it is slower than the dense step
-#: already at small heights, and ``auto`` does not take it.
-AUTO_SPLIT_BELOW = {7: 2048, 14: 2560, 15: 512}
-
+from exact_khk.linalg.paths import SPLIT_N
+from exact_khk.linalg.numtheory import ramanujan_sum
 
 def _factors(n):
     """Per divisor d of n: (d, deg = φ(d), θ^j for j < d as coefficient lists in the

@@ -72,6 +72,11 @@ class QuadraticField:
         """The quadratic terms ``quad`` (subclasses may build them on demand)."""
         return self.quad
 
+    def circulant_structure(self):
+        """The :class:`~exact_khk.linalg.circulant.CirculantStructure` of a field whose
+        step's four n×n blocks are circulant (declared by the field), or None."""
+        return None
+
     @property
     def homogeneous(self) -> bool:
         """True when f is a homogeneous quadratic (no linear or constant part)."""

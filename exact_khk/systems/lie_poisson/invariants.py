@@ -23,6 +23,7 @@ from exact_khk.linalg import circulant
 from exact_khk.arith import get_arith
 from exact_khk.errors import InputError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
+from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
 from exact_khk.parsing import parse_rational
 
 
@@ -54,7 +55,7 @@ def Htilde(field, x, eps, arith=None, method="auto"):
 
     Exact rational arithmetics with python-flint solve the 2n×2n system as a
     2×2 system over circulants (:func:`exact_khk.linalg.circulant.exact_htilde`) when
-    the Hessian blocks are cyclic Hankel and n ≥ :data:`STRUCTURED_MIN_N`
+    the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.linalg.paths.HTILDE_STRUCTURED_MIN_N`
     (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
     40×, 160× faster than the dense solve); the result is the same rational
     number.  ``method='dense'`` forces the 2n×2n solve.
@@ -65,7 +66,7 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     if method not in ("auto", "dense"):
         raise InputError(f"method: expected 'auto' or 'dense', got {method!r}")
     e = _eps(ar, eps)
-    if method == "auto" and ar.rational and circulant.flint is not None and field.system.n >= STRUCTURED_MIN_N:
+    if method == "auto" and ar.rational and circulant.flint is not None and field.system.n >= HTILDE_STRUCTURED_MIN_N:
         st = circulant.circulant_structure(field)
         if st is not None:
             try:
@@ -74,10 +75,6 @@ def Htilde(field, x, eps, arith=None, method="auto"):
                 raise _pole(ar, x, e) from None
     with ar.local():  # e.g. the working precision of ball:P
         return _htilde(ar, field, x, e)
-
-
-#: smallest n for which exact H̃ takes the structured path
-STRUCTURED_MIN_N = 3
 
 
 def _pole(ar, x, e):
@@ -99,36 +96,6 @@ def _htilde(ar, field, x, e):
     except SingularMatrix:
         raise _pole(ar, x, e) from None
     return sum((x[i] * z[i][0] for i in range(N)), ar.zero)
-
-
-def htilde_definition(field, x, eps, arith=None, x_next=None):
-    """The integral by its definition: h(x, x̃) = (2ε)^{-1} xᵀ J((x+x̃)/2)^{-1} x̃,
-    x̃ = Φ(x, ε) the Kahan step of ``field`` (pass ``x_next`` if already known).
-
-    Raises :class:`PoleError` where J((x+x̃)/2) is singular (for instance on every
-    orbit with Σ u_i = 0, an invariant hyperplane of the Kahan map, where J is singular).
-
-    >>> from exact_khk.systems.lie_poisson import default_system
-    >>> ar = get_arith("fraction"); f = default_system().field("f")
-    >>> x = [ar(t) for t in (1, 0, 0, 0, 1, 0)]
-    >>> htilde_definition(f, x, "1/10", ar) == Htilde(f, x, "1/10", ar)
-    True
-    """
-    from exact_khk.kahan.map import KahanMap
-
-    ar = get_arith(arith)
-    e = _eps(ar, eps)
-    x = list(x)
-    y = list(KahanMap(field, e, ar).step(x) if x_next is None else x_next)
-    half = ar.one / ar.convert(2)
-    m = [(a + b) * half for a, b in zip(x, y)]
-    with ar.local():
-        try:
-            z, _ = solve(ar, field.system.J(m), [[t] for t in y])
-        except SingularMatrix:
-            raise PoleError("h(x, x~) is undefined: J((x+x~)/2) is singular at x = ("
-                            + ", ".join(ar.format(t) for t in x) + ")") from None
-    return sum((a * r[0] for a, r in zip(x, z)), ar.zero) / (e + e)
 
 
 def shift_index(n: int, l: int) -> list[int]:

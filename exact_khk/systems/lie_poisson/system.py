@@ -35,8 +35,11 @@ from fractions import Fraction
 from math import gcd
 
 from exact_khk.arith.cyclotomic import cyclotomic_field
+from exact_khk.linalg import circulant
+from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.parsing import format_signs, parse_signs, parse_vector
+from exact_khk.systems.base import System
 from exact_khk.systems.quadratic import QuadraticField
 
 # --- small exact matrix helpers (Fractions, lists of rows) ------------------
@@ -75,24 +78,6 @@ def eye(N):
 
 
 # --- involutions by sign pattern ------------------------------------------
-
-
-def _mobius(m: int) -> int:
-    result, p = 1, 2
-    while p * p <= m:
-        if m % p == 0:
-            m //= p
-            if m % p == 0:
-                return 0
-            result = -result
-        p += 1
-    return -result if m > 1 else result
-
-
-def ramanujan_sum(q: int, k: int) -> int:
-    """c_q(k) = Σ_{1<=j<=q, gcd(j,q)=1} ω_q^{jk} = Σ_{m | gcd(q,k)} μ(q/m) m."""
-    g = gcd(q, k)
-    return sum(_mobius(q // m) * m for m in range(1, g + 1) if g % m == 0)
 
 
 def divisor_classes(n: int) -> dict[int, list[int]]:
@@ -171,8 +156,17 @@ def involution_circulant_cyclotomic(n: int, signs) -> tuple:
 
 
 @dataclass(frozen=True, eq=False)
-class LiePoissonSystem:
-    """A member of the family, given by its admissible Hessian blocks a, b, c ∈ Q^n."""
+class LiePoissonSystem(System):
+    """A member of the family, given by its admissible Hessian blocks a, b, c ∈ Q^n.
+
+    As a :class:`~exact_khk.systems.base.System` it knows its fields (``'f'``,
+    the associated ``'g[signs]'``, the non-associated ``'control'``), its
+    integrals H̃ and K̃ (:mod:`~exact_khk.systems.lie_poisson.invariants`) and its
+    invariant Poisson tensor Π; the paper's certificate
+    (:mod:`exact_khk.certification.lie_poisson`) checks all of them.
+    """
+
+    kind = "lie-poisson"
 
     a: tuple
     b: tuple
@@ -211,9 +205,30 @@ class LiePoissonSystem:
     def dim(self) -> int:
         return 2 * self.n
 
+    @property
+    def name(self) -> str:
+        return f"lie-poisson n={self.n}"
+
+    @property
+    def variables(self) -> tuple:
+        return tuple(f"u{i}" for i in range(self.n)) + tuple(f"v{i}" for i in range(self.n))
+
+    default_x0 = property(lambda self: DEFAULT_X0 if self.n == 3 else random_point(self.n, 0))
+
     def describe(self) -> str:
         fmt = lambda v: "(" + ", ".join(str(t) for t in v) + ")"  # noqa: E731
         return f"Lie–Poisson system n={self.n}: a={fmt(self.a)}, b={fmt(self.b)}, c={fmt(self.c)}"
+
+    def to_json(self) -> dict:
+        return {"family": "lie-poisson", "n": self.n, "a": [str(t) for t in self.a],
+                "b": [str(t) for t in self.b], "c": [str(t) for t in self.c]}
+
+    @classmethod
+    def from_json(cls, d: dict) -> "LiePoissonSystem":
+        try:
+            return cls.from_vectors(d["a"], d["b"], d["c"])
+        except (KeyError, TypeError):
+            raise InputError("system: a Lie–Poisson system needs the vectors 'a', 'b', 'c'") from None
 
     # matrices ------------------------------------------------------------
     @property
@@ -266,6 +281,13 @@ class LiePoissonSystem:
         return s / ar.convert(2)
 
     # fields --------------------------------------------------------------
+    def field_for_signs(self, signs) -> "LiePoissonField":
+        """f for the identity pattern '+…+', else the associated g[signs] (over Q(ω)
+        when the involution is not rational)."""
+        if signs == "+" * self.n:
+            return self.field("f")
+        return self.field("g", signs, cyclotomic=True)
+
     def field_from_hessian(self, M, label="f") -> "LiePoissonField":
         """The field f(x) = J(x) M x for any 2n×2n matrix M (no admissibility check)."""
         N = self.dim
@@ -343,6 +365,10 @@ class LiePoissonField(QuadraticField):
     hessian: tuple = ()
     signs: str | None = None
 
+    def circulant_structure(self):
+        """The circulant structure of the step's blocks (Hessian blocks cyclic Hankel), or None."""
+        return circulant.circulant_structure(self)
+
     def terms(self) -> tuple:
         """The quadratic terms of f(x) = J(x) M x, built once on first use:
         f_i = Σ_{k<n} x_k (J(e_k) M x)_i with (J(e_k) M)[i][l] = M[n + (k-i)%n][l]
@@ -365,3 +391,28 @@ class LiePoissonField(QuadraticField):
                 out.append(tuple((key, c) for key, c in sorted(acc.items()) if c != 0))
             hit = self._cache["terms"] = tuple(out)
         return hit
+
+
+def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.CirculantStructure:
+    """The structure of ``system.field(kind, signs, power)`` computed from the vectors a, b, c
+    alone, in O(n²) (building the field itself costs O((2n)³) memory).
+
+    First rows: A^p X(w) = X(w shifted by p); B X(w) = X(Σ_k α_k w shifted by k).
+    """
+    n = system.n
+
+    def left(coeffs, w):  # first row of (Σ_k coeffs[k] P^k) X(w)
+        return tuple(sum((c * w[(j + k) % n] for k, c in enumerate(coeffs) if c), Fraction(0))
+                     for j in range(n))
+
+    unit = lambda k: [Fraction(int(i == k % n)) for i in range(n)]  # noqa: E731
+    if kind == "f":
+        coeffs = unit(power)
+    elif kind == "g":
+        coeffs = involution_circulant(n, signs if signs is not None else b0_signs(n))
+    elif kind == "control":
+        coeffs = unit(1) if n >= 3 else [2 * a + b for a, b in zip(unit(0), unit(1))]
+    else:
+        raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
+    a, b, c = system.a, system.b, system.c
+    return circulant.CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))

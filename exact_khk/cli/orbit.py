@@ -1,0 +1,70 @@
+"""``exact-khk orbit``: iterate a Kahan map and print the orbit (a thin view of
+:class:`~exact_khk.kahan.map.KahanMap`)."""
+
+from __future__ import annotations
+
+from exact_khk.arith import get_arith, point_height
+from exact_khk.certification.records import library_versions
+from exact_khk.cli.options import add_system_options, system_from_args, write_json
+from exact_khk.errors import InputError
+from exact_khk.kahan.map import METHODS, KahanMap
+from exact_khk.systems.lie_poisson.system import b0_signs
+
+
+def register(sub):
+    p = sub.add_parser("orbit", help="iterate a Kahan map and print the orbit",
+                       description="Iterate the Kahan map of a Lie–Poisson field.")
+    add_system_options(p)
+    p.add_argument("--field", choices=["f", "g", "control"], default="f",
+                   help="f (Hessian Hs), g (B Hs, see --signs) or control (A Hs; (2I+A) Hs for n = 2)")
+    p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
+    p.add_argument("--method", choices=METHODS, default="auto",
+                   help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
+                        "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n = 2, 3, 4, "
+                        "6: 2x2 over each factor of t^n - 1); default auto: the fastest measured path")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    p.set_defaults(func=cmd_orbit)
+
+
+def cmd_orbit(args):
+    system, x0, eps = system_from_args(args)
+    ar = get_arith(args.arith)
+    if args.signs is not None and args.field != "g":
+        raise InputError("--signs applies only to --field g")
+    signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
+    from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω in the arithmetic
+
+    fld = system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
+    phi = KahanMap(fld, eps, ar, method=args.method)
+    pts = phi.orbit(x0, args.steps)
+    if args.json:
+        write_json({"system": system.to_json(), "field": fld.label, "signs": fld.signs,
+                    "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
+                    "method": args.method, "path": phi.path,
+                    "x0": [str(t) for t in x0],
+                    "orbit": [[ar.format(t) for t in p] for p in pts],
+                    "versions": library_versions()}, "-")
+        return 0
+    print(system.describe())
+    kind = "exact" if ar.exact else f"{ar.prec}-bit floating point"
+    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
+          f"method {args.method}: {phi.path}")
+    if not (ar.rational or not ar.exact):  # Q(zeta), F_p: no real approximation to show
+        for k, p in enumerate(pts):
+            print(f"{k:>4}  (" + ", ".join(ar.format(t) for t in p) + ")")
+        return 0
+    if ar.exact:
+        print("coordinates are the exact rationals rounded to 8 significant digits for display; "
+              "'bits' is the largest numerator/denominator bit length (--json prints them exactly)")
+    else:
+        print(f"coordinates are the {ar.name} values rounded to 8 significant digits (--json prints all digits)")
+    head = f"{'k':>4}  " + "  ".join(f"{'x' + str(i):>15}" for i in range(system.dim))
+    print(head + ("   bits" if ar.exact else ""))
+    for k, p in enumerate(pts):
+        row = f"{k:>4}  " + "  ".join(f"{ar.to_float(t):>15.8g}" for t in p)
+        if ar.exact:
+            row += f"  {point_height(ar, p):>5}"
+        print(row)
+    return 0
+
+

@@ -1,0 +1,65 @@
+"""The one table of rules by which ``method='auto'`` picks how an exact step is solved.
+
+Every rule here was measured along exact orbits (docs/benchmarks.md,
+docs/benchmarks_tall.md) and kept only where it buys at least 20 % somewhere;
+every fast path gives the same rational point as the dense solve (tested with
+``==``).  The rules depend on what the field *declares* — whether its step's
+2×2 blocks are circulant (``field.circulant_structure()``, n = dim/2) — on the
+arithmetic's integer kernel (``flint``: python-flint; ``gmpy2``: Bareiss
+elimination) and on the point's height h (bits of its largest numerator or
+denominator); never on a family's name.
+
+=============================  ==================================================
+circulant blocks, kernel gmpy2  split for n in :data:`SPLIT_N` (Bareiss is
+                                1.7–100× slower)
+circulant blocks, kernel flint  split for n in :data:`AUTO_SPLIT_N`;
+                                split below :data:`AUTO_SPLIT_BELOW` [n] bits, then
+                                structured (n = 7, 14, 15);
+                                structured for n ≥ :data:`STRUCTURED_MIN_N`;
+                                dense below :data:`STRUCTURED_MIN_BITS`, then
+                                structured (n = 11, 13)
+no structure, or other kernels  dense
+dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
+                                8 ≤ N < 16) once an answer grew by < 2× and
+                                :data:`SMALL_ANSWER_MIN_BITS` ≤ h <
+                                :data:`DIXON_BITS` · (N − 6)
+exact H̃ (flint, rational)       structured for n ≥ :data:`HTILDE_STRUCTURED_MIN_N`
+floating arithmetics            dense (genuine p-bit arithmetic)
+=============================  ==================================================
+"""
+
+#: the n for which the split step exists (the generated code grows like the cube
+#: of the largest degree φ(d); for n ≥ 16 the structured step is as fast)
+SPLIT_N = tuple(range(1, 16))
+#: flint: split at every height (split faster than dense to 10 000 bits for n ≤ 8
+#: and than structured to 3000 bits for n = 9, 10, 12)
+AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 9, 10, 12)
+#: flint: split below these heights, where the structured step overtakes it
+AUTO_SPLIT_BELOW = {7: 2048, 14: 2560, 15: 512}
+#: flint: structured from the first step for n ≥ 16 ...
+STRUCTURED_MIN_N = 16
+#: ... and for the remaining n = 11, 13 from this height (crossovers ≈ 420, 330 bits)
+STRUCTURED_MIN_BITS = 384
+#: dense orbit steps: Dixon from this height (crossover measured for N = 8..14) ...
+SMALL_ANSWER_MIN_BITS = 128
+#: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
+#: 40 000, 60 000 bits for N = 8, 10, 12)
+DIXON_BITS = 10_000
+#: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
+HTILDE_STRUCTURED_MIN_N = 3
+
+
+def auto_path(n: int, kernel: str, splits: bool, circulant: bool):
+    """``(split, structured, switch_bits)`` of ``method='auto'`` for an exact step
+    with integer kernel ``kernel`` ('flint', 'gmpy2', …) of a field of dimension 2n
+    whose blocks split (``splits``) / are circulant (``circulant``): the rows of
+    the table above.  ``switch_bits``: the height from which the structured step
+    takes over (0: from the start, if ``structured``)."""
+    if splits and circulant:
+        if kernel != "flint" or n in AUTO_SPLIT_N:
+            return True, False, 0
+        if n in AUTO_SPLIT_BELOW:
+            return True, True, AUTO_SPLIT_BELOW[n]
+    if not circulant or kernel != "flint":
+        return False, False, 0
+    return False, True, (0 if n >= STRUCTURED_MIN_N else STRUCTURED_MIN_BITS)
