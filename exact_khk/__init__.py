@@ -25,7 +25,8 @@ from exact_khk.systems.quadratic import QuadraticField
 from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
                       rational_sign_patterns)
 from exact_khk.systems.lie_poisson.invariants import Htilde
-from exact_khk.certification.lie_poisson import Certificate, Check, certify
+from exact_khk.certification import certify
+from exact_khk.certification.records import Certificate, Check
 
 __all__ = [
     "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",

@@ -57,6 +57,11 @@ class UndecidedError(ExactKHKError, ArithmeticError):
     e.g. no pivot is certainly nonzero.  Never a wrong answer: "undecided"."""
 
 
+class OutputError(ExactKHKError, OSError):
+    """An output destination that cannot be written (checked before the work
+    starts where possible); the message names the path and the reason."""
+
+
 class NearSingularWarning(UserWarning):
     """A floating step was taken with an ill-conditioned matrix I - eps f'(x).
 

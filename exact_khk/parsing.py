@@ -13,11 +13,38 @@ exact_khk.errors.InputError: eps: '1/0' is not a rational number (zero denominat
 from __future__ import annotations
 
 import re
+import sys
 from fractions import Fraction
 
 from exact_khk.errors import InputError
 
 _RATIONAL = re.compile(r"^[+-]?(\d+(/\d+)?|\d*\.\d+([eE][+-]?\d+)?|\d+[eE][+-]?\d+)$")
+
+#: the largest |exponent| of a decimal such as '1e-300' (10^10000 has 10 001 digits;
+#: beyond, merely writing the number down costs more than any computation here)
+MAX_EXPONENT = 10_000
+#: the longest number text accepted (a million digits)
+MAX_DIGITS = 1_000_000
+
+
+def _fraction(text: str) -> Fraction:
+    """Fraction(text) for a validated number text, free of Python's 4300-digit
+    int/str limit (exact orbits reach far larger numbers)."""
+    mantissa, _, exp = text.lower().partition("e")
+    if exp and abs(int(exp)) > MAX_EXPONENT:
+        raise ValueError(f"exponent {exp} beyond the limit of {MAX_EXPONENT}")
+    limit = sys.get_int_max_str_digits() if hasattr(sys, "get_int_max_str_digits") else 0
+    if limit:
+        sys.set_int_max_str_digits(0)
+    try:
+        if "/" in mantissa:
+            num, den = mantissa.split("/")
+            return Fraction(int(num), int(den))
+        q = Fraction(mantissa)
+        return q * Fraction(10) ** int(exp) if exp else q
+    finally:
+        if limit:
+            sys.set_int_max_str_digits(limit)
 
 
 def parse_rational(value, name: str) -> Fraction:
@@ -37,12 +64,16 @@ def parse_rational(value, name: str) -> Fraction:
                          f"write it as a string such as '1/10' or as a Fraction")
     if isinstance(value, str):
         text = value.strip().replace(" ", "")
+        if len(text) > MAX_DIGITS:
+            raise InputError(f"{name}: a number of {len(text)} characters is beyond the limit of {MAX_DIGITS}")
         if not _RATIONAL.match(text):
-            raise InputError(f"{name}: {value!r} is not a rational number (expected 'p', 'p/q' or a decimal)")
+            raise InputError(f"{name}: {_short(value)} is not a rational number (expected 'p', 'p/q' or a decimal)")
         try:
-            return Fraction(text)
+            return _fraction(text)
         except ZeroDivisionError:
-            raise InputError(f"{name}: {value!r} is not a rational number (zero denominator)") from None
+            raise InputError(f"{name}: {_short(value)} is not a rational number (zero denominator)") from None
+        except ValueError as exc:
+            raise InputError(f"{name}: {_short(value)}: {exc}") from None
     for num, den in (("numerator", "denominator"), ("p", "q")):
         if hasattr(value, num) and hasattr(value, den):
             try:
@@ -50,6 +81,12 @@ def parse_rational(value, name: str) -> Fraction:
             except (TypeError, ValueError, ZeroDivisionError):
                 break
     raise InputError(f"{name}: cannot read {value!r} ({type(value).__name__}) as a rational number")
+
+
+def _short(value, width: int = 60) -> str:
+    """repr of ``value``, cut to ``width`` characters for a one-line message."""
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
 
 
 def parse_vector(value, name: str, length: int | None = None) -> tuple[Fraction, ...]:

@@ -1,0 +1,22 @@
+"""Certification: records, generic checks, the Lie–Poisson theorems, evidence of other kinds.
+
+:func:`certify` certifies any :class:`~exact_khk.systems.base.System`: a system
+that knows the paper's theorems (the Lie–Poisson family) gets the paper's
+certificate (:mod:`~exact_khk.certification.lie_poisson`), every other system
+the checks of what it declares (:mod:`~exact_khk.certification.generic`).
+"""
+
+from __future__ import annotations
+
+
+def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **options):
+    """Certify ``system`` (default: the built-in Lie–Poisson system) on the orbit of
+    ``x0``; see :func:`exact_khk.certification.lie_poisson.certify` (options
+    ``signs``, ``poisson_points``, ``identities``, ``prove``) and
+    :func:`exact_khk.certification.generic.certify_system` (option ``claims``)."""
+    from exact_khk.certification import generic, lie_poisson
+    from exact_khk.systems.lie_poisson.system import LiePoissonSystem
+
+    if system is None or isinstance(system, LiePoissonSystem):
+        return lie_poisson.certify(system, x0, eps, steps, arith, **options)
+    return generic.certify_system(system, x0, eps, steps, arith, **options)

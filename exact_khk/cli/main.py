@@ -16,9 +16,9 @@ import sys
 
 from exact_khk import __version__
 from exact_khk.cli.options import Parser
-from exact_khk.errors import InputError, PoleError, SingularStepError
+from exact_khk.errors import InputError, OutputError, PoleError, SingularStepError, UndecidedError
 
-COMMAND_MODULES = ["exact_khk.cli.orbit", "exact_khk.cli.certify", "exact_khk.cli.study",
+COMMAND_MODULES = ["exact_khk.cli.orbit", "exact_khk.cli.certify", "exact_khk.cli.systems", "exact_khk.cli.study",
                    "exact_khk.cli.liouville"]
 
 
@@ -60,30 +60,64 @@ def _join_values(argv, parser):
     return out
 
 
+#: exit status by kind of failure (documented in the README)
+EXIT = {"ok": 0, "invalid": 1, "input": 2, "singular": 3, "inconclusive": 4, "output": 5,
+        "internal": 70, "interrupted": 130}
+
+
 def main(argv=None) -> int:
-    parser = build_parser()
-    argv = list(sys.argv[1:] if argv is None else argv)
+    """Run one command; every failure becomes one line on stderr and an exit status
+    (:data:`EXIT`), never a traceback."""
+    if hasattr(sys, "set_int_max_str_digits"):
+        sys.set_int_max_str_digits(0)  # exact orbits print and parse integers of any size
+    for stream in (sys.stdout, sys.stderr):  # an ASCII-only terminal gets escapes, not a crash
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     try:
-        args = parser.parse_args(_join_values(argv, parser))
+        parser = build_parser()
+        args = parser.parse_args(_join_values(list(sys.argv[1:] if argv is None else argv), parser))
         if args.command is None:
             parser.print_help()
-            return 2
+            return EXIT["input"]
         return args.func(args)
     except InputError as exc:
-        print(f"exact-khk: error: {exc}", file=sys.stderr)
-        return 2
-    except SingularStepError as exc:
-        print(f"exact-khk: singular step: {exc}", file=sys.stderr)
-        return 3
-    except PoleError as exc:
-        print(f"exact-khk: undefined: {exc}", file=sys.stderr)
-        return 3
+        return _fail("error", exc, "input")
+    except (SingularStepError, PoleError) as exc:
+        return _fail("singular step" if isinstance(exc, SingularStepError) else "undefined", exc, "singular")
+    except UndecidedError as exc:
+        return _fail("undecided", exc, "inconclusive")
     except BrokenPipeError:
-        return 0
+        return EXIT["ok"]
+    except (OutputError, OSError) as exc:
+        return _fail("output", exc, "output")
+    except MemoryError:
+        return _fail("resource", "out of memory (choose fewer steps, a smaller n or a lower precision)", "output")
+    except KeyboardInterrupt:
+        return _fail("interrupted", "stopped by the user (Ctrl-C)", "interrupted")
+    except RecursionError as exc:
+        return _fail("resource", exc, "output")
+    except Exception as exc:  # noqa: BLE001 - the one error boundary of the command line
+        return _fail("internal error", f"{type(exc).__name__}: {exc} (please report this)", "internal")
+
+
+def _fail(kind, exc, status) -> int:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    try:
+        print(f"exact-khk: {kind}: {text[:2000]}", file=sys.stderr)
+    except Exception:  # noqa: BLE001 - stderr itself may be gone
+        pass
+    return EXIT[status]
 
 
 def entry_point():  # console script
-    sys.exit(main())
+    try:
+        code = main()
+        sys.stdout.flush()
+    except KeyboardInterrupt:  # Ctrl-C between the boundary and the exit
+        code = EXIT["interrupted"]
+    except BrokenPipeError:
+        code = EXIT["ok"]
+    sys.exit(code)
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ import json
 from exact_khk.arith import arith_names
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
+from exact_khk.studies.output import check_writable, write_atomic
 from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem,
                                                   random_point)
 
@@ -84,13 +85,18 @@ def system_from_args(args):
 
 
 def write_json(obj, target):
-    """Write ``obj`` to a path, or to stdout for ``-``."""
+    """Write ``obj`` to a path (atomically), or to stdout for ``-``."""
     text = json.dumps(obj, indent=1)
     if target in (None, "-"):
         print(text)
     else:
-        with open(target, "w") as fh:
-            fh.write(text + "\n")
+        write_atomic(target, text + "\n", "--json")
+
+
+def check_output(target, what="--json"):
+    """Check an output path (not ``-``) before the work starts."""
+    if target not in (None, "-"):
+        check_writable(target, what)
 
 
 

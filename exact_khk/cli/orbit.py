@@ -15,8 +15,9 @@ def register(sub):
     p = sub.add_parser("orbit", help="iterate a Kahan map and print the orbit",
                        description="Iterate the Kahan map of a Lie–Poisson field.")
     add_system_options(p)
-    p.add_argument("--field", choices=["f", "g", "control"], default="f",
-                   help="f (Hessian Hs), g (B Hs, see --signs) or control (A Hs; (2I+A) Hs for n = 2)")
+    p.add_argument("--field", default="f",
+                   help="Lie–Poisson family: f (Hessian Hs), g (B Hs, see --signs) or control (A Hs; (2I+A) Hs "
+                        "for n = 2); --system: f or a field named in the system file")
     p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
@@ -29,16 +30,11 @@ def register(sub):
 def cmd_orbit(args):
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
-    if args.signs is not None and args.field != "g":
-        raise InputError("--signs applies only to --field g")
-    signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
-    from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω in the arithmetic
-
-    fld = system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
+    fld = _field(system, args, ar)
     phi = KahanMap(fld, eps, ar, method=args.method)
     pts = phi.orbit(x0, args.steps)
     if args.json:
-        write_json({"system": system.to_json(), "field": fld.label, "signs": fld.signs,
+        write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
                     "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
                     "method": args.method, "path": phi.path,
                     "x0": [str(t) for t in x0],
@@ -58,7 +54,7 @@ def cmd_orbit(args):
               "'bits' is the largest numerator/denominator bit length (--json prints them exactly)")
     else:
         print(f"coordinates are the {ar.name} values rounded to 8 significant digits (--json prints all digits)")
-    head = f"{'k':>4}  " + "  ".join(f"{'x' + str(i):>15}" for i in range(system.dim))
+    head = f"{'k':>4}  " + "  ".join(f"{name[:15]:>15}" for name in _names(system))
     print(head + ("   bits" if ar.exact else ""))
     for k, p in enumerate(pts):
         row = f"{k:>4}  " + "  ".join(f"{ar.to_float(t):>15.8g}" for t in p)
@@ -68,3 +64,23 @@ def cmd_orbit(args):
     return 0
 
 
+
+
+def _field(system, args, ar):
+    """The field to iterate: by kind (and signs) for the Lie–Poisson family, by name otherwise."""
+    if system.kind != "lie-poisson":
+        if args.signs is not None:
+            raise InputError("--signs applies only to the Lie–Poisson family")
+        return system.field(args.field)
+    if args.field not in ("f", "g", "control"):
+        raise InputError(f"--field: expected f, g or control for the Lie–Poisson family, got {args.field!r}")
+    if args.signs is not None and args.field != "g":
+        raise InputError("--signs applies only to --field g")
+    signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
+    from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω
+
+    return system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
+
+
+def _names(system):
+    return [f"x{i}" for i in range(system.dim)] if system.kind == "lie-poisson" else list(system.variables)

@@ -76,6 +76,32 @@ def lu_factor(ar, M):
     return LU, perm
 
 
+def determinant(ar, M):
+    """det M by the elimination of :func:`lu_factor` (0 when it finds no pivot).
+
+    >>> from fractions import Fraction as F
+    >>> from exact_khk.arith import get_arith
+    >>> determinant(get_arith("fraction"), [[F(2), F(1)], [F(1), F(3)]])
+    Fraction(5, 1)
+    """
+    try:
+        LU, perm = lu_factor(ar, M)
+    except SingularMatrix:
+        if ar.exact:
+            return ar.zero
+        raise
+    det, seen = ar.one, [False] * len(perm)
+    for i in range(len(perm)):  # the sign of the permutation, by its cycles
+        j, length = i, 0
+        while not seen[j]:
+            seen[j], j, length = True, perm[j], length + 1
+        if length and length % 2 == 0:
+            det = -det
+    for i in range(len(M)):
+        det = det * LU[i][i]
+    return det
+
+
 def lu_solve(LU, perm, B):
     """Solve with a factorisation from :func:`lu_factor`; ``B`` is a list of rows."""
     n = len(LU)

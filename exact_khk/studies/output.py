@@ -1,0 +1,63 @@
+"""Output files written atomically, and destinations checked before the work starts.
+
+A reader never sees a truncated file: every file is written to a temporary
+name in its target folder and renamed into place (``os.replace`` is atomic on
+one file system).  :func:`check_writable` is called before a long computation,
+so that a bad destination fails at once, not after the work.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+
+from exact_khk.errors import OutputError
+
+
+def check_writable(path, what: str = "output") -> str:
+    """``path`` as a string if a file can be written there; else :class:`OutputError`
+    naming the problem (missing folder, a folder in the way, no permission)."""
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if os.path.isdir(path):
+        raise OutputError(f"{what}: {path!r} is a folder, not a file")
+    if not os.path.isdir(folder):
+        raise OutputError(f"{what}: the folder {folder!r} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise OutputError(f"{what}: no permission to write in {folder!r}")
+    if os.path.exists(path) and not os.access(path, os.W_OK):
+        raise OutputError(f"{what}: no permission to overwrite {path!r}")
+    return path
+
+
+def write_atomic(path, text: str, what: str = "output") -> None:
+    """Write ``text`` to ``path`` through a temporary file renamed into place (a
+    path that exists and is not a regular file — a device such as /dev/stdout, a
+    pipe — is written directly: renaming over it would replace it)."""
+    path = check_writable(path, what)
+    if os.path.exists(path) and not os.path.isfile(path):
+        try:
+            with open(path, "w", encoding="utf-8") as fh:
+                fh.write(text)
+        except OSError as exc:
+            raise OutputError(f"{what}: cannot write {path!r}: {exc.strerror or exc}") from None
+        return
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; a plain open() would honour the umask
+        os.replace(tmp, path)
+    except BaseException as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        if isinstance(exc, OSError):
+            raise OutputError(f"{what}: cannot write {path!r}: {exc.strerror or exc}") from None
+        raise

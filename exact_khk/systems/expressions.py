@@ -1,0 +1,445 @@
+"""Systems written as expressions: system files (TOML) and the Python equivalent.
+
+A system file (see ``docs/system-files.md``) gives a quadratic vector field f on
+Q^N componentwise, f_i = Σ_{j≤k} q_ijk x_j x_k + Σ_j l_ij x_j + c_i, together with
+claimed integrals I(x, ε), a Poisson tensor Π(x, ε), commuting fields, a
+Hamiltonian form f = K∇H and negative controls.  Everything is exact: decimal
+literals are rationals (0.1 = 1/10) and parameters are substituted as rationals.
+
+Expressions are read by the safe parser of :mod:`.expression_parser` (never by
+``eval``): only the declared names, ``eps``, numbers, ``+ - * / **`` and
+parentheses, with bounded exponents and a bounded amount of work.
+
+>>> s = ExpressionSystem.from_expressions(["x1", "x2"], field=["x1*x2", "-x1*x2 + x2"],
+...                                       integrals={"I": "x1 + x2 - log_x2"})
+Traceback (most recent call last):
+...
+exact_khk.errors.InputError: integrals I: unknown name 'log_x2' at position 10 (allowed: variables x1, x2; eps)
+>>> s = ExpressionSystem.from_expressions(["x", "y"], field=["y", "-x"], integrals={"H": "x**2 + y**2"})
+>>> s.field("f").evaluate(get_arith("fraction"), [Fraction(1), Fraction(2)])
+[Fraction(2, 1), Fraction(-1, 1)]
+>>> s.integrals()["H"](get_arith("fraction"), [Fraction(1), Fraction(2)], Fraction(1, 10))
+Fraction(5, 1)
+>>> ExpressionSystem.from_json(s.to_json()).to_json() == s.to_json()
+True
+"""
+
+from __future__ import annotations
+
+import re
+from decimal import Decimal
+from fractions import Fraction
+from pathlib import Path
+
+import sympy
+from sympy.polys.rings import ring
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+from ..arith import _as_fraction, get_arith
+from ..errors import InputError
+from .base import System
+from .expression_parser import CONSTANTS, Parser, checked_polynomial, frac, number_text, short, text_of, to_polynomial
+from .functions import PolynomialTensor, RationalFunction
+from .quadratic import QuadraticField
+
+MAX_FILE = 10_000_000     # bytes in a system file
+EPS = "eps"
+CLAIMS = ("reversibility", "integrals", "poisson", "commutation", "jacobian", "cmoq")
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+_SYSTEM_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*\Z")
+
+
+def _quadratic_field(polys, label: str) -> QuadraticField:
+    """The QuadraticField with f_i = polys[i] (ring polynomials of degree <= 2, no ε)."""
+    quad, lin, const = [], [], []
+    for p in polys:
+        q, l, c = [], [], Fraction(0)
+        for m, coef in p.items():
+            idx = tuple(i for i, k in enumerate(m[:-1]) for _ in range(k))
+            if len(idx) == 2:
+                q.append((idx, frac(coef)))
+            elif len(idx) == 1:
+                l.append((idx[0], frac(coef)))
+            else:
+                c = frac(coef)
+        quad.append(tuple(sorted(q)))
+        lin.append(tuple(sorted(l)))
+        const.append(c)
+    return QuadraticField(len(polys), tuple(quad), tuple(lin), tuple(const), label)
+
+
+def _rational(value, where: str) -> Fraction:
+    """An exact rational from an int, Fraction, TOML decimal or a constant expression string."""
+    if isinstance(value, (int, Fraction)) and not isinstance(value, bool):
+        return Fraction(value)
+    if isinstance(value, Decimal):
+        if not value.is_finite():
+            raise InputError(f"{where}: {value} is not a rational number")
+        return Fraction(value)
+    if isinstance(value, str):
+        num, den = Parser(value, where, CONSTANTS, {}, {}, "a rational number is expected here").value
+        return frac(num.LC) / frac(den.LC)
+    if isinstance(value, float):
+        raise InputError(f"{where}: {value!r} is a binary float; write it as a string such as '1/10'")
+    raise InputError(f"{where}: expected a rational number (a string such as '1/3'), got {value!r}")
+
+
+def _spec_value(value, where: str):
+    """A number or expression as stored in the JSON form: a string."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        raise InputError(f"{where}: expected a string, got {value!r}")
+    if isinstance(value, Decimal):
+        return number_text(_rational(value, where))
+    if isinstance(value, (int, Fraction)) or hasattr(value, "numerator") or hasattr(value, "p"):
+        return number_text(_as_fraction(value))  # also gmpy2 mpq, flint fmpq
+    raise InputError(f"{where}: expected a string, got {value!r} ({type(value).__name__})")
+
+
+def _table(value, where: str) -> dict:
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise InputError(f"{where}: expected a table (name = value), got {type(value).__name__}")
+    return value
+
+
+def _matrix(value, N: int, where: str) -> list:
+    if not isinstance(value, (list, tuple)) or len(value) != N or any(
+            not isinstance(row, (list, tuple)) or len(row) != N for row in value):
+        raise InputError(f"{where}: expected a {N}x{N} matrix (a list of {N} rows of {N} entries)")
+    return [[_spec_value(e, f"{where}[{i}][{j}]") for j, e in enumerate(row)] for i, row in enumerate(value)]
+
+
+def _components(value, variables, where: str) -> dict:
+    """A field given as {variable: expression} or as a list in variable order."""
+    if isinstance(value, (list, tuple)):
+        if len(value) != len(variables):
+            raise InputError(f"{where}: expected {len(variables)} components (one per variable), got {len(value)}")
+        value = dict(zip(variables, value))
+    value = _table(value, where)
+    missing = [v for v in variables if v not in value]
+    extra = [k for k in value if k not in variables]
+    if missing or extra:
+        raise InputError(f"{where}: " + "; ".join(
+            ([f"missing component(s) {', '.join(missing)}"] if missing else []) +
+            ([f"unknown component(s) {', '.join(map(str, extra))}"] if extra else [])) +
+            f" (one component per variable: {', '.join(variables)})")
+    return {v: _spec_value(value[v], f"{where} {v}") for v in variables}
+
+
+# --- the system ----------------------------------------------------------------------
+
+_KEYS = ("format", "kind", "name", "title", "source", "variables", "parameters", "field", "fields",
+         "integrals", "poisson", "hamiltonian", "controls", "defaults", "claims")
+_NEEDS = {"integrals": "integrals", "poisson": "poisson", "commutation": "fields", "cmoq": "hamiltonian"}
+
+
+class ExpressionSystem(System):
+    """A quadratic system given by expressions (a system file, or Python strings).
+
+    Build it with :meth:`from_expressions`, :meth:`from_toml`, :meth:`from_json`
+    or :func:`load_system`; every input error is an :class:`InputError` naming
+    the key at fault.  :meth:`to_json` keeps the original strings, so
+    ``from_json(to_json())`` rebuilds the same system.
+    """
+
+    kind = "expressions"
+
+    def __init__(self, table: dict, origin: str = ""):
+        at = (lambda key: f"{origin}: {key}") if origin else (lambda key: key)
+        t = _table(table, origin or "system")
+        unknown = [k for k in t if k not in _KEYS]
+        if unknown:
+            raise InputError(at(f"unknown key(s) {', '.join(map(repr, unknown))}; known keys: {', '.join(_KEYS)}"))
+        if t.get("format", 1) != 1 or t.get("kind", self.kind) != self.kind:
+            raise InputError(at(f"format {t.get('format')!r} / kind {t.get('kind')!r}: this reader "
+                                f"knows format 1, kind 'expressions'"))
+        for key in ("name", "variables"):
+            if key not in t:
+                raise InputError(at(f"missing required key {key!r}"))
+        for key in ("name", "title", "source"):
+            if not isinstance(t.get(key, ""), str):
+                raise InputError(at(f"{key}: expected a string, got {t[key]!r}"))
+        if not _SYSTEM_NAME.match(t["name"]):
+            raise InputError(at(f"name: {t['name']!r} must be letters, digits, '.', '_' or '-'"))
+        self.name, self.title, self.source = t["name"], t.get("title", ""), t.get("source", "")
+        variables = t["variables"]
+        if not isinstance(variables, (list, tuple)) or not variables or not all(isinstance(v, str) for v in variables):
+            raise InputError(at("variables: expected a non-empty list of names"))
+        for v in variables:
+            if not _NAME.match(v) or v == EPS or variables.count(v) > 1:
+                raise InputError(at(f"variables: {v!r} is " + ("used twice" if variables.count(v) > 1 else
+                                    "reserved for the step size" if v == EPS else "not a valid name")))
+        self.variables, self.dim = tuple(variables), len(variables)
+        spec = {"format": 1, "kind": self.kind, "name": self.name, "title": self.title,
+                "source": self.source, "variables": list(variables)}
+        self._spec, self._at = spec, at
+
+        params = _table(t.get("parameters"), at("parameters"))
+        for p in params:
+            if not isinstance(p, str) or not _NAME.match(p) or p == EPS or p in variables:
+                raise InputError(at(f"parameters: {p!r} is " + ("the name of a variable" if p in variables else
+                                    "reserved for the step size" if p == EPS else "not a valid name")))
+        self.parameters = {p: _rational(v, at(f"parameters {p}")) for p, v in params.items()}
+        if params:
+            spec["parameters"] = {p: _spec_value(v, at(f"parameters {p}")) for p, v in params.items()}
+        self._ring, *gens = ring([sympy.Symbol(v) for v in (*variables, EPS)], sympy.QQ)
+        self._eps = gens[-1]
+        self._values = {p: self._ring(sympy.QQ(q.numerator, q.denominator)) for p, q in self.parameters.items()}
+        self._names = dict(zip(variables, gens), **self._values)
+
+        self._fields, self._hamiltonian = {}, None
+        f = self._read_hamiltonian(t.get("hamiltonian"))
+        if "field" in t:
+            spec["field"] = _components(t["field"], variables, at("field"))
+            exprs = self._read_field(spec["field"], "field")
+            for i, v in enumerate(variables):
+                if f is not None and exprs[i] != f[i]:
+                    raise InputError(at(f"hamiltonian: field {v} = {short(spec['field'][v])} differs "
+                                        f"from (K grad H)_{v} = {text_of(f[i])}"))
+            f = exprs
+        elif f is None:
+            raise InputError(at("missing required key 'field' (or give [hamiltonian] with K and H)"))
+        self._fields["f"] = _quadratic_field(f, "f")
+        others = _table(t.get("fields"), at("fields"))
+        for g, comps in others.items():
+            if g == "f" or not isinstance(g, str) or not _NAME.match(g):
+                raise InputError(at(f"fields: {g!r} is not a valid name for another field ('f' is the main one)"))
+            spec.setdefault("fields", {})[g] = _components(comps, variables, at(f"fields.{g}"))
+            self._fields[g] = _quadratic_field(self._read_field(spec["fields"][g], f"fields.{g}"), g)
+
+        self._integrals, self._controls = (self._read_functions(t.get(key), key) for key in ("integrals", "controls"))
+        self._poisson = self._read_poisson(t.get("poisson"))
+        self._read_defaults(_table(t.get("defaults"), at("defaults")))
+        self._read_claims(t.get("claims"))
+
+    # --- readers (each records the original strings in self._spec) ----------
+
+    def _parse(self, text, where, eps=True, constant=False):
+        """Parse ``text``: variables, parameters and (if ``eps``) ε allowed; only
+        parameters if ``constant``."""
+        names = dict(self._values) if constant else dict(self._names, **({EPS: self._eps} if eps else {}))
+        refused = {v: f"{v} is a variable, and this entry must be constant" for v in self.variables}
+        refused[EPS] = ("eps is not allowed here: it is the step size, and a vector field does not "
+                        "depend on it" if not constant else "eps is not allowed in a constant")
+        allowed = "; ".join(s for s in ("" if constant else "variables " + ", ".join(self.variables),
+                                        "parameters " + ", ".join(self._values) if self._values else "",
+                                        EPS if EPS in names else "") if s)
+        return Parser(text, self._at(where), self._ring, names, refused, "allowed: " + (allowed or "numbers only"))
+
+    def _read_field(self, comps, key):
+        return [checked_polynomial(self._parse(comps[v], f"{key} {v}", eps=False), self.variables, 2,
+                                    self._at(f"{key} {v}"), "a Kahan map needs a quadratic field")
+                for v in self.variables]
+
+    def _function(self, text, where, name):
+        num, den = self._parse(text, where).value
+        return RationalFunction(to_polynomial(num, self.dim), to_polynomial(den, self.dim), name=name, text=text)
+
+    def _read_functions(self, table, key):
+        out = {}
+        for name, text in _table(table, self._at(key)).items():
+            text = _spec_value(text, self._at(f"{key} {name}"))
+            self._spec.setdefault(key, {})[name] = text
+            out[name] = self._function(text, f"{key} {name}", name)
+        return out
+
+    def _read_poisson(self, table):
+        if table is None:
+            return None
+        table = _table(table, self._at("poisson"))
+        if set(table) != {"matrix"}:
+            raise InputError(self._at("poisson: expected exactly one key, 'matrix'"))
+        M = _matrix(table["matrix"], self.dim, self._at("poisson matrix"))
+        self._spec["poisson"] = {"matrix": M}
+        entries = [[self._function(e, f"poisson matrix[{i}][{j}]", f"Pi[{i}][{j}]") for j, e in enumerate(row)]
+                   for i, row in enumerate(M)]
+        return PolynomialTensor(entries, name=self._at("poisson matrix"), text=str(M))
+
+    def _read_hamiltonian(self, table):
+        """K∇H as ring polynomials (None without [hamiltonian]); sets self._hamiltonian."""
+        if table is None:
+            return None
+        table = _table(table, self._at("hamiltonian"))
+        if set(table) != {"K", "H"}:
+            raise InputError(self._at("hamiltonian: expected exactly the keys 'K' and 'H'"))
+        Ks = _matrix(table["K"], self.dim, self._at("hamiltonian K"))
+        Htext = _spec_value(table["H"], self._at("hamiltonian H"))
+        self._spec["hamiltonian"] = {"K": Ks, "H": Htext}
+        K = [[self._parse(e, f"hamiltonian K[{i}][{j}]", constant=True).value for j, e in enumerate(row)]
+             for i, row in enumerate(Ks)]
+        K = [[frac(num.LC) / frac(den.LC) for num, den in row] for row in K]
+        for i in range(self.dim):
+            for j in range(i, self.dim):
+                if K[i][j] + K[j][i] != 0:
+                    raise InputError(self._at(f"hamiltonian K: K[{j}][{i}] = {short(Ks[j][i])} is not minus "
+                                              f"K[{i}][{j}] = {short(Ks[i][j])} (K must be skew-symmetric)"))
+        H = checked_polynomial(self._parse(Htext, "hamiltonian H", eps=False), self.variables, 3,
+                                self._at("hamiltonian H"), "H must be a polynomial of degree <= 3")
+        self._hamiltonian = (tuple(map(tuple, K)),
+                             RationalFunction(to_polynomial(H, self.dim), name="H", text=Htext))
+        R, grad = self._ring, [H.diff(x) for x in self._ring.gens[:-1]]
+        return [sum((grad[j] * R(sympy.QQ(k.numerator, k.denominator)) for j, k in enumerate(row)), R.zero)
+                for row in K]
+
+    def _read_defaults(self, table):
+        extra = [k for k in table if k not in ("x0", "eps")]
+        if extra:
+            raise InputError(self._at(f"defaults: unknown key(s) {', '.join(map(repr, extra))} (known: x0, eps)"))
+        spec = {}
+        self.default_eps = Fraction(1, 10)
+        if "eps" in table:
+            spec["eps"] = _spec_value(table["eps"], self._at("defaults eps"))
+            self.default_eps = _rational(table["eps"], self._at("defaults eps"))
+            if self.default_eps == 0:
+                raise InputError(self._at("defaults eps: the step size must be nonzero"))
+        if "x0" in table:
+            x0 = table["x0"]
+            if not isinstance(x0, (list, tuple)) or len(x0) != self.dim:
+                raise InputError(self._at(f"defaults x0: expected a list of {self.dim} numbers (one per "
+                                          f"variable), got {x0!r}"[:200]))
+            spec["x0"] = [_spec_value(v, self._at(f"defaults x0[{i}]")) for i, v in enumerate(x0)]
+            self.default_x0 = tuple(_rational(v, self._at(f"defaults x0[{i}]")) for i, v in enumerate(x0))
+        else:
+            self.default_x0 = self._regular_point(self.default_eps)
+        if spec:
+            self._spec["defaults"] = spec
+
+    def _read_claims(self, claims):
+        present = {"integrals": self._integrals, "poisson": self._poisson,
+                   "fields": len(self._fields) > 1, "hamiltonian": self._hamiltonian}
+        if claims is None:
+            self.claims = tuple(c for c in CLAIMS if c not in _NEEDS or present[_NEEDS[c]])
+            return
+        if not isinstance(claims, (list, tuple)) or not all(isinstance(c, str) for c in claims):
+            raise InputError(self._at(f"claims: expected a list of names among {', '.join(CLAIMS)}"))
+        for c in claims:
+            if c not in CLAIMS:
+                raise InputError(self._at(f"claims: unknown claim {c!r}; known: {', '.join(CLAIMS)}"))
+            if c in _NEEDS and not present[_NEEDS[c]]:
+                raise InputError(self._at(f"claims: {c!r} needs a [{_NEEDS[c]}] section"))
+        self.claims = tuple(dict.fromkeys(claims))
+        self._spec["claims"] = list(self.claims)
+
+    def _regular_point(self, eps):
+        """The first small random point where every declared function is finite and
+        I − ε g'(x) is invertible for every field g (reproducible)."""
+        fr = get_arith("fraction")
+        fns = list(self._integrals.values()) + list(self._controls.values()) + (
+            [e for row in self._poisson.entries for e in row] if self._poisson else [])
+        for seed in range(200):
+            x = self.random_point(seed)
+            if all(not fn.den.evaluate(fr, x, eps) == 0 for fn in fns) and all(
+                    sympy.Matrix([[int(i == j) - eps * t for j, t in enumerate(row)]
+                                  for i, row in enumerate(g.jacobian(fr, x))]).det() != 0
+                    for g in self._fields.values()):
+                return x
+        return self.random_point(0)
+
+    # --- constructors -------------------------------------------------------------
+
+    @classmethod
+    def from_expressions(cls, variables, field=None, parameters=None, integrals=None, poisson=None,
+                         fields=None, hamiltonian=None, controls=None, x0=None, eps=None, claims=None,
+                         name="user", title="", source=""):
+        """A system from Python values: ``variables`` a list of names (or ``"x, y"``),
+        ``field`` a list of expression strings in variable order (or a dict),
+        ``parameters`` name -> rational, ``integrals``/``controls`` name -> expression,
+        ``poisson`` an N×N matrix of expressions, ``fields`` name -> field,
+        ``hamiltonian`` ``{"K": matrix, "H": expression}``, ``x0``/``eps`` rationals,
+        ``claims`` a list of claim names."""
+        if isinstance(variables, str):
+            variables = [v for v in re.split(r"[\s,]+", variables) if v]
+        t = {"name": name, "title": title, "source": source, "variables": variables}
+        for key, value in (("field", field), ("parameters", parameters), ("integrals", integrals),
+                           ("fields", fields), ("hamiltonian", hamiltonian), ("controls", controls),
+                           ("claims", claims)):
+            if value is not None:
+                t[key] = value
+        if poisson is not None:
+            t["poisson"] = poisson if isinstance(poisson, dict) else {"matrix": poisson}
+        defaults = {k: v for k, v in (("x0", x0), ("eps", eps)) if v is not None}
+        if defaults:
+            t["defaults"] = defaults
+        return cls(t)
+
+    @classmethod
+    def from_toml(cls, text, origin: str = "<string>"):
+        """A system from the text of a system file (``origin`` names it in errors)."""
+        if isinstance(text, bytes):
+            text = text.decode("utf-8")
+        try:
+            table = tomllib.loads(text, parse_float=Decimal)
+        except (tomllib.TOMLDecodeError, ValueError) as exc:
+            raise InputError(f"{origin}: not valid TOML: {exc}") from None
+        return cls(table, origin)
+
+    @classmethod
+    def from_json(cls, d: dict):
+        """The inverse of :meth:`to_json`."""
+        return cls(d)
+
+    # --- the System interface -------------------------------------------------------
+
+    def to_json(self) -> dict:
+        """The system as a JSON-compatible dict of the original strings (see :meth:`from_json`)."""
+        import copy
+        return copy.deepcopy(self._spec)
+
+    def field(self, name: str = "f") -> QuadraticField:
+        if name not in self._fields:
+            raise InputError(f"{self.name}: unknown field {name!r}; known: {', '.join(self._fields)}")
+        return self._fields[name]
+
+    def field_names(self) -> tuple:
+        return tuple(self._fields)
+
+    def integrals(self) -> dict:
+        return dict(self._integrals)
+
+    def controls(self) -> dict:
+        return dict(self._controls)
+
+    def poisson(self):
+        return self._poisson
+
+    def hamiltonian_form(self):
+        return self._hamiltonian
+
+    def known(self) -> str:
+        """What the file claims, in a few words."""
+        n, others = len(self._integrals), [g for g in self._fields if g != "f"]
+        return ", ".join(s for s in (
+            f"{n} integral{'s' * (n != 1)}" if n else "",
+            "Poisson tensor" if self._poisson else "",
+            f"commuting field{'s' * (len(others) != 1)} {', '.join(others)}" if others else "",
+            "Hamiltonian form f = K grad H" if self._hamiltonian else "",
+            f"{len(self._controls)} control{'s' * (len(self._controls) != 1)}" if self._controls else "") if s) or "the field only"
+
+    def describe(self) -> str:
+        return f"{self.name}: {self.title or 'quadratic system'} (dimension {self.dim}; {self.known()})"
+
+    def __repr__(self):
+        return f"<ExpressionSystem {self.describe()}>"
+
+
+def load_system(path) -> ExpressionSystem:
+    """Read a system file (TOML); every problem is an InputError naming the file."""
+    p = Path(path)
+    try:
+        if p.stat().st_size > MAX_FILE:
+            raise InputError(f"{path}: the file is larger than {MAX_FILE} bytes")
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such system file") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the system file ({exc.strerror or exc})") from None
+    return ExpressionSystem.from_toml(text, origin=str(path))
