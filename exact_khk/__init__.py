@@ -21,6 +21,7 @@ from exact_khk.errors import (ExactKHKError, InputError, NearSingularWarning, No
                      PoleError, SingularStepError, UndecidedError)
 from exact_khk.kahan.map import KahanMap, kahan_step, map_jacobian, orbit
 from exact_khk.parsing import parse_rational, parse_signs, parse_vector
+from exact_khk.systems.base import System
 from exact_khk.systems.quadratic import QuadraticField
 from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
                       rational_sign_patterns)
@@ -34,6 +35,6 @@ __all__ = [
     "SingularStepError", "UndecidedError",
     "KahanMap", "kahan_step", "map_jacobian", "orbit",
     "parse_rational", "parse_signs", "parse_vector",
-    "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",
+    "System", "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",
     "rational_sign_patterns", "Htilde", "Certificate", "Check", "certify", "__version__",
 ]

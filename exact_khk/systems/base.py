@@ -80,6 +80,21 @@ class System:
     default_x0: tuple = ()
     default_eps = Fraction(1, 10)
 
+    @staticmethod
+    def from_expressions(variables, **parts) -> "System":
+        """A system from expressions (see :meth:`exact_khk.systems.expressions.ExpressionSystem.from_expressions`
+        and docs/system-files.md)."""
+        from exact_khk.systems.expressions import ExpressionSystem
+
+        return ExpressionSystem.from_expressions(variables, **parts)
+
+    @staticmethod
+    def load(spec) -> "System":
+        """A catalogue system by name (``'euler-top'``) or a system file by path."""
+        from exact_khk.systems.catalogue import resolve
+
+        return resolve(spec)
+
     def describe(self) -> str:
         return f"{self.name} (dimension {self.dim})"
 
