@@ -52,6 +52,22 @@ class PoleError(ExactKHKError, ArithmeticError):
     Not a singular Kahan step."""
 
 
+class NumericalError(PoleError):
+    """A floating evaluation (``float``, ``mp:P``) that gives no trustworthy
+    number: a value beyond the arithmetic's range (overflow), a non-finite
+    result, or a condition estimate κ with κ·2^-p ≥ 1 (no correct bit can be
+    guaranteed).  It does **not** claim a pole: the message says so, and an
+    exact arithmetic (or more bits) decides.  A subclass of :class:`PoleError`
+    so that code skipping points where a function is undefined skips these too.
+
+    Attribute ``condition``: the condition estimate (``inf`` for overflow), or None.
+    """
+
+    def __init__(self, message, condition=None):
+        super().__init__(message)
+        self.condition = condition
+
+
 class UndecidedError(ExactKHKError, ArithmeticError):
     """Ball (interval) arithmetic cannot decide a question at this precision,
     e.g. no pivot is certainly nonzero.  Never a wrong answer: "undecided"."""

@@ -1,7 +1,7 @@
 """Regenerate tests/data/golden_orbits.json by an independent route.
 
 This script does NOT use exact_khk.  It builds every matrix with SymPy straight
-from the formulas of shared/MATH.md — X(w), J(x), Hs, B = Σ_j s_j Π_j with
+from the formulas of docs/conventions.md — X(w), J(x), Hs, B = Σ_j s_j Π_j with
 Π_j = (1/n) Σ_k ω^{-jk} A^k (ω = exp(2πi/n), simplified symbolically), the
 Jacobian f'(x) = J(x) M + [J(e_0) y, …, J(e_{n-1}) y, 0, …, 0] with y = M x — and
 takes each Kahan step with SymPy's exact ``Matrix.LUsolve``.  The library's own

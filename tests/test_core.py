@@ -93,7 +93,7 @@ def test_system_matrices_follow_conventions():
     # H_1 has Hessian A Hs, and A Hs is again admissible: A (A Hs) = (A Hs) Aᵀ
     M = s.hamiltonian_hessian(1)
     assert matmul(A, M) == matmul(M, At)
-    # f(x) = J(x) Hs x and its Jacobian from the MATH.md formula
+    # f(x) = J(x) Hs x and its Jacobian from the formula in docs/conventions.md
     ar = get_arith("fraction")
     fld = s.field("f")
     y = [sum(h * t for h, t in zip(row, x)) for row in s.hessian]

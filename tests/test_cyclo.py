@@ -106,7 +106,7 @@ def test_non_rational_field_needs_the_cyclotomic_flag():
 
 def _sympy_step(system, signs, x, eps, N):
     """Φ_g(x) by SymPy: B = Σ_j s_j Π_j built from its definition, g'(x) = J(x)M +
-    [J(e_k) y, 0] (MATH.md), and DomainMatrix.lu_solve over QQ<exp(2πi/N)>."""
+    [J(e_k) y, 0] (docs/conventions.md), and DomainMatrix.lu_solve over QQ<exp(2πi/N)>."""
     from sympy import I, QQ, exp, pi
     from sympy.polys.matrices import DomainMatrix
 
@@ -196,7 +196,7 @@ def _check(records):
 
 def test_paper_6d_example_with_b0_b1_b2():
     """2n = 6: the three involutions B_0, B_1, B_2 (sign patterns; the printed 𝓑_1
-    block is the misprinted B_2 = B_{n-1}, MATH.md item 4) in Q(ζ_3) and Q(ζ_6)."""
+    block is the misprinted B_2 = B_{n-1}, docs/conventions.md, misprint 4) in Q(ζ_3) and Q(ζ_6)."""
     system = default_system()
     assert integral_patterns(3) == ["-++", "+-+", "++-"]
     for N in (3, 6):

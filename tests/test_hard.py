@@ -19,7 +19,7 @@ E = sympy.Symbol("eps")
 
 
 def independent_det(system, x):
-    """det(I - eps f'(x)) from MATH.md's formula f'(x) = J(x) Hs + [J(e_0) y, ..., J(e_{n-1}) y, 0...],
+    """det(I - eps f'(x)) from the formula of docs/conventions.md, f'(x) = J(x) Hs + [J(e_0) y, ..., J(e_{n-1}) y, 0...],
     y = Hs x, in SymPy matrices (not the library's Jacobian)."""
     n, N = system.n, system.dim
     x = sympy.Matrix([sympy.Rational(t) for t in x])

@@ -1,6 +1,6 @@
 """Integrals, q_l, Π and exact gradients against an independent SymPy model.
 
-The SymPy model below is built from the definitions in MATH.md only (cyclic
+The SymPy model below is built from the definitions in docs/conventions.md only (cyclic
 Hankel blocks, J(x), A, the Kahan step as a linear solve, H̃ by (tH 4) and by
 its definition); it uses none of the library's matrices or solvers.
 """
@@ -27,7 +27,7 @@ def Q(v):
 
 
 class SymModel:
-    """The family for one (a, b, c), in SymPy, from MATH.md's definitions."""
+    """The family for one (a, b, c), in SymPy, from the definitions in docs/conventions.md."""
 
     def __init__(self, a, b, c):
         self.n = n = len(a)
@@ -135,7 +135,7 @@ def test_4d_q0_q1_paper_formulas():
 
 @pytest.mark.parametrize("n", [2, 3, 4, 5])
 def test_matrix_polynomial_and_q_gradients(n):
-    """(J Hs)² = Σ q_l A^l (MATH.md) and ∇q_l = A^l ∇q_0, from the library's q_l and dual gradients."""
+    """(J Hs)² = Σ q_l A^l (docs/conventions.md) and ∇q_l = A^l ∇q_0, from the library's q_l and dual gradients."""
     s, m, x = _case(n, seed=20 + n)
     ar = get_arith("flint")
     xa = [ar(F(int(t.p), int(t.q))) for t in x]

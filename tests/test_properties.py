@@ -69,7 +69,7 @@ def test_reversibility(setup, eps):
 @settings(max_examples=30, deadline=None)
 @given(setups(), nonzero)
 def test_fixed_point_form(setup, eps):
-    """x̃ = (I + ε f'(x̃)) x (MATH.md's equivalent form of the step)."""
+    """x̃ = (I + ε f'(x̃)) x (the equivalent form of the step, docs/conventions.md)."""
     system, kind, x = setup
     phi, y = _step(system, kind, x, eps)
     ar = phi.arith

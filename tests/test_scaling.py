@@ -66,7 +66,7 @@ def test_ball_runs_enclose_and_rates_are_positive(study):
             assert math.isfinite(run.radius_rate) and run.radius_rate > 0
             r = run.rows[-1]
             assert r.error_log10 <= r.radius_log10            # the midpoint error is within the radius
-            assert r.h_drift_log10 is not None and r.commutation_log10 is not None
+            assert r.drift_log10["H~"] is not None and r.commutation_log10 is not None
         else:
             assert run.encloses is None and math.isfinite(run.loss_rate)
 
@@ -78,7 +78,8 @@ def test_diagnostics_are_rounding_sized(study):
         if run.arith.startswith("mp") or run.arith == "float":
             half = -(run.prec / 2) * LOG10_2
             for r in run.rows[:-1]:
-                assert r.h_drift_log10 < half and r.k_drift_log10 < half
+                assert set(r.drift_log10) == {"H~", "K~"}
+                assert r.drift_log10["H~"] < half and r.drift_log10["K~"] < half
                 assert r.commutation_log10 < half and r.reversibility_log10 < half
 
 
@@ -133,8 +134,13 @@ def test_write_study(tmp_path, study):
     assert names == ["error_vs_step.png", "scaling.csv", "scaling.json", "work_precision.png"]
     lines = (tmp_path / "scaling.csv").read_text().splitlines()
     assert len(lines) == 1 + sum(len(r.rows) for r in study.runs)
+    head = lines[0].split(",")
+    assert head[4:7] == ["drift_log10[H~]", "drift_log10[K~]", "commutation_log10"]
     doc = json.loads((tmp_path / "scaling.json").read_text())
     assert [r["arith"] for r in doc["runs"]] == [r.arith for r in study.runs] and "error" in doc["method"]
+    assert doc["integrals"] == ["H~", "K~"] and doc["commuting_fields"] == ["g[-++]"]
+    assert doc["system"]["family"] == "lie-poisson" and doc["system"]["a"] == ["1", "0", "2"]
+    assert set(doc["rows"][0]["drift_log10"]) == {"H~", "K~"}
     assert (tmp_path / "work_precision.png").read_bytes()[:4] == b"\x89PNG"
 
 

@@ -234,7 +234,7 @@ def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch):
 
 def test_structured_step_at_n_256():
     """Exact step at n = 256 (the structure from the vectors: building the dense field
-    would need (2n)³ tensor entries), checked against MATH.md's equivalent form
+    would need (2n)³ tensor entries), checked against the equivalent form (docs/conventions.md)
     Φ(x) = (I + εf'(Φ(x))) x, an equation the solver never used."""
     from exact_khk.linalg.circulant import circulant_ring, kahan_system, reflect
 

@@ -14,7 +14,31 @@ Names understood by :func:`get_arith`:
 ``flint``     ``flint.fmpq`` (python-flint; the fastest exact backend)
 ``mp:P``      mpmath binary floats at P bits, in a private ``MPContext``
 ``float``     IEEE float64 (Python floats)
+``cyclo:N``   Q(ζ_N), exact (:mod:`exact_khk.arith.cyclotomic`)
+``gf:P``      the prime field F_P (:mod:`exact_khk.arith.cyclotomic`)
+``ball:P``    python-flint ``arb`` balls at P bits (:mod:`exact_khk.arith.ball`)
 ========== ============================================================
+
+Limits, refused at once with an :class:`~exact_khk.errors.InputError` naming
+them: P ≤ :data:`MAX_PRECISION_BITS` (10⁶ bits) for ``mp:P`` and ``ball:P``
+(one number then takes 125 kB and one product milliseconds; beyond, a 2n×2n
+solve no longer fits in memory and time); N ≤
+:data:`~exact_khk.arith.cyclotomic.MAX_CYCLOTOMIC_N` for ``cyclo:N``; P a prime
+with 5 ≤ P < 2⁶⁴ for ``gf:P``.
+
+Values are converted into an arithmetic by :func:`to_element` (strings such as
+``'1/3'``, int, Fraction, gmpy2/python-flint rationals, elements of the
+arithmetic; binary floats only into floating arithmetics) and back into exact
+rationals by :func:`to_fraction`:
+
+>>> to_fraction(get_arith("flint"), get_arith("flint")("-3/4") * 2)
+Fraction(-3, 2)
+>>> to_fraction(get_arith("float"), 0.5)
+Fraction(1, 2)
+>>> to_element(get_arith("flint"), 0.1, "eps")
+Traceback (most recent call last):
+...
+exact_khk.errors.InputError: eps: 0.1 is a binary float, not an exact rational; write it as a string such as '1/10' or as a Fraction
 
 >>> ar = get_arith("flint")
 >>> ar.format(ar(Fraction(-3, 4)) * 2)
@@ -29,12 +53,33 @@ from __future__ import annotations
 
 import contextlib
 import math
+import sys
+import numbers
 from fractions import Fraction
 
 import mpmath
 from mpmath import libmp
 
 from exact_khk.errors import InputError
+
+#: the largest precision P (bits) of ``mp:P`` and ``ball:P``: one number of 10⁶ bits
+#: takes 125 kB and one multiplication about a millisecond, so a 2n×2n solve
+#: at this precision is already minutes; beyond it the run would not finish
+MAX_PRECISION_BITS = 1_000_000
+#: the longest parameter text after ``:`` in an arithmetic's name (digits)
+_MAX_PARAM_DIGITS = 30
+
+
+def check_precision(kind: str, prec) -> int:
+    """``prec`` if 2 ≤ prec ≤ :data:`MAX_PRECISION_BITS`, else :class:`InputError` naming the limit."""
+    if isinstance(prec, bool) or not isinstance(prec, int):
+        raise InputError(f"arith: {kind}:P needs an integer precision P in bits, got {prec!r}")
+    if prec < 2:
+        raise InputError(f"arith: {kind}:{prec}: the {kind} precision must be at least 2 bits")
+    if prec > MAX_PRECISION_BITS:
+        raise InputError(f"arith: {kind}:{prec}: the precision is beyond the limit of {MAX_PRECISION_BITS} bits "
+                         f"(MAX_PRECISION_BITS; one {kind} number would take {prec // 8:,} bytes)")
+    return prec
 
 
 class Arith:
@@ -56,7 +101,10 @@ class Arith:
     fourier = False
 
     def __call__(self, value):
-        return self.convert(value)
+        """``value`` as an element of this arithmetic, read as every public function
+        reads numbers (:func:`to_element`: ``'1/3'``, int, Fraction, backend
+        rationals; binary floats only in floating arithmetics)."""
+        return to_element(self, value)
 
     def convert(self, value):  # pragma: no cover - abstract
         raise NotImplementedError
@@ -102,6 +150,19 @@ class Arith:
 
     def __hash__(self):
         return hash(self.name)
+
+
+def _digits(n) -> str:
+    """str(n) for an integer of any size (Python's int refuses beyond 4300 digits
+    unless told otherwise; exact orbits go far beyond)."""
+    if type(n) is not int or n.bit_length() < 14_000:
+        return str(n)
+    limit = sys.get_int_max_str_digits()
+    sys.set_int_max_str_digits(0)
+    try:
+        return str(n)
+    finally:
+        sys.set_int_max_str_digits(limit)
 
 
 def _as_fraction(value) -> Fraction:
@@ -280,8 +341,8 @@ class RationalArith(Arith):
         return Fraction(int(self._num(e)), int(self._den(e)))
 
     def format(self, e) -> str:
-        p, q = int(self._num(e)), int(self._den(e))
-        return str(p) if q == 1 else f"{p}/{q}"
+        p, q = self._num(e), self._den(e)  # fmpz / mpz print any size themselves
+        return _digits(p) if q == 1 else f"{_digits(p)}/{_digits(q)}"
 
     def magnitude(self, e) -> float:
         return abs(float(self.to_fraction(e)))
@@ -323,9 +384,7 @@ class MPArith(Arith):
     fourier = True
 
     def __init__(self, prec: int):
-        if prec < 2:
-            raise InputError(f"arith: precision must be at least 2 bits, got {prec}")
-        self.prec = prec
+        self.prec = check_precision("mp", prec)
         self.name = f"mp:{prec}"
         self.ctx = mpmath.MPContext()
         self.ctx.prec = prec
@@ -335,7 +394,10 @@ class MPArith(Arith):
         if isinstance(value, self.ctx.mpf):
             return +value
         if isinstance(value, float):  # its exact binary value, rounded (nan/inf kept)
-            return self.ctx.mpf(value)
+            return self.ctx.mpf(float(value))
+        if hasattr(value, "_mpf_"):  # an mpf of another mpmath context, rounded to this one
+            return self.ctx.make_mpf(libmp.normalize(*value._mpf_, self.prec, libmp.round_nearest)
+                                     if value._mpf_[1] else value._mpf_)
         q = _as_fraction(value)
         return self.ctx.make_mpf(libmp.from_rational(q.numerator, q.denominator,
                                                      self.prec, libmp.round_nearest))
@@ -373,7 +435,7 @@ class FloatArith(Arith):
 
     def convert(self, value):
         if isinstance(value, float):
-            return value
+            return float(value)  # a numpy float64 becomes a Python float (bool pivot tests)
         q = _as_fraction(value)
         try:
             return float(q)  # correctly rounded
@@ -384,8 +446,11 @@ class FloatArith(Arith):
     def format(self, e) -> str:
         return repr(float(e))
 
+    def is_zero(self, e):
+        return bool(e == 0.0)
+
     def magnitude(self, e) -> float:
-        return abs(e)
+        return abs(float(e))
 
     def is_finite(self, e) -> bool:
         return math.isfinite(e)
@@ -409,17 +474,24 @@ _PARAMETRIZED = {"mp": MPArith}
 _CACHE: dict[str, Arith] = {}
 
 
-def register_arith(prefix: str, factory, parametrized: bool = True):
+_PARAM_LETTER: dict[str, str] = {}
+
+
+def register_arith(prefix: str, factory, parametrized: bool = True, letter: str = "P"):
     """Make ``prefix:PARAM`` (or a plain ``prefix``) a name for :func:`get_arith`.
 
-    ``factory(int_param)`` (or ``factory()``) returns an :class:`Arith`.
+    ``factory(int_param)`` (or ``factory()``) returns an :class:`Arith`;
+    ``letter`` names the parameter in :func:`arith_names` (``cyclo:N``).
     """
     (_PARAMETRIZED if parametrized else _FIXED)[prefix] = factory
+    if parametrized:
+        _PARAM_LETTER[prefix] = letter
 
 
 def arith_names() -> list[str]:
-    """The names understood by :func:`get_arith` (``X:P`` for parametrized ones)."""
-    return sorted(_FIXED) + sorted(f"{p}:P" for p in _PARAMETRIZED)
+    """The names understood by :func:`get_arith` (``X:P`` for parametrized ones,
+    ``cyclo:N``)."""
+    return sorted(_FIXED) + sorted(f"{p}:{_PARAM_LETTER.get(p, 'P')}" for p in _PARAMETRIZED)
 
 
 def get_arith(name=None) -> Arith:
@@ -444,6 +516,9 @@ def get_arith(name=None) -> Arith:
         except ImportError as exc:
             raise InputError(f"arith: {name!r} needs a package that is not installed ({exc})") from None
     elif param and prefix in _PARAMETRIZED:
+        if len(param) > _MAX_PARAM_DIGITS:
+            raise InputError(f"arith: {prefix}:P with a parameter of {len(param)} characters is beyond "
+                             f"every limit (see exact-khk --help for the arithmetics and their bounds)")
         try:
             value = int(param)
         except ValueError:
@@ -453,6 +528,89 @@ def get_arith(name=None) -> Arith:
         raise InputError(f"arith: unknown arithmetic {name!r}; known: {', '.join(arith_names())}")
     _CACHE[key] = ar
     return ar
+
+
+def _is_element(ar, value) -> bool:
+    """Whether ``value`` is already an element of ``ar`` (a context whose elements
+    share a Python type with other contexts', e.g. Q(ζ_N) or F_P, says so by ``owns``)."""
+    if type(value) is not type(ar.zero) or isinstance(value, (int, str)):
+        return False
+    owns = getattr(ar, "owns", None)
+    return True if owns is None else owns(value)
+
+
+def _is_binary_float(value) -> bool:
+    """A real number that is not exact: float, numpy floating, gmpy2 mpfr, mpmath mpf."""
+    if isinstance(value, (bool, int, Fraction)):
+        return False
+    if isinstance(value, float) or hasattr(value, "_mpf_"):
+        return True
+    return isinstance(value, numbers.Real) and not isinstance(value, numbers.Rational)
+
+
+def to_element(ar, value, name: str = "value"):
+    """``value`` as an element of ``ar``, the way every public function reads numbers.
+
+    Accepted: elements of ``ar``; exact rationals as ``'p'``, ``'p/q'``, decimal
+    strings, int, Fraction, gmpy2 ``mpq``, python-flint ``fmpq`` (anything with
+    numerator/denominator); and, in floating arithmetics only (``float``,
+    ``mp:P``, ``ball:P``), binary floats: Python and numpy floats, mpmath ``mpf``.
+    A binary float in an exact arithmetic, or anything else, raises
+    :class:`~exact_khk.errors.InputError` naming ``name``.
+    """
+    if _is_element(ar, value):
+        return value
+    if _is_binary_float(value):
+        if ar.exact:
+            raise InputError(f"{name}: {value!r} is a binary float, not an exact rational; "
+                             f"write it as a string such as '1/10' or as a Fraction")
+        try:
+            out = ar.convert(value if isinstance(value, float) or hasattr(value, "_mpf_") else float(value))
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"{name}: cannot read {value!r} in {ar.name} ({exc})") from None
+        if not ar.is_finite(out):
+            raise InputError(f"{name}: expected a finite number, got {value!r}")
+        return out
+    if isinstance(value, (str, int, Fraction)):
+        from exact_khk.parsing import parse_rational
+
+        value = parse_rational(value, name)
+    try:  # exact rationals, backend rationals, elements of a subfield, a Dual over a base, ...
+        return ar.convert(value)
+    except InputError:
+        raise
+    except (TypeError, ValueError, ArithmeticError) as exc:
+        raise InputError(f"{name}: cannot read {_short(value)} ({type(value).__name__}) as a number of "
+                         f"{ar.name} ({exc})") from None
+
+
+def _short(value, width: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
+
+
+def to_fraction(ar, value):
+    """The exact rational value of ``value`` (an element of ``ar``, or anything
+    :func:`to_element` reads) as a :class:`~fractions.Fraction`; a point (list or
+    tuple) gives a tuple of Fractions.
+
+    Exact for the rational arithmetics (``flint``, ``gmpy2``, ``fraction``), for
+    rational elements of ``cyclo:N`` and for binary floats (``float``, ``mp:P``:
+    the float's exact value); for ``ball:P`` the ball's midpoint.  Elements with
+    no rational value (an irrational element of Q(ζ_N), F_P, non-finite
+    floats) raise :class:`~exact_khk.errors.InputError`.
+    """
+    if isinstance(value, (list, tuple)):
+        return tuple(to_fraction(ar, t) for t in value)
+    e = to_element(ar, value)
+    try:
+        if hasattr(e, "to_fraction"):  # e.g. a CycloNumber
+            return e.to_fraction()
+        return ar.to_fraction(e)
+    except InputError:
+        raise
+    except (TypeError, ValueError, ArithmeticError) as exc:
+        raise InputError(f"{ar.name}: {ar.format(e)} has no exact rational value ({exc})") from None
 
 
 def point_height(ar, x) -> int:

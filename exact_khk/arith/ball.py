@@ -29,8 +29,8 @@ from fractions import Fraction
 
 import flint
 
-from exact_khk.arith import Arith, _as_fraction, register_arith
-from exact_khk.errors import InputError, UndecidedError
+from exact_khk.arith import Arith, _as_fraction, check_precision, register_arith
+from exact_khk.errors import UndecidedError
 
 
 def arb_to_fmpq(x) -> flint.fmpq:
@@ -80,9 +80,7 @@ class BallArith(Arith):
     decides = True
 
     def __init__(self, prec: int):
-        if not isinstance(prec, int) or prec < 2:
-            raise InputError(f"arith: ball precision must be at least 2 bits, got {prec}")
-        self.prec = prec
+        self.prec = check_precision("ball", prec)
         self.name = f"ball:{prec}"
         self.evidence = f"certified enclosure (arb balls at {prec} bits)"
         self.zero, self.one = flint.arb(0), flint.arb(1)

@@ -8,7 +8,8 @@ Lie–Poisson family that are not rational have entries in Q(ω), ω = ζ_n
 (:func:`exact_khk.systems.involution_circulant_cyclotomic`); ``cyclo:N``
 converts them for every N that is a multiple of n (ζ_n = z^{N/n}).
 
-``gf:P`` is the prime field F_P (python-flint ``nmod``, P prime, checked).
+``gf:P`` is the prime field F_P (python-flint ``nmod``, P prime, checked:
+:data:`MIN_PRIME` ≤ P < 2⁶⁴).  ``cyclo:N`` takes N ≤ :data:`MAX_CYCLOTOMIC_N`.
 It converts a rational p/q only when P does not divide q (otherwise a
 :class:`BadReductionError`), and an element of Q(ζ_m) only when
 P ≡ 1 (mod m), through the fixed embedding ζ_m ↦ g^{(P-1)/m} with g the
@@ -53,6 +54,15 @@ __all__ = ["CyclotomicField", "CycloNumber", "CycloArith", "GFArith", "BadReduct
 
 #: a prime P ≡ 1 (mod 720720) below 2^62: ω = e^{2πi/n} exists in F_P for every n ≤ 16
 DEFAULT_PRIME = 4611686018420360881
+
+#: the largest N of ``cyclo:N``: an element is a polynomial of degree < φ(N) ≤ N − 1,
+#: so one product costs about N² coefficient operations and a 2n×2n solve
+#: (2n)³ of them; at N = 10⁴ a single Kahan step already takes minutes
+MAX_CYCLOTOMIC_N = 10_000
+#: the smallest P of ``gf:P``: 2 and 3 divide the denominators of the formulas
+#: themselves (the 1/2 of H0 and of (2ε)⁻¹, the 2/n of the involution B_0 for
+#: n = 3), so every computation over F_2 or F_3 would be a bad reduction
+MIN_PRIME = 5
 
 
 class BadReductionError(InputError):
@@ -102,8 +112,13 @@ class CyclotomicField:
 @lru_cache(maxsize=None)
 def cyclotomic_field(N: int) -> CyclotomicField:
     """The field Q(ζ_N) (one object per N)."""
-    if not isinstance(N, int) or N < 1:
+    if isinstance(N, bool) or not isinstance(N, int) or N < 1:
         raise InputError(f"arith: cyclo:N needs an integer N >= 1, got {N!r}")
+    if N > MAX_CYCLOTOMIC_N:
+        raise InputError(f"arith: cyclo:{N}: N is beyond the limit of {MAX_CYCLOTOMIC_N} (MAX_CYCLOTOMIC_N; "
+                         f"an element of Q(zeta_N) is a polynomial of degree up to N - 1, one product about "
+                         f"N^2 = {N * N:.2g} coefficient operations); the involutions of size n need only "
+                         f"N = n")
     return CyclotomicField(N)
 
 
@@ -271,6 +286,10 @@ class CycloArith(Arith):
         self.gen = self.K.gen
         self.evidence = f"exact in Q(zeta_{N})"
 
+    def owns(self, e) -> bool:
+        """Whether ``e`` is an element of this field (not of another Q(ζ_M))."""
+        return e.K is self.K
+
     def convert(self, value):
         if isinstance(value, CycloNumber):
             return self.K.embed(value)
@@ -310,14 +329,20 @@ class GFArith(Arith):
     exact = True
 
     def __init__(self, P: int):
-        if P < 2 or P >= 2 ** 64 or not flint.fmpz(P).is_prime():
-            raise InputError(f"arith: gf:{P}: P must be a prime below 2^64")
+        if P < MIN_PRIME or P >= 2 ** 64 or not flint.fmpz(P).is_prime():
+            why = ("too small: 2 and 3 divide the denominators of the formulas (bad reduction everywhere)"
+                   if P in (2, 3) else "P >= 2^64" if P >= 2 ** 64 else "P < 2" if P < 2 else "not a prime")
+            raise InputError(f"arith: gf:{P}: P must be a prime with {MIN_PRIME} <= P < 2^64 ({why})")
         self.P = P
         self.name = f"gf:{P}"
         self.zero, self.one = flint.nmod(0, P), flint.nmod(1, P)
         # A nonzero residual mod P refutes a claim at a point; zero residuals
         # mod P do not prove the rational claim (P may divide the residual).
         self.evidence = f"modular: exact in F_{P} (zero mod P is evidence, not proof)"
+
+    def owns(self, e) -> bool:
+        """Whether ``e`` is a residue mod this P."""
+        return e.modulus() == self.P
 
     def root_of_unity(self, m: int):
         """ζ_m in F_P under the fixed embedding; InputError unless P ≡ 1 (mod m)."""
@@ -352,5 +377,5 @@ class GFArith(Arith):
         return [[X[i, j] for j in range(X.ncols())] for i in range(X.nrows())]
 
 
-register_arith("cyclo", CycloArith)
+register_arith("cyclo", CycloArith, letter="N")
 register_arith("gf", GFArith)

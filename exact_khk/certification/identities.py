@@ -1,6 +1,6 @@
 """Complete Liouville integrability of the Kahan maps, checked in any exact arithmetic.
 
-For a system with n ≥ 2 the checked claims are (MATH.md):
+For a system with n ≥ 2 the checked claims are (docs/conventions.md, "The integrals H̃ and K̃"):
 
 * ``conservation``  K̃_j(Φ(x), ε) = K̃_j(x, ε) for the n integrals and every map
   Φ ∈ {Φ_f} ∪ {Φ_{g_s} : s a sign pattern ≠ ±I};

@@ -1,7 +1,7 @@
 """Certification of the paper's theorems on orbits, as records (never printed here).
 
 :func:`certify` iterates Φ_f and every associated Φ_g[s] from a point and checks,
-in one arithmetic, at every orbit point (MATH.md for the formulas):
+in one arithmetic, at every orbit point (docs/conventions.md for the formulas):
 
 * **integrals** — H̃ and each K̃[s] by the closed form (tH 4) equal their
   definition h(x, Φ(x)); each is conserved by Φ_f and by every Φ_g[s];
@@ -123,10 +123,135 @@ def expressible_rank(n: int, signs) -> int:
 
 
 def non_admissible_hessian(system):
-    """Hs with its (0, 0) entry raised by 1: the block X(a) is no longer cyclic Hankel."""
+    """Hs with its (0, 0) entry raised by 1: the block X(a) is no longer cyclic Hankel.
+
+    For n = 2 the entries (0, 2) and (2, 0) are raised instead (the block X(b)):
+    a 2×2 block with a raised diagonal entry keeps H~ conserved for about 4 % of
+    small random systems and points, the raised off-diagonal block for under 0.2 %.
+    """
     M = [list(r) for r in system.hessian]
-    M[0][0] += 1
+    if system.n == 2:
+        M[0][2] += 1
+        M[2][0] += 1
+    else:
+        M[0][0] += 1
     return M
+
+
+class _ControlDegeneracy:
+    """Where a negative control of :func:`_run_checks` cannot fail, decided exactly
+    (in Fractions, independently of the checks' arithmetic); each method returns
+    the reason, or None.  A control that did not fail at a point of these sets is
+    recorded as inapplicable (``run_check(..., degenerate=...)``), never as a
+    failure.  The sets (x0 = (u, v); frequencies: DFT index j, ω = e^{2πi/n}):
+
+    * J(x0) singular, i.e. X(u0) singular: some û_j = Σ u_i ω^{ij} vanishes
+      (u = 0, u with equal coordinates, Σu = 0, Σ(−1)^i u_i = 0 for even n, …);
+      an invariant set of every Kahan map of the family, on which h(x, x̃) is
+      undefined (all controls);
+    * equilibria: Hs x0 = 0 (then f, every g and the control field vanish at x0
+      when J(x0) is regular; every map fixes x0), or M' x0 = 0 for the
+      non-admissible Hessian M' (all controls, respectively the third);
+    * n = 2, controls 1 and 2: for n = 2 the frequencies j = 0, 1 decouple, the
+      control field equals f on j = 1 and 3f on j = 0, so the control map is
+      (Φ_{f_0}(3ε), Φ_{f_1}(ε)) with f_0 the planar field
+      U' = U(βU + γV), V' = −U(αU + βV) of (U, V) = (Σu, Σv), (α, β, γ) =
+      (Σa, Σb, Σc).  Kahan maps of f_0 with different steps commute (and conserve
+      each other's H~) when β² = αγ (f_0 = U·K w with K nilpotent) or when
+      (U, V) lies on an eigenline of K, i.e. αU² + 2βUV + γV² = 0 (an invariant
+      line, on which the maps are commuting Möbius maps);
+    * poles: H~ (or H~ of M') undefined at x0, at the perturbed point or at x_K
+      (controls 2 to 4: the control has nothing to compare);
+    * the fourth control: H~ constant along the line through x0 in the
+      perturbed coordinate (checked at three further points of the line).
+    """
+
+    def __init__(self, system, x0, eps):
+        self.system, self.x0, self.eps = system, tuple(Fraction(t) for t in x0), Fraction(eps)
+        self._ar = get_arith("fraction")
+        self._cache = {}
+
+    def _memo(self, key, fn):
+        if key not in self._cache:
+            self._cache[key] = fn()
+        return self._cache[key]
+
+    def common(self):
+        """Reasons shared by every control: J(x0) singular, x0 an equilibrium."""
+        def reason():
+            from exact_khk.systems.lie_poisson.system import hankel_singular
+
+            n, x = self.system.n, self.x0
+            if hankel_singular(x[:n]):
+                return ("J(x0) is singular (X(u0) is: u0 lies on the invariant set where a DFT value "
+                        "sum_i u_i w^(ij) vanishes, e.g. u = 0, equal coordinates, sum u = 0)")
+            if not any(matvec(self.system.hessian, list(x))):
+                return "x0 is an equilibrium (Hs x0 = 0): every map of the family fixes it"
+            return None
+        return self._memo("common", reason)
+
+    def _planar(self):
+        """n = 2: the degenerate frequency-0 subsystem (see the class docstring)."""
+        s = self.system
+        if s.n != 2:
+            return None
+        al, be, ga = sum(s.a), sum(s.b), sum(s.c)
+        U, V = sum(self.x0[:2]), sum(self.x0[2:])
+        if be * be == al * ga:
+            return (f"n = 2: the control map is Phi_f with step 3 eps on the frequency-0 plane, where the "
+                    f"planar field is degenerate (sum b^2 = sum a * sum c = {al * ga}): its Kahan maps commute")
+        if al * U * U + 2 * be * U * V + ga * V * V == 0:
+            return ("n = 2: (sum u, sum v) lies on an invariant line of the frequency-0 planar field "
+                    "(sum a U^2 + 2 sum b UV + sum c V^2 = 0), where Kahan maps with different steps commute")
+        return None
+
+    def _pole(self, field, x):
+        try:
+            Htilde(field, list(x), self.eps, self._ar)
+        except PoleError:
+            return True
+        return False
+
+    def commutation(self):
+        return self.common() or self._planar()
+
+    def control_conserves(self):
+        why = self.common() or self._planar()
+        if not why and self._pole(self.system.field("f"), self.x0):
+            why = "H~ has a pole at x0"
+        return why
+
+    def non_admissible(self):
+        why = self.common()
+        if why and why.startswith("J("):
+            return why
+        bad = non_admissible_hessian(self.system)
+        if not any(matvec(bad, list(self.x0))):
+            return "x0 is an equilibrium of the non-admissible field (Hs' x0 = 0)"
+        field = self.system.field_from_hessian(bad, "non-admissible")
+        if self._pole(field, self.x0):
+            return "H~ of the non-admissible Hessian has a pole at x0"
+        return None
+
+    def perturbed(self, x_last, ar):
+        """The fourth control; ``x_last`` is the orbit's last point (in ``ar``)."""
+        why = self.common()
+        if why:
+            return why
+        f = self.system.field("f")
+        if self._pole(f, self.x0):
+            return "H~ has a pole at x0 (and at the perturbed point: J does not depend on v)"
+        try:
+            if self._pole(f, [ar.to_fraction(t) for t in x_last] if ar.rational else x_last):
+                return "H~ has a pole at the last orbit point"
+        except (TypeError, ValueError, ArithmeticError):
+            pass
+        x, h0 = list(self.x0), Htilde(f, list(self.x0), self.eps, self._ar)
+        for t in (1, 2, 3):
+            y = x[:-1] + [x[-1] + t]
+            if self._pole(f, y) or Htilde(f, y, self.eps, self._ar) != h0:
+                return None
+        return "H~ does not depend on the perturbed (last) coordinate near x0"
 
 
 class _Orbit:
@@ -191,7 +316,8 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     if prove and n != 2:
         raise InputError(f"prove: symbolic proofs are available for n = 2 only (got n = {n})")
     with ar.local():  # e.g. the working precision of a ball arithmetic
-        checks, heights = _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress)
+        checks, heights, (orbit, values, path) = _run_checks(system, x0, eps, steps, ar, signs,
+                                                             poisson_points, progress)
     if identities is not None:
         from exact_khk.certification.identities import liouville_identities
 
@@ -206,11 +332,15 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
             progress("symbolic proofs")
         checks += prove_all(system)
     return Certificate(system, tuple(x0), eps, steps, ar.name, tuple(signs), tuple(checks),
-                       library_versions(), time.perf_counter() - t_start, heights)
+                       library_versions(), time.perf_counter() - t_start, heights,
+                       orbit=orbit, values=values, path=path)
 
 
 def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
-    """The checks of :func:`certify` (arguments already validated) and the orbit height."""
+    """The checks of :func:`certify` (arguments already validated), the orbit height, and
+    the record (orbit, values, path): the Phi_f orbit as strings, the integrals' values
+    along it (memoised by the checks; None for an integral with a pole on the orbit)
+    and how its steps were solved."""
     n = system.n
     fields = {"f": system.field("f")} | {s: system.field("g", s, cyclotomic=True) for s in signs}
     orbits = {key: _Orbit(fld, eps, ar, x0, steps) for key, fld in fields.items()}
@@ -220,10 +350,10 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     npts = steps + 1
     checks = []
 
-    def add(name, claim, fn, expected=True):
+    def add(name, claim, fn, expected=True, degenerate=None):
         if progress is not None:
             progress(name)
-        checks.append(run_check(name, claim, ar, fn, expected))
+        checks.append(run_check(name, claim, ar, fn, expected, degenerate=degenerate))
 
     def add_eq(name, claim, ks, sides, expected=True):  # sides(k) -> (lhs, rhs) at point k
         add(name, claim, lambda: compare(ar, ((k, lambda k=k: sides(k)) for k in ks)), expected)
@@ -299,50 +429,84 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
             else f"over Q only {n_rational} of the n = {n} integrals are expressible (the others need Q(omega))")
 
     def rank_fn(rows_at, expected):
+        # Functional independence is a generic statement: full rank at one point proves it,
+        # and the rank drops on critical sets of the integrals (an equilibrium: all gradients
+        # vanish).  So: True with full rank somewhere, None (undecided) if nowhere, False only
+        # for a rank above the dimension of the span (impossible if grad K~ = B grad H~).
         def fn():
-            ranks = [rank(ar, rows_at(k)) if getattr(ar, "decides", ar.exact) else None for k in range(npts)]
-            if None in ranks:
+            if not getattr(ar, "decides", ar.exact):
                 return None, "n/a", "rank not decidable in this arithmetic"
-            bad = [k for k, r in enumerate(ranks) if r != expected]
-            if bad:
-                return False, f"rank {ranks[bad[0]]}", f"rank {ranks[bad[0]]} != {expected} at step {bad[0]}"
-            return True, f"rank {expected}", f"rank {expected} at all {npts} points"
+            ranks, poles = {}, []
+            for k in range(npts):
+                try:
+                    r = rank(ar, rows_at(k))
+                except PoleError:
+                    poles.append(k)
+                    continue
+                if r is None:
+                    return None, "n/a", f"rank not decidable at step {k}"
+                ranks[k] = r
+            high = [k for k, r in ranks.items() if r > expected]
+            if high:
+                return False, f"rank {ranks[high[0]]}", f"rank {ranks[high[0]]} > {expected} at step {high[0]}"
+            full = [k for k, r in ranks.items() if r == expected]
+            low = [k for k, r in ranks.items() if r < expected]
+            notes = (f"; rank below {expected} at k = {low[:8]} (critical points of the integrals)" if low else "") \
+                + (f"; gradients undefined (pole) at k = {poles[:8]}" if poles else "")
+            if not full:
+                return None, f"rank {max(ranks.values(), default=0)}", \
+                    f"rank {expected} at no orbit point (a degenerate orbit, e.g. an equilibrium){notes}"
+            return True, f"rank {expected}", f"rank {expected} at {len(full)} of {npts} points{notes}"
         return fn
 
     add(f"rank of integral gradients ({', '.join(integral.values())})",
         f"the gradients of the {len(integral)} integrals expressible here have rank {r_expr} "
-        f"(the dimension of their span) at every Phi_f orbit point; {over}",
+        f"(the dimension of their span: functional independence, proved by one orbit point of full rank; "
+        f"the rank may drop at critical points) on the Phi_f orbit; {over}",
         rank_fn(lambda k: [grad(key, k) for key in orbits], r_expr))
     add("rank of integral gradients A^i grad H~ (i < n)",
         f"the gradients A^i grad H~ (i = 0..{n - 1}) of the n integrals H~_i have full rank n = {n} "
-        f"at every Phi_f orbit point",
+        f"(functional independence, proved by one orbit point of full rank) on the Phi_f orbit",
         rank_fn(lambda k: [[grad("f", k)[s] for s in shift_index(n, i)] for i in range(n)], n))
-    # 7. negative controls
+    # 7. negative controls (each with the degenerate sets where it cannot fail:
+    # there it is recorded as inapplicable, see _ControlDegeneracy)
     ctrl = system.field("control")
     phi_c = KahanMap(ctrl, eps, ar)
+    degen = _ControlDegeneracy(system, x0, eps)
     add("control: commutation with non-associated field",
         f"[control, must fail] Phi_f commutes with the Kahan map of the control field "
         f"({'A Hs' if n >= 3 else '(2I + A) Hs'}) at the points of the Phi_f orbit",
-        lambda: compare(ar, commute_points_items(F.phi, phi_c, F.pts)), expected=False)
+        lambda: compare(ar, commute_points_items(F.phi, phi_c, F.pts)), expected=False,
+        degenerate=degen.commutation)
     add("control: integral H~ conserved by Phi_control",
         "[control, must fail] H~ is conserved along the orbit of the control map",
         lambda: compare(ar, conserved_items(lambda x: Htilde(fields["f"], x, eps, ar),
-                                            lazy_orbit(phi_c, x0, steps))), expected=False)
+                                            lazy_orbit(phi_c, x0, steps))), expected=False,
+        degenerate=degen.control_conserves)
     bad_field = system.field_from_hessian(non_admissible_hessian(system), "non-admissible")
     add("control: integral H~ conserved for a non-admissible Hessian",
-        "[control, must fail] with Hs[0][0] raised by 1 (block X(a) not cyclic Hankel), the closed "
+        "[control, must fail] with " + ("Hs[0][0]" if n >= 3 else "Hs[0][2] = Hs[2][0]") + " raised by 1 "
+        "(block X(" + ("a" if n >= 3 else "b") + ") not cyclic Hankel), the closed "
         "form H~ is conserved by the Kahan map of J(x) Hs' x",
         lambda: compare(ar, conserved_items(lambda x: Htilde(bad_field, x, eps, ar),
                                             lazy_orbit(KahanMap(bad_field, eps, ar), x0, steps))),
-        expected=False)
+        expected=False, degenerate=degen.non_admissible)
     rel = ar.convert(PERTURBATION if ar.exact else Fraction(2, 2 ** ar.prec))
     how = "2^-60 relative" if ar.exact else "one ulp"
     add("control: integral H~ at a perturbed point",
         f"[control, must fail] H~ at x0 with its last coordinate perturbed by {how} equals "
         f"H~(x_{steps}) on the orbit",
         lambda: compare(ar, [(0, lambda: (Htilde(fields["f"], _perturb(ar, F.pts[0], rel), eps, ar),
-                                          value("f", F, steps)))]), expected=False)
-    return checks, orbit_height(ar, [p for orb in orbits.values() for p in orb.pts])
+                                          value("f", F, steps)))]), expected=False,
+        degenerate=lambda: degen.perturbed(F.pts[steps], ar))
+    values = {}
+    for key in orbits:
+        try:
+            values[integral[key]] = [ar.format(value(key, F, k)) for k in range(npts)]
+        except PoleError:
+            values[integral[key]] = None
+    record = (tuple(tuple(ar.format(t) for t in p) for p in F.pts), values, F.phi.path)
+    return checks, orbit_height(ar, [p for orb in orbits.values() for p in orb.pts]), record
 
 
 def orbit_height(ar, pts):

@@ -24,6 +24,8 @@ import sys
 from dataclasses import asdict, dataclass, field
 from fractions import Fraction
 
+from exact_khk.errors import InputError
+
 #: version of the certificate JSON (``Certificate.to_json``)
 SCHEMA_VERSION = 2
 
@@ -171,6 +173,74 @@ class Certificate:
         lines.append(f"evidence, unless stated: {common}")
         return "\n".join(lines)
 
+    @classmethod
+    def from_json(cls, d: dict) -> "Certificate":
+        """The certificate of :meth:`to_json` (schema version 2), rebuilt: the system by
+        ``LiePoissonSystem.from_json`` (a ``"family"`` key) or ``ExpressionSystem.from_json``,
+        the checks by :meth:`Check.from_json`.  The derived keys (``status``, ``valid``,
+        ``verdict``) are not read: they follow from the checks (re-checking them is the
+        business of :func:`exact_khk.certification.verify.verify`).  Malformed input
+        raises :class:`~exact_khk.errors.InputError` naming the key.
+
+        >>> from exact_khk.certification.lie_poisson import certify
+        >>> cert = certify(steps=2, signs=["-++"])
+        >>> again = Certificate.from_json(cert.to_json())
+        >>> again.to_json() == cert.to_json()
+        True
+        >>> Certificate.from_json({"schema_version": 2, "system": {"family": "lie-poisson"}})
+        Traceback (most recent call last):
+        ...
+        exact_khk.errors.InputError: system: a Lie–Poisson system needs the vectors 'a', 'b', 'c'
+        """
+        from exact_khk.parsing import parse_rational, parse_signs, parse_vector
+
+        d = _json_object(d, "certificate")
+        version = _json_key(d, "schema_version", int)
+        if version != SCHEMA_VERSION:
+            raise InputError(f"schema_version: this reader knows version {SCHEMA_VERSION}, got {version!r}")
+        system = system_from_json(_json_key(d, "system", dict))
+        x0 = parse_vector(_json_key(d, "x0", list), "x0", system.dim)
+        eps = parse_rational(_json_key(d, "eps", str), "eps")
+        steps = _json_key(d, "steps", int)
+        if steps < 1:
+            raise InputError(f"steps: expected a positive integer, got {steps}")
+        signs = _json_key(d, "signs", list)
+        for i, s in enumerate(signs):
+            if not isinstance(s, str):
+                raise InputError(f"signs[{i}]: expected a string such as '-++', got {_kind(s)}")
+            if getattr(system, "kind", "") == "lie-poisson":
+                parse_signs(s, system.n)
+        if signs and getattr(system, "kind", "") != "lie-poisson":
+            raise InputError("signs: only a Lie–Poisson certificate has involutions")
+        checks = tuple(_check_from_json(c, f"checks[{i}]")
+                       for i, c in enumerate(_json_key(d, "checks", list)))
+        versions = _json_key(d, "versions", dict, {})
+        for k, v in versions.items():
+            if v is not None and not isinstance(v, str):
+                raise InputError(f"versions.{k}: expected a string or null, got {_kind(v)}")
+        height = _json_key(d, "height_bits", int, None, nullable=True)
+        orbit = []
+        for k, p in enumerate(_json_key(d, "orbit", list, [])):
+            if not isinstance(p, list) or len(p) != system.dim:
+                raise InputError(f"orbit[{k}]: expected a list of {system.dim} coordinates (strings)")
+            for i, t in enumerate(p):
+                if not isinstance(t, str):
+                    raise InputError(f"orbit[{k}][{i}]: expected a string, got {_kind(t)}")
+            orbit.append(tuple(p))
+        values = _json_key(d, "values", dict, {})
+        for name, vs in values.items():
+            if vs is None:
+                continue
+            if not isinstance(vs, list):
+                raise InputError(f"values.{name}: expected a list of strings or null, got {_kind(vs)}")
+            for k, t in enumerate(vs):
+                if not isinstance(t, str):
+                    raise InputError(f"values.{name}[{k}]: expected a string, got {_kind(t)}")
+        return cls(system, x0, eps, steps, _json_key(d, "arith", str), tuple(signs), checks,
+                   dict(versions), float(_json_key(d, "seconds", (int, float), 0.0)), height,
+                   tuple(orbit), {k: (None if v is None else list(v)) for k, v in values.items()},
+                   _json_key(d, "path", str, ""))
+
     def to_json(self) -> dict:
         return {"schema_version": SCHEMA_VERSION, "system": self.system.to_json(),
                 "x0": [str(t) for t in self.x0], "eps": str(self.eps), "steps": self.steps,
@@ -179,6 +249,89 @@ class Certificate:
                 "seconds": self.seconds, "height_bits": self.height_bits, "versions": self.versions,
                 "orbit": [list(p) for p in self.orbit], "values": self.values,
                 "checks": [c.to_json() for c in self.checks]}
+
+
+def system_from_json(d: dict):
+    """The system of a certificate's ``"system"`` JSON: a Lie–Poisson system when the
+    dict has a ``"family"`` key (which must be ``"lie-poisson"``), else an
+    :class:`~exact_khk.systems.expressions.ExpressionSystem`; InputError if malformed."""
+    from exact_khk.systems.expressions import ExpressionSystem
+    from exact_khk.systems.lie_poisson.system import LiePoissonSystem
+
+    d = _json_object(d, "system")
+    if "family" not in d:
+        return ExpressionSystem.from_json(d)
+    if d["family"] != "lie-poisson":
+        raise InputError(f"system.family: unknown family {d['family']!r}; known: 'lie-poisson'")
+    unknown = sorted(set(d) - {"family", "n", "a", "b", "c"})
+    if unknown:
+        raise InputError(f"system: unknown key(s) {', '.join(map(repr, unknown))} for the Lie–Poisson family")
+    for key in ("a", "b", "c"):
+        if key in d and not isinstance(d[key], list):
+            raise InputError(f"system.{key}: expected a list of rationals (strings), got {_kind(d[key])}")
+    system = LiePoissonSystem.from_json(d)
+    if "n" in d and (type(d["n"]) is not int or d["n"] != system.n):
+        raise InputError(f"system.n: {d['n']!r} does not match the length {system.n} of the vectors a, b, c")
+    return system
+
+
+#: the fields of a check in its JSON: (type(s), required)
+_CHECK_FIELDS = {"name": (str, True), "claim": (str, True), "expected": (bool, True),
+                 "holds": ((bool, type(None)), True), "residual": (str, True), "arith": (str, True),
+                 "seconds": ((int, float), True), "evidence": (str, False), "detail": (str, False),
+                 "applicable": (bool, False)}
+
+
+def _check_from_json(d, where: str) -> Check:
+    d = _json_object(d, where)
+    for key, (types, required) in _CHECK_FIELDS.items():
+        if key not in d:
+            if required:
+                raise InputError(f"{where}: missing key {key!r}")
+            continue
+        v = d[key]
+        if not isinstance(v, types) or (isinstance(v, bool) and bool not in _as_tuple(types)):
+            raise InputError(f"{where}.{key}: expected {_type_names(types)}, got {_kind(v)}")
+    return Check.from_json(d)
+
+
+def _json_object(d, where: str) -> dict:
+    if not isinstance(d, dict):
+        raise InputError(f"{where}: expected a JSON object, got {_kind(d)}")
+    return d
+
+
+def _json_key(d: dict, key: str, types, default=..., nullable=False):
+    """``d[key]`` checked to be of ``types`` (bool is not an int here); ``default`` if
+    absent and a default is given, else InputError naming the key."""
+    if key not in d:
+        if default is ...:
+            raise InputError(f"{key}: missing key {key!r}")
+        return default
+    v = d[key]
+    if v is None and nullable:
+        return None
+    if not isinstance(v, types) or (isinstance(v, bool) and bool not in _as_tuple(types)):
+        raise InputError(f"{key}: expected {_type_names(types)}{' or null' if nullable else ''}, got {_kind(v)}")
+    return v
+
+
+def _as_tuple(types) -> tuple:
+    return types if isinstance(types, tuple) else (types,)
+
+
+def _type_names(types) -> str:
+    names = {str: "a string", int: "an integer", float: "a number", bool: "true or false",
+             dict: "an object", list: "a list", type(None): "null"}
+    return " or ".join(dict.fromkeys(names.get(t, t.__name__) for t in _as_tuple(types)))
+
+
+def _kind(v) -> str:
+    """A value for a message: its JSON type, and the value itself when short."""
+    kind = {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "a list",
+            dict: "an object", type(None): "null"}.get(type(v), type(v).__name__)
+    text = repr(v) if isinstance(v, (bool, float, type(None))) or (isinstance(v, str) and len(v) <= 40) else ""
+    return f"{kind} {text}".strip() if text and kind != "null" else kind
 
 
 def _short(system) -> str:

@@ -11,7 +11,8 @@ from __future__ import annotations
 from exact_khk.arith import get_arith
 from exact_khk.certification.generic import CLAIMS, certify_system
 from exact_khk.certification.lie_poisson import certify, default_signs
-from exact_khk.cli.options import add_system_options, check_output, system_from_args, write_json
+from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
+                                   write_json)
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
@@ -24,8 +25,20 @@ from exact_khk.parsing import format_signs, parse_signs
 EXIT_STATUS = {"VALID": 0, "INVALID": 1, "INCONCLUSIVE": 4}
 
 
+#: the most involutions certified by default (2^(number of divisors of n) − 2
+#: rational ones, 2^n − 2 with omega): beyond, --signs must name them
+MAX_DEFAULT_SIGNS = 4096
+
+
 def _signs(args, n, ar):
     if not args.signs:
+        from exact_khk.certification.lie_poisson import expresses_omega
+        from exact_khk.systems.lie_poisson.system import divisor_classes
+
+        count = 2 ** (n if n >= 3 and expresses_omega(ar, n) else len(divisor_classes(n))) - 2
+        if count > MAX_DEFAULT_SIGNS:
+            raise InputError(f"--signs: n = {n} has {count:,} involutions to certify by default, beyond the "
+                             f"limit of {MAX_DEFAULT_SIGNS} (MAX_DEFAULT_SIGNS); name some with --signs")
         return default_signs(n, ar)
     return [format_signs(parse_signs(s, n)) for s in args.signs]
 
@@ -37,7 +50,7 @@ def register(sub):
                        "options: the built-in n = 3 system, x0 and eps = 1/10, 20 steps), or with --system what "
                        "a catalogue system or a system file declares. Exit status 0 VALID, 1 INVALID (a claim "
                        "is false), 4 INCONCLUSIVE.")
-    add_system_options(p, steps_default=20)
+    add_system_options(p, steps_default=None)
     p.add_argument("--signs", action="append", metavar="SIGNS",
                    help="involution of an associated field, e.g. '-++' (repeatable; default: every "
                    "involution other than ±I that the arithmetic can express: the rational ones, "
@@ -69,6 +82,8 @@ def register(sub):
 def cmd_certify(args):
     check_output(args.json)
     system, x0, eps = system_from_args(args)
+    if args.steps is None:
+        args.steps = system.default_steps
     if args.steps < 1:
         raise InputError(f"--steps: certify needs at least 1 step, got {args.steps}")
     if system.kind != "lie-poisson":
@@ -78,8 +93,16 @@ def cmd_certify(args):
     if args.poisson_points is not None and args.poisson_points < 1:
         raise InputError(f"--poisson-points: expected a positive integer, got {args.poisson_points}")
     ar = get_arith(args.arith)
-    cert = certify(system, x0, eps, args.steps, ar, _signs(args, system.n, ar),
-                   poisson_points=args.poisson_points, identities=args.identities, prove=args.prove)
+    phi = KahanMap(system.field("f"), eps, ar)
+    # the certificate solves dense 2n x 2n systems and takes exact gradients of Pi by dual
+    # numbers ((2n)^3 numbers): checked first, before the involutions are even listed
+    check_resources("certify", system, phi, x0, 0, dense=True, cube_numbers=2)
+    signs = _signs(args, system.n, ar)
+    # it keeps every orbit (Phi_f and each Phi_g) with Pi and the gradients at each point
+    check_resources("certify", system, phi, x0, args.steps, orbits=1 + len(signs), per_point=1 + system.dim)
+    with Progress(args, None, "certify", unit="check") as progress:
+        cert = certify(system, x0, eps, args.steps, ar, signs, poisson_points=args.poisson_points,
+                       progress=progress, identities=args.identities, prove=args.prove)
     if args.json != "-":
         print(system.describe())
         print(f"x0 = ({', '.join(str(t) for t in x0)}), eps = {eps}, {args.steps} steps, "
@@ -98,7 +121,10 @@ def _certify_system(args, system, x0, eps):
         if given:
             raise InputError(f"{opt} applies only to the Lie–Poisson family, not to --system")
     claims = None if args.claims is None else [c.strip() for c in args.claims.split(",") if c.strip()]
-    cert = certify_system(system, x0, eps, args.steps, get_arith(args.arith), claims=claims)
+    ar = get_arith(args.arith)
+    check_resources("certify", system, KahanMap(system.field("f"), eps, ar), x0, args.steps, dense=True,
+                    orbits=len(system.field_names()), per_point=1 + system.dim, cube_numbers=2)
+    cert = certify_system(system, x0, eps, args.steps, ar, claims=claims)
     if args.json != "-":
         print(cert.summary().rsplit("\n", 1)[0])
         print(cert.table())
@@ -113,8 +139,14 @@ def cmd_integrals(args):
     ar = get_arith(args.arith)
     if system.kind != "lie-poisson":
         return _system_integrals(args, system, x0, eps, ar)
-    x = KahanMap(system.field("f"), eps, ar).orbit(x0, args.steps)[-1]
+    phi = KahanMap(system.field("f"), eps, ar)
+    # H~ takes the structured solve for exact flint arithmetic and n >= 3, else the dense one
+    structured_htilde = ar.rational and ar.integers is not None and ar.integers.name == "flint" and system.n >= 3
+    check_resources("integrals", system, phi, x0, args.steps,
+                    dense=not structured_htilde or (phi.structure is None and not phi.split))
     signs = _signs(args, system.n, ar)
+    with Progress(args, args.steps, "orbit") as progress:
+        x = phi.orbit(x0, args.steps, progress=progress)[-1]
     H = ar.format(Htilde(system.field("f"), x, eps, ar))
     K = {s: ar.format(Htilde(system.field("g", s, cyclotomic=True), x, eps, ar)) for s in signs}
     if args.json:
@@ -135,7 +167,9 @@ def _system_integrals(args, system, x0, eps, ar):
     """``integrals --system``: the declared integrals at x0 or after --steps steps."""
     if args.signs:
         raise InputError("--signs applies only to the Lie–Poisson family, not to --system")
-    x = KahanMap(system.field("f"), eps, ar).orbit(x0, args.steps)[-1]
+    phi = KahanMap(system.field("f"), eps, ar)
+    check_resources("integrals", system, phi, x0, args.steps, dense=True)
+    x = phi.orbit(x0, args.steps)[-1]
     e = ar.convert(eps)
     values = {name: ar.format(fn(ar, x, e)) for name, fn in system.integrals().items()}
     if args.json:

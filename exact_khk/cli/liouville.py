@@ -10,10 +10,11 @@ every record is as expected (claims hold, controls fail), 1 otherwise.
 from __future__ import annotations
 
 from exact_khk.arith import get_arith
-from exact_khk.cli.options import add_system_options, system_from_args, write_json
+from exact_khk.cli.options import add_system_options, check_output, check_resources, system_from_args, write_json
 from exact_khk.certification.records import library_versions
 from exact_khk.arith.cyclotomic import GFArith
 from exact_khk.errors import InputError, NotRationalError
+from exact_khk.parsing import format_signs, parse_signs
 from exact_khk.certification.identities import (integral_patterns, involution_patterns, liouville_at_points,
                          liouville_identities)
 
@@ -43,12 +44,24 @@ def register(sub):
     q.set_defaults(func=cmd_prove)
 
 
+#: the most involutions ``--involutions all`` may check (2^n − 2 of them: n ≤ 12)
+MAX_PATTERNS = 4096
+#: the most random points ``--trials`` may draw for gf:P
+MAX_TRIALS = 1000
+
+
 def _patterns(n, spec):
     if spec == "all":
+        if 2 ** n - 2 > MAX_PATTERNS:
+            raise InputError(f"--involutions all: n = {n} has 2^{n} - 2 involutions, beyond the limit of "
+                             f"{MAX_PATTERNS} (MAX_PATTERNS); use --involutions basis or a comma list")
         return involution_patterns(n)
     if spec == "basis":
         return [s for s in integral_patterns(n) if s != "+" * n]
-    return [s.strip() for s in spec.split(",")]
+    out = [format_signs(parse_signs(s.strip(), n)) for s in spec.split(",")]
+    if any(s in ("+" * n, "-" * n) for s in out):
+        raise InputError("--involutions: +I and -I are not involutions of interest; leave them out")
+    return out
 
 
 def _report(args, system, recs, extra):
@@ -66,9 +79,17 @@ def _report(args, system, recs, extra):
 
 
 def cmd_liouville(args):
+    check_output(args.json)
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
+    if not 1 <= args.trials <= MAX_TRIALS:
+        raise InputError(f"--trials: expected an integer from 1 to {MAX_TRIALS} (MAX_TRIALS; the failure bound "
+                         f"shrinks geometrically, a handful is enough), got {args.trials}")
     pats = _patterns(system.n, args.involutions)
+    from exact_khk.kahan.map import KahanMap
+
+    check_resources("liouville", system, KahanMap(system.field("f"), eps, ar), x0, args.steps, dense=True,
+                    orbits=1 + len(pats), per_point=1 + system.dim, cube_numbers=2)
     if isinstance(ar, GFArith):
         recs = liouville_identities(system, ar, trials=args.trials, seed=args.draw_seed,
                                     patterns=pats, pairs=args.pairs)
@@ -89,5 +110,6 @@ def cmd_liouville(args):
 def cmd_prove(args):
     from exact_khk.certification.proofs import prove_all
 
+    check_output(args.json)
     system, _, _ = system_from_args(args)
     return _report(args, system, prove_all(system), {})

@@ -1,8 +1,12 @@
 """Command-line interface: ``exact-khk <command> [options]``.
 
 Exit status: 0 success; 1 a certification failed (``certify``); 2 malformed
-input (one-line message); 3 a singular Kahan step (one-line message naming the
-step, x and eps) or an integral evaluated at its pole.
+input or a request beyond a documented limit (one-line message naming the
+argument and the limit); 3 a singular Kahan step (one-line message naming the
+step, x and eps), an integral evaluated at its pole, or a floating evaluation
+with no trustworthy bit (overflow, condition estimate κ·2^-p ≥ 1); 4
+inconclusive; 5 an output that cannot be written or a resource exhausted;
+70 an internal error (a bug: please report); 130 interrupted (Ctrl-C).
 
 Each command lives in a module with ``register(subparsers)``; the module list
 is :data:`COMMAND_MODULES`.
@@ -13,12 +17,15 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from exact_khk import __version__
 from exact_khk.cli.options import Parser
-from exact_khk.errors import InputError, OutputError, PoleError, SingularStepError, UndecidedError
+from exact_khk.errors import (InputError, NumericalError, OutputError, PoleError, SingularStepError,
+                              UndecidedError)
 
-COMMAND_MODULES = ["exact_khk.cli.orbit", "exact_khk.cli.certify", "exact_khk.cli.systems", "exact_khk.cli.study",
+COMMAND_MODULES = ["exact_khk.cli.orbit", "exact_khk.cli.certify", "exact_khk.cli.verify", "exact_khk.cli.systems",
+                   "exact_khk.cli.diagnostics", "exact_khk.cli.sweep", "exact_khk.cli.study",
                    "exact_khk.cli.liouville"]
 
 
@@ -67,12 +74,34 @@ EXIT = {"ok": 0, "invalid": 1, "input": 2, "singular": 3, "inconclusive": 4, "ou
 
 def main(argv=None) -> int:
     """Run one command; every failure becomes one line on stderr and an exit status
-    (:data:`EXIT`), never a traceback."""
+    (:data:`EXIT`), never a traceback.  Warnings (e.g. ``NearSingularWarning``)
+    are gathered and, if the command succeeds, summarised in one line on stderr
+    (the first, and how many more)."""
     if hasattr(sys, "set_int_max_str_digits"):
         sys.set_int_max_str_digits(0)  # exact orbits print and parse integers of any size
     for stream in (sys.stdout, sys.stderr):  # an ASCII-only terminal gets escapes, not a crash
         if hasattr(stream, "reconfigure"):
-            stream.reconfigure(errors="backslashreplace")
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # a stream that cannot be reconfigured (closed, detached)
+                pass
+    seen = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        warnings.showwarning = lambda message, category, *rest, **kw: seen.append((category, message))
+        code = _run(argv)
+    if seen and code in (EXIT["ok"], EXIT["invalid"], EXIT["inconclusive"]):
+        category, message = seen[0]
+        more = f" (and {len(seen) - 1} more warning(s))" if len(seen) > 1 else ""
+        text = " ".join(str(message).split())
+        try:
+            print(f"exact-khk: warning: {category.__name__}: {text[:1000]}{more}", file=sys.stderr)
+        except Exception:  # noqa: BLE001 - stderr itself may be gone
+            pass
+    return code
+
+
+def _run(argv) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(_join_values(list(sys.argv[1:] if argv is None else argv), parser))
@@ -82,6 +111,8 @@ def main(argv=None) -> int:
         return args.func(args)
     except InputError as exc:
         return _fail("error", exc, "input")
+    except NumericalError as exc:
+        return _fail("numerically undefined", exc, "singular")
     except (SingularStepError, PoleError) as exc:
         return _fail("singular step" if isinstance(exc, SingularStepError) else "undefined", exc, "singular")
     except UndecidedError as exc:
@@ -96,6 +127,8 @@ def main(argv=None) -> int:
         return _fail("interrupted", "stopped by the user (Ctrl-C)", "interrupted")
     except RecursionError as exc:
         return _fail("resource", exc, "output")
+    except SystemExit as exc:  # argparse --help/--version, or a library calling sys.exit
+        return exc.code if isinstance(exc.code, int) else (EXIT["ok"] if exc.code is None else EXIT["input"])
     except Exception as exc:  # noqa: BLE001 - the one error boundary of the command line
         return _fail("internal error", f"{type(exc).__name__}: {exc} (please report this)", "internal")
 

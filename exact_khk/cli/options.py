@@ -3,15 +3,36 @@
 ``--system NAME|FILE`` selects a catalogue system or a system file; otherwise
 the Lie–Poisson family (``--n``, ``--a/--b/--c``, ``--seed``; default the
 built-in n = 3 system).
+
+Limits, checked before any work (:func:`check_resources`), each refused with
+an :class:`~exact_khk.errors.InputError` that names it and states the estimate:
+
+* ``--steps`` ≤ :data:`MAX_STEPS`;
+* the planned memory ≤ :data:`MAX_MEMORY_BYTES` (4 GiB; the environment
+  variable ``EXACT_KHK_MAX_MEMORY``, e.g. ``16G``, changes it): the dense
+  2n×2n path costs about :data:`DENSE_BYTES_PER_CUBE` · (2n)³ bytes (its
+  integer and coefficient tensors; measured 130 B exact and 230 B float at
+  n = 60), the certificate's exact gradients and Jacobi sums (2n)³ numbers
+  more, and the stored orbit (steps + 1)·2n numbers, whose size grows along
+  exact orbits (measured on two probe steps when 2n ≤ 64, else about 17·n
+  bits per step); the structured path (``--method structured``, or ``auto``
+  for exact flint steps at n ≥ 16) needs O(n) memory per point;
+* precisions, ``cyclo:N`` and ``gf:P`` are bounded in :mod:`exact_khk.arith`.
+
+A run that lasts more than about 2 s shows progress on stderr (a tqdm bar,
+only when stderr is a terminal; ``--quiet`` turns it off).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
+import sys
 
-from exact_khk.arith import arith_names
-from exact_khk.errors import InputError
+from exact_khk.arith import arith_names, point_height
+from exact_khk.errors import InputError, SingularStepError
 from exact_khk.parsing import parse_rational, parse_vector
 from exact_khk.studies.output import check_writable, write_atomic
 from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem,
@@ -19,7 +40,12 @@ from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, 
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse with a one-line error message and exit status 2."""
+    """argparse with a one-line error message and exit status 2; an option defined
+    twice (a command's own ``--quiet`` after the shared one) replaces the first."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("conflict_handler", "resolve")
+        super().__init__(*args, **kwargs)
 
     def error(self, message):
         where = self.prog.removeprefix("exact-khk").strip()
@@ -41,9 +67,28 @@ def add_system_options(p, steps_default=20):
     g.add_argument("--seed", type=int, help="draw a, b, c (and x0 if not given) as small random integers")
     g.add_argument("--x0", help="initial point: comma-separated rationals (2n for the Lie–Poisson family)")
     g.add_argument("--eps", default=None, help=f"step size, a nonzero rational (default {DEFAULT_EPS})")
-    g.add_argument("--steps", type=int, default=steps_default, help=f"number of steps K (default {steps_default})")
-    g.add_argument("--arith", default=None,
-                   help="arithmetic: " + ", ".join(arith_names()) + " (default: fastest exact)")
+    g.add_argument("--steps", type=int, default=steps_default,
+                   help=f"number of steps K (default {steps_default})" if steps_default is not None else
+                   "number of steps K (default 20, or the system file's [defaults] steps)")
+    g.add_argument("--arith", default=None, help=ARITH_HELP)
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress display on stderr (shown only for runs longer than about 2 s, and only "
+                        "when stderr is a terminal)")
+
+
+def _arith_help() -> str:
+    from exact_khk.arith import MAX_PRECISION_BITS
+    from exact_khk.arith.cyclotomic import MAX_CYCLOTOMIC_N, MIN_PRIME
+
+    names = arith_names()
+    return ("arithmetic: " + ", ".join(names) + " (default: fastest exact). flint, gmpy2, fraction: exact "
+            "rationals; float: IEEE float64; mp:P: mpmath at P bits; ball:P: certified arb balls at P bits "
+            f"(2 <= P <= {MAX_PRECISION_BITS}); cyclo:N: exact Q(zeta_N), N <= {MAX_CYCLOTOMIC_N}; gf:P: the "
+            f"prime field F_P, P prime, {MIN_PRIME} <= P < 2^64")
+
+
+#: the ``--arith`` help: every arithmetic, with its bounds
+ARITH_HELP = _arith_help()
 
 
 def system_from_args(args):
@@ -57,8 +102,10 @@ def system_from_args(args):
         raise InputError("give either --a/--b/--c or --seed, not both")
     if args.n is not None and args.n < 2:
         raise InputError(f"--n: the family needs n >= 2, got {args.n}")
+    check_n(args.n)
     if all(given):
         a = parse_vector(args.a, "--a", args.n)
+        check_n(len(a), "--a")
         system = LiePoissonSystem(a, parse_vector(args.b, "--b", len(a)), parse_vector(args.c, "--c", len(a)))
         if args.x0 is None:
             raise InputError("--x0 is required with --a/--b/--c")
@@ -70,17 +117,19 @@ def system_from_args(args):
         if args.n not in (None, 3):
             raise InputError("--n other than 3 needs --a/--b/--c or --seed")
         system = LiePoissonSystem.from_vectors(*DEFAULT_VECTORS)
-    if args.x0 is not None:
-        x0 = parse_vector(args.x0, "--x0", system.dim)
-    elif args.seed is not None:
-        x0 = random_point(system.n, args.seed)
-    else:
-        x0 = parse_vector(list(DEFAULT_X0), "--x0")
     eps = DEFAULT_EPS if args.eps is None else parse_rational(args.eps, "--eps")
     if eps == 0:
         raise InputError("--eps: the step size must be nonzero")
-    if args.steps < 0:
-        raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
+    if args.x0 is not None:
+        x0 = parse_vector(args.x0, "--x0", system.dim)
+    elif args.seed is not None:  # off the degenerate sets (random_point), also those of this system and eps
+        x0 = random_point(system.n, args.seed, system=system, eps=eps)
+    else:
+        x0 = parse_vector(list(DEFAULT_X0), "--x0")
+    if args.steps is not None:
+        if args.steps < 0:
+            raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
+        check_steps(args.steps)
     return system, x0, eps
 
 
@@ -101,6 +150,25 @@ def check_output(target, what="--json"):
 
 
 
+#: the largest system file read (bytes): a system file is a few lines of TOML
+MAX_SYSTEM_FILE_BYTES = 10_000_000
+
+
+def _check_system_file(spec):
+    """A --system path must be a regular file of at most :data:`MAX_SYSTEM_FILE_BYTES`
+    (a device such as /dev/zero would never end, a FIFO would block)."""
+    if not os.path.exists(spec):
+        return  # a catalogue name, or a missing file: resolve() says which
+    if os.path.isdir(spec):
+        raise InputError(f"--system: {spec!r} is a folder, not a system file")
+    if not os.path.isfile(spec):
+        raise InputError(f"--system: {spec!r} is not a regular file (a device or a pipe)")
+    size = os.path.getsize(spec)
+    if size > MAX_SYSTEM_FILE_BYTES:
+        raise InputError(f"--system: {spec!r} has {size:,} bytes, beyond the limit of {MAX_SYSTEM_FILE_BYTES:,} "
+                         f"for a system file (MAX_SYSTEM_FILE_BYTES)")
+
+
 def _named_system(args):
     """(system, x0, eps) for ``--system NAME|FILE``."""
     from exact_khk.systems.catalogue import resolve
@@ -108,6 +176,7 @@ def _named_system(args):
     clash = [o for o, v in (("--n", args.n), ("--a", args.a), ("--b", args.b), ("--c", args.c)) if v is not None]
     if clash:
         raise InputError(f"--system: {clash[0]} describes the Lie–Poisson family; it cannot be combined with --system")
+    _check_system_file(args.system)
     system = resolve(args.system)
     if args.x0 is not None:
         x0 = parse_vector(args.x0, "--x0", system.dim)
@@ -118,6 +187,162 @@ def _named_system(args):
     eps = system.default_eps if args.eps is None else parse_rational(args.eps, "--eps")
     if eps == 0:
         raise InputError("--eps: the step size must be nonzero")
-    if args.steps < 0:
-        raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
+    if args.steps is not None:
+        if args.steps < 0:
+            raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
+        check_steps(args.steps)
     return system, x0, eps
+
+
+# --- limits, estimated before the work ------------------------------------------
+
+#: the largest ``--steps`` (beyond, the orbit alone is more than 10⁷ points)
+MAX_STEPS = 10_000_000
+#: the memory a command may plan to use, in bytes (``EXACT_KHK_MAX_MEMORY`` overrides)
+MAX_MEMORY_BYTES = 4 * 2 ** 30
+#: bytes per (2n)³ of the dense 2n×2n path (its coefficient and integer tensors)
+DENSE_BYTES_PER_CUBE = 250
+#: bits per step by which exact orbit heights grow, per n, when not measured
+#: (measured at n = 16, 32, 64 from small integers: about 13·n, 16·n, 17·n)
+GROWTH_BITS_PER_N = 17
+
+
+def max_memory() -> int:
+    """:data:`MAX_MEMORY_BYTES`, or ``EXACT_KHK_MAX_MEMORY`` (bytes, or with a K/M/G/T suffix)."""
+    text = os.environ.get("EXACT_KHK_MAX_MEMORY", "").strip().upper().removesuffix("B")
+    if not text:
+        return MAX_MEMORY_BYTES
+    scale = {"K": 2 ** 10, "M": 2 ** 20, "G": 2 ** 30, "T": 2 ** 40}.get(text[-1:], 1)
+    try:
+        value = float(text[:-1] if scale != 1 else text) * scale
+    except ValueError:
+        raise InputError(f"EXACT_KHK_MAX_MEMORY: expected a size such as '16G', got "
+                         f"{os.environ['EXACT_KHK_MAX_MEMORY']!r}") from None
+    if not value > 0 or not math.isfinite(value):
+        raise InputError("EXACT_KHK_MAX_MEMORY: expected a positive size")
+    return int(value)
+
+
+#: the largest n of the Lie–Poisson family on the command line: beyond it even the
+#: O(n) set-up (drawing the system and x0, the circulant structure) takes minutes
+#: and one exact structured step hours
+MAX_N = 100_000
+
+
+def check_n(n, option="--n"):
+    if n is not None and n > MAX_N:
+        raise InputError(f"{option}: n = {n} is beyond the limit of {MAX_N:,} (MAX_N; even the O(n) set-up of the "
+                         f"system would take minutes, one exact step hours)")
+
+
+def check_steps(steps):
+    if steps > MAX_STEPS:
+        raise InputError(f"--steps: {steps} is beyond the limit of {MAX_STEPS:,} steps (MAX_STEPS; the orbit "
+                         f"alone would hold more than 10^7 points)")
+
+
+def human_bytes(b) -> str:
+    for unit in ("B", "kB", "MB", "GB", "TB", "PB"):
+        if b < 1000 or unit == "PB":
+            return f"{b:.3g} {unit}"
+        b /= 1000
+    return f"{b:.3g} PB"  # pragma: no cover
+
+
+def _number_bytes(ar, bits) -> float:
+    """About the bytes of one number of ``ar`` whose numerator and denominator have ``bits`` bits."""
+    if not ar.exact:
+        if ar.name == "float":
+            return 32
+        return 120 + (2 if ar.name.startswith("ball") else 1) * ar.prec / 8
+    if ar.name.startswith("gf:"):
+        return 40
+    degree = getattr(getattr(ar, "K", None), "degree", 1)
+    return degree * (100 + bits / 4)
+
+
+def _growth(phi, x0, steps, ar):
+    """(height of x0 in bits, bits per step): measured on two steps when cheap, else a model."""
+    if not ar.rational:
+        return 64, 0
+    h0 = point_height(ar, phi.point(x0, "x0"))
+    n = phi.field.dim // 2
+    if phi.field.dim <= 64 and steps:
+        try:
+            pts = phi.orbit(x0, min(steps, 2))
+        except SingularStepError:
+            return h0, 0
+        hs = [point_height(ar, p) for p in pts]
+        return h0, max(1, max(b - a for a, b in zip(hs, hs[1:])))
+    return h0, GROWTH_BITS_PER_N * n + 2 * h0
+
+
+def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_point=1, cube_numbers=0):
+    """Refuse at once (:class:`InputError`, with the estimate and the limit) a run whose
+    planned memory is beyond :func:`max_memory`: the dense 2n×2n path (``dense``),
+    ``cube_numbers``·(2n)³ further numbers (the certificate's exact gradients and
+    Jacobi sums), and ``orbits`` stored orbits of ``steps`` + 1 points with
+    ``per_point`` numbers each (2n for an orbit)."""
+    check_steps(steps)
+    ar, N, limit = phi.arith, system.dim, max_memory()
+    n = N // 2
+    if dense or cube_numbers:
+        need = (DENSE_BYTES_PER_CUBE if dense else 0) * N ** 3 + cube_numbers * N ** 3 * _number_bytes(ar, 64)
+        if need > limit:
+            hint = (" (the structured path needs O(n) memory: --method structured, or the default flint "
+                    "arithmetic)" if what == "orbit" else "")
+            raise InputError(f"--n: {what} at n = {n} solves dense {N}x{N} systems, which need about "
+                             f"{human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x (2n)^3"
+                             + (f" + {cube_numbers} x (2n)^3 numbers" if cube_numbers else "")
+                             + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY){hint}")
+    h0, g = _growth(phi, x0, steps, ar)
+    mean_bits = h0 + g * steps / 2
+    need = orbits * (steps + 1) * N * per_point * _number_bytes(ar, mean_bits)
+    if need > limit:
+        grow = f", heights growing from {h0} by about {g} bits per step" if g else ""
+        raise InputError(f"--steps: {what} would hold {orbits * (steps + 1) * per_point * N:,} numbers "
+                         f"({orbits} orbit(s) of {steps + 1} points of dimension {N}"
+                         + (f", {per_point} vectors per point" if per_point > 1 else "")
+                         + f"; about {human_bytes(need)} in {ar.name}{grow}), beyond the memory limit of "
+                         f"{human_bytes(limit)} (EXACT_KHK_MAX_MEMORY); choose fewer steps")
+
+
+# --- progress on stderr ---------------------------------------------------------
+
+
+class Progress:
+    """A progress display on stderr for long runs: a tqdm bar shown after 2 s, only
+    when stderr is a terminal and ``--quiet`` is not given.  Call it with a step
+    number (``k``, of ``total``) or a stage name."""
+
+    def __init__(self, args, total=None, desc="", unit="step"):
+        self.bar = None
+        if not getattr(args, "quiet", False) and _is_terminal(sys.stderr):
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, desc=desc, unit=unit, delay=2.0, file=sys.stderr, leave=False,
+                            dynamic_ncols=True)
+
+    def __call__(self, where):
+        if self.bar is None:
+            return
+        if isinstance(where, int):
+            self.bar.update(where - self.bar.n)
+        else:
+            self.bar.set_description_str(str(where)[:48], refresh=False)
+            self.bar.update(1)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.close()
+        return False
+
+
+def _is_terminal(stream) -> bool:
+    try:
+        return stream.isatty()
+    except (AttributeError, ValueError, OSError):
+        return False

@@ -3,9 +3,12 @@
 
 from __future__ import annotations
 
+import math
+from fractions import Fraction
+
 from exact_khk.arith import get_arith, point_height
 from exact_khk.certification.records import library_versions
-from exact_khk.cli.options import add_system_options, system_from_args, write_json
+from exact_khk.cli.options import Progress, add_system_options, check_resources, system_from_args, write_json
 from exact_khk.errors import InputError
 from exact_khk.kahan.map import METHODS, KahanMap
 from exact_khk.systems.lie_poisson.system import b0_signs
@@ -32,7 +35,9 @@ def cmd_orbit(args):
     ar = get_arith(args.arith)
     fld = _field(system, args, ar)
     phi = KahanMap(fld, eps, ar, method=args.method)
-    pts = phi.orbit(x0, args.steps)
+    check_resources("orbit", system, phi, x0, args.steps, dense=phi.structure is None and not phi.split)
+    with Progress(args, args.steps, "orbit") as progress:
+        pts = phi.orbit(x0, args.steps, progress=progress)
     if args.json:
         write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
                     "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
@@ -57,7 +62,7 @@ def cmd_orbit(args):
     head = f"{'k':>4}  " + "  ".join(f"{name[:15]:>15}" for name in _names(system))
     print(head + ("   bits" if ar.exact else ""))
     for k, p in enumerate(pts):
-        row = f"{k:>4}  " + "  ".join(f"{ar.to_float(t):>15.8g}" for t in p)
+        row = f"{k:>4}  " + "  ".join(f"{_display(ar, t):>15}" for t in p)
         if ar.exact:
             row += f"  {point_height(ar, p):>5}"
         print(row)
@@ -80,6 +85,35 @@ def _field(system, args, ar):
     from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω
 
     return system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
+
+
+def _display(ar, t) -> str:
+    """t to 8 significant digits, also beyond the float range (exact rationals of
+    any size, mp:P floats with huge exponents)."""
+    try:
+        v = ar.to_float(t)
+        if math.isfinite(v) and abs(v) > 1e-300:
+            return f"{v:.8g}"
+    except (OverflowError, ValueError, ZeroDivisionError):
+        pass
+    try:
+        q = ar.to_fraction(t)
+    except (TypeError, ValueError, ArithmeticError):
+        return ar.format(t)[:15]
+    if q == 0:
+        return "0"
+    sign, q = ("-" if q < 0 else ""), abs(q)
+    e = (q.numerator.bit_length() - q.denominator.bit_length()) * 30103 // 100000  # ≈ log10 q
+    m = q / Fraction(10) ** e
+    while m >= 10:
+        m, e = m / 10, e + 1
+    while m < 1:
+        m, e = m * 10, e - 1
+    digits = round(m * 10 ** 7)
+    if digits >= 10 ** 8:
+        digits, e = digits // 10, e + 1
+    text = str(digits)
+    return f"{sign}{text[0]}.{text[1:].rstrip('0') or '0'}e{e:+d}"
 
 
 def _names(system):

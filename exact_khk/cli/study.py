@@ -1,6 +1,8 @@
 """``exact-khk scale`` and ``exact-khk hard``: precision-scaling studies and hard cases.
 
-Thin views over :mod:`exact_khk.studies.scaling` and :mod:`exact_khk.hard`.
+Thin views over :mod:`exact_khk.studies.scaling` and :mod:`exact_khk.studies.hard`,
+for the Lie–Poisson family or any ``--system NAME|FILE``.  The hard cases (which
+need SymPy) are imported when ``hard`` runs, not when the parser is built.
 """
 
 from __future__ import annotations
@@ -13,15 +15,21 @@ import sys
 from exact_khk.cli.options import add_system_options, system_from_args
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
-from exact_khk.studies import hard
+from exact_khk.parsing import parse_rational, parse_vector
 from exact_khk.studies import scaling
+
+#: the default of ``hard --ariths`` (= exact_khk.studies.hard.DEFAULT_ARITHS, written here so that
+#: building the parser does not import SymPy; a test keeps them equal)
+HARD_ARITHS = "float,mp:113,mp:256,ball:128,ball:512"
 
 
 def register(sub):
     p = sub.add_parser("scale", help="compare floating and ball orbits with the exact orbit, step by step",
                        description="Iterate the orbit of Phi_f in several arithmetics and compare every step "
-                       "with the exact orbit: relative error, H~/K~ drift, commutation and reversibility "
-                       "residuals, time per step; fitted bits lost per step; work-precision plots.")
+                       "with the exact orbit: relative error, drift of every integral the system declares "
+                       "(Lie–Poisson family: H~, K~), commutation residual with every field it declares "
+                       "commuting (Lie–Poisson: g of B_0), reversibility residual, time per step; fitted bits "
+                       "lost per step; work-precision plots.")
     add_system_options(p, steps_default=50)
     p.add_argument("--ariths", default=",".join(scaling.DEFAULT_ARITHS),
                    help="comma-separated floating/ball arithmetics (default: %(default)s)")
@@ -31,15 +39,22 @@ def register(sub):
                    "error_vs_step.png (and enclosure.json with --digits)")
     p.add_argument("--no-plots", action="store_true", help="with --out: skip the PNG figures")
     p.add_argument("--no-diagnostics", action="store_true",
-                   help="only the orbit error (skip H~/K~ drift and the residuals)")
+                   help="only the orbit error (skip the integral drifts and the residuals)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_scale)
 
     h = sub.add_parser("hard", help="run the catalogue of hard cases (near-singular steps, ...)",
                        description="Run each hard case in exact arithmetic and in floating and ball "
                        "arithmetics; print what each returned, whether the trouble was flagged, and "
-                       "the precision needed.")
-    h.add_argument("--ariths", default=",".join(hard.DEFAULT_ARITHS),
+                       "the precision needed. Without --system: the Lie–Poisson catalogue; with --system: "
+                       "eps approaching the real root of det(I - eps f'(x0)) nearest 0, an exactly singular "
+                       "step at each rational root, and a long orbit, all from the system's x0.")
+    h.add_argument("--system", metavar="NAME|FILE",
+                   help="build the cases from a catalogue system or a system file (.toml) instead of "
+                        "running the Lie–Poisson catalogue")
+    h.add_argument("--x0", help="with --system: the point of the cases (default: the system's x0)")
+    h.add_argument("--eps", help="with --system: the step size of the long orbit (default: the system's)")
+    h.add_argument("--ariths", default=HARD_ARITHS,
                    help="comma-separated floating/ball arithmetics (default: %(default)s)")
     h.add_argument("--digits", type=int, default=10,
                    help="correct digits for the 'bits needed' columns (default 10)")
@@ -68,7 +83,19 @@ def _ariths(text):
     return out
 
 
+def _drift(name):
+    """A row's drift of integral ``name``: None where not computed, -inf where exactly 0."""
+    def get(row):
+        if name not in row.drift_log10:
+            return None
+        v = row.drift_log10[name]
+        return -math.inf if v is None else v
+    return get
+
+
 def _fmt(v, spec=".1f"):
+    if v == -math.inf:  # log10 of an exact 0
+        return "-inf"
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
 
 
@@ -81,27 +108,32 @@ def cmd_scale(args):
     if args.digits is not None and args.digits < 1:
         raise InputError(f"--digits: expected a positive integer, got {args.digits}")
     ariths = _ariths(args.ariths)
+    print(system.describe())
     study = scaling.scaling_study(system, x0, eps, args.steps, ariths,
                                   diagnostics=not args.no_diagnostics, progress=not args.quiet)
-    print(system.describe())
-    print(f"eps = {eps}, K = {args.steps} steps; reference: exact orbit (flint, "
-          f"{study.exact_seconds_per_step * 1e3:.3g} ms/step, last point {study.exact_final_height_bits} bits)")
+    print(f"x0 = ({', '.join(str(t) for t in x0)}), eps = {eps}, K = {args.steps} steps; reference: exact orbit "
+          f"(flint, {study.exact_seconds_per_step * 1e3:.3g} ms/step, last point {study.exact_final_height_bits} bits)")
     print("errors are relative, computed exactly against the exact orbit (balls: midpoint error; "
           "radius = certified bound); log10 values; rates are least-squares slopes in bits/step")
-    head = (f"{'arith':<10} {'status':<10} {'steps':>5} {'err@K':>8} {'bits left':>9} {'lost/step':>9} "
-            f"{'rad/step':>8} {'H~ drift':>8} {'comm':>8} {'rev':>8} {'ms/step':>8}")
-    print(head)
+    if not args.no_diagnostics:
+        ints = ", ".join(study.integrals) or "none"
+        print(f"declared integrals (drift columns): {ints}; commuting fields (comm): "
+              f"{', '.join(study.commuting) or 'none'}; rev = reversibility residual")
+    # the diagnostic columns: (header, value of a row or None when not computed there; a drift
+    # computed and exactly 0 is -inf)
+    diag = [] if args.no_diagnostics else (
+        [(f"{name} drift", _drift(name)) for name in study.integrals]
+        + ([("comm", lambda r: r.commutation_log10)] if study.commuting else [])
+        + [("rev", lambda r: r.reversibility_log10)])
+    width = [max(8, len(head)) for head, _ in diag]
+    print(f"{'arith':<10} {'status':<10} {'steps':>5} {'err@K':>8} {'bits left':>9} {'lost/step':>9} "
+          f"{'rad/step':>8} " + "".join(f"{head:>{w}} " for (head, _), w in zip(diag, width)) + f"{'ms/step':>8}")
     for run in study.runs:
-        last = run.rows[-1] if run.rows else None
-        drift = None if last is None else last.h_drift_log10
-        if drift is None and len(run.rows) > 1:
-            drift = run.rows[-2].h_drift_log10
-        comm = next((r.commutation_log10 for r in reversed(run.rows) if r.commutation_log10 is not None), None)
-        rev = next((r.reversibility_log10 for r in reversed(run.rows) if r.reversibility_log10 is not None), None)
         ms = None if run.seconds_per_step is None else run.seconds_per_step * 1e3
+        last = [next((v for v in map(value, reversed(run.rows)) if v is not None), None) for _, value in diag]
         print(f"{run.arith:<10} {run.status:<10} {run.steps_done:>5} {_fmt(run.final_error_log10):>8} "
               f"{_fmt(run.bits_left):>9} {_fmt(run.loss_rate, '.3f'):>9} {_fmt(run.radius_rate, '.2f'):>8} "
-              f"{_fmt(drift):>8} {_fmt(comm):>8} {_fmt(rev):>8} {_fmt(ms, '.3f'):>8}")
+              + "".join(f"{_fmt(v):>{w}} " for v, w in zip(last, width)) + f"{_fmt(ms, '.3f'):>8}")
         if run.message:
             print(f"  {run.arith}: {run.message}")
         if run.useless_step is not None:
@@ -150,12 +182,32 @@ def _digits_report(system, x0, eps, args, study):
 
 
 def cmd_hard(args):
+    from exact_khk.studies import hard  # SymPy (the certified roots): only when the command runs
+
     ariths = _ariths(args.ariths)
     if args.digits < 1:
         raise InputError(f"--digits: expected a positive integer, got {args.digits}")
     if args.long_steps < 1:
         raise InputError(f"--long-steps: expected a positive integer, got {args.long_steps}")
-    cases = hard.catalogue(long_steps=args.long_steps)
+    title = ""
+    if args.system is None:
+        for opt, value in (("--x0", args.x0), ("--eps", args.eps)):
+            if value is not None:
+                raise InputError(f"{opt} applies only with --system (the catalogue fixes its own points and steps)")
+        cases = hard.catalogue(long_steps=args.long_steps)
+    else:
+        from exact_khk.systems.catalogue import resolve
+
+        system = resolve(args.system)
+        x0 = None if args.x0 is None else parse_vector(args.x0, "--x0", system.dim)
+        eps = None if args.eps is None else parse_rational(args.eps, "--eps")
+        if eps == 0:
+            raise InputError("--eps: the step size must be nonzero")
+        cases = hard.system_cases(system, x0, eps, long_steps=args.long_steps)
+        title = f"hard cases of {system.describe()}, x0 = ({', '.join(str(t) for t in cases[-1].x0)})"
+        if not any(c.name.startswith("near-root") for c in cases):
+            title += "; det(I - eps f'(x0)) has no real root in eps: no near-singular case"
+        print(title)
     if args.only:
         cases = [c for c in cases if args.only.lower() in c.name.lower()]
         if not cases:
@@ -185,6 +237,6 @@ def cmd_hard(args):
         doc = {"cases": [hard.result_json(r) for r in results], "legend": legend,
                "versions": library_versions()}
         (out / "hard_cases.json").write_text(json.dumps(doc, indent=1) + "\n")
-        (out / "hard_cases.md").write_text(table + "\n\n" + legend + "\n")
+        (out / "hard_cases.md").write_text((title + "\n\n" if title else "") + table + "\n\n" + legend + "\n")
         print(f"wrote {out / 'hard_cases.json'}, {out / 'hard_cases.md'}", file=sys.stderr)
     return 0

@@ -65,9 +65,10 @@ from __future__ import annotations
 
 import math
 import warnings
+from fractions import Fraction
 
 from exact_khk.linalg import circulant
-from exact_khk.arith import get_arith, point_height as _height
+from exact_khk.arith import _is_element as _arith_is_element, get_arith, point_height as _height, to_element
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
 from exact_khk.parsing import parse_rational
@@ -77,31 +78,38 @@ from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 METHODS = ("auto", "dense", "structured", "split")
 
 def as_point(ar, x, dim: int, name: str = "x"):
-    """Convert a point (strings, ints, Fractions, backend rationals, or elements
-    of ``ar``) into a tuple of elements of ``ar``; checks the dimension."""
-    if ar.exact and type(x) is tuple and len(x) == dim and all(type(t) is type(ar.zero) for t in x):
+    """Convert a point into a tuple of elements of ``ar``; checks the dimension.
+
+    Coordinates are read by :func:`exact_khk.arith.to_element`: strings
+    (``'1/3'``, ``'0.25'``), ints, Fractions, gmpy2/python-flint rationals,
+    elements of ``ar``; binary floats (Python or numpy) only in floating
+    arithmetics, where they must be finite.  Anything else raises
+    :class:`~exact_khk.errors.InputError` naming the coordinate."""
+    if ar.rational and type(x) is tuple and len(x) == dim and all(type(t) is type(ar.zero) for t in x):
         return x  # already a point of ar (e.g. a previous step's result)
+    if isinstance(x, (str, bytes)) or not hasattr(x, "__len__") and not hasattr(x, "__iter__"):
+        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}")
     try:
         coords = list(x)
     except TypeError:
-        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {x!r}") from None
+        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}") from None
     if len(coords) != dim:
         raise InputError(f"{name}: expected {dim} coordinates, got {len(coords)}")
     out = []
     for i, t in enumerate(coords):
-        if not ar.exact and isinstance(t, float):
-            out.append(ar.convert(t))
-        elif _is_element(ar, t):
-            out.append(t)
-        else:
-            out.append(ar.convert(parse_rational(t, f"{name}[{i}]")))
+        out.append(to_element(ar, t, f"{name}[{i}]"))
         if not ar.exact and not ar.is_finite(out[-1]):
-            raise InputError(f"{name}[{i}]: expected a finite number, got {t!r}")
+            raise InputError(f"{name}[{i}]: expected a finite number, got {_short(t)}")
     return tuple(out)
 
 
+def _short(value, width: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
+
+
 def _is_element(ar, t) -> bool:
-    return type(t) is type(ar.zero) and not isinstance(t, (int, str))
+    return _arith_is_element(ar, t)
 
 
 class KahanMap:
@@ -126,13 +134,16 @@ class KahanMap:
         self.field = field
         self.arith = ar = get_arith(arith)
         self.method = method
-        if _is_element(ar, eps):
-            self.eps = eps
-            self.eps_exact = ar.to_fraction(eps) if ar.rational else None
+        if _is_element(ar, eps) or not isinstance(eps, (str, int, Fraction)):
+            self.eps = to_element(ar, eps, "eps")
+            self.eps_exact = ar.to_fraction(self.eps) if ar.rational else None
         else:
             self.eps_exact = parse_rational(eps, "eps")
-            self.eps = ar.convert(self.eps_exact)
+            self.eps = to_element(ar, self.eps_exact, "eps")
         if ar.is_zero(self.eps) is True:
+            if self.eps_exact:  # a nonzero rational rounded to 0 (e.g. 10^-5000 in float)
+                raise InputError(f"eps: {_short(str(self.eps_exact), 40)} underflows to 0 in {ar.name} "
+                                 f"(use mp:P or an exact arithmetic)")
             raise InputError("eps: the step size must be nonzero")
         self.split, self.structure, self.switch_bits = _choose_path(field, ar, method, self.eps)
 

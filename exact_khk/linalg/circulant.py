@@ -1,4 +1,4 @@
-"""Kahan steps and H̃ as 2×2 systems over circulants (MATH.md, "Structure worth exploiting").
+"""Kahan steps and H̃ as 2×2 systems over circulants (docs/conventions.md, "Structure worth exploiting").
 
 For a Lie–Poisson field f(x) = J(x) M x whose Hessian M has four cyclic Hankel
 n×n blocks (f, every associated field g and the control field do), all four
@@ -6,7 +6,7 @@ blocks of f'(x) are circulant.  Circulants form the commutative ring
 R = Q[t]/(tⁿ − 1) (P ↔ t), so I − εf'(x) is a 2×2 matrix over R and a Kahan
 step is a few products in R and one inversion in R.
 
-Dictionary (0-based, as in MATH.md):
+Dictionary (0-based, as in docs/conventions.md):
 
 * a vector w ∈ Qⁿ ↔ its *reflected* polynomial ŵ(t) = Σ_i w_i t^{−i}; then
   P w ↔ t ŵ, so a circulant Σ_m c_m P^m acts as multiplication by c(t);

@@ -215,7 +215,7 @@ def _in_characters(rows, n, d, deg, powers):
     """Rows over [x, D] of one factor as rows over the coefficients of χ_d(x_u),
     χ_d(x_v) and D, or None if one is not such a form.  With circulant blocks
     every one is: the Hessian is then cyclic Hankel in each block (as for
-    Lie–Poisson fields, MATH.md), and the generated step computes those few
+    Lie–Poisson fields, docs/conventions.md), and the generated step computes those few
     sums once."""
     out = []
     for row in rows:

@@ -1,9 +1,12 @@
 """Hard cases: where floating arithmetic breaks, and whether the tool says so.
 
-:func:`catalogue` builds the cases (ε approaching a root of det(I − εf′(x0)) at
-distances 10^-3 … 10^-30, exactly singular steps, large ε, large coordinates,
-a long orbit, a nearly degenerate Hessian, an orbit passing close to a point
-where the map is undefined); :func:`run_case` runs one case in several
+:func:`catalogue` builds the Lie–Poisson cases (ε approaching a root of
+det(I − εf′(x0)) at distances 10^-3 … 10^-30, exactly singular steps, large ε,
+large coordinates, a long orbit, a nearly degenerate Hessian, an orbit passing
+close to a point where the map is undefined); :func:`system_cases` builds the
+cases of any system from its x0 (ε approaching the real root of
+det(I − εf′(x0)) nearest 0, an exactly singular step at every rational root,
+a long orbit); :func:`run_case` runs one case in several
 arithmetics and in exact arithmetic and records what each returned, whether
 the trouble was flagged (NearSingularWarning with its condition estimate,
 SingularStepError, UndecidedError) and the precision needed.
@@ -30,10 +33,12 @@ from fractions import Fraction
 import flint
 import sympy
 
-from exact_khk.arith import get_arith
+from exact_khk.arith import get_arith, point_height
+from exact_khk.errors import InputError
 from exact_khk.kahan.map import KahanMap
-from exact_khk.parsing import parse_rational
+from exact_khk.parsing import parse_rational, parse_vector
 from exact_khk.studies.scaling import LOG10_2, exact_prefix, jsonable, precision_needed, run_orbit
+from exact_khk.systems.base import System
 from exact_khk.systems.lie_poisson.system import DEFAULT_X0, LiePoissonSystem, default_system, random_point
 
 DEFAULT_ARITHS = ("float", "mp:113", "mp:256", "ball:128", "ball:512")
@@ -97,7 +102,7 @@ class HardCase:
 
     name: str
     description: str
-    system: LiePoissonSystem
+    system: System
     x0: tuple
     eps: Fraction
     steps: int
@@ -158,6 +163,45 @@ def _near_undefined_case(s2, y_a, root, back=3, delta=Fraction(1, 10 ** 12)):
     return HardCase("near undefined point", f"orbit of eps = 1/10 whose point x_{back} lies 1e-12 (in the "
                     f"ray parameter) from the set det(I - eps f'(x)) = 0; x0 = Phi^-{back}(x_{back}) exactly",
                     s2, x0, eps, back + 2)
+
+
+def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DISTANCES) -> list[HardCase]:
+    """The hard cases of any system at x0 and ε (default: the system's own):
+
+    * ``near-root 1e-d``: ε* + 10^-d, 2 steps, for the real root ε* of
+      det(I − εf′(x0)) nearest 0 (certified: :func:`singular_step_sizes`);
+    * ``singular (eps=r)``: 1 step at every rational root r (det = 0 exactly);
+    * ``long orbit K``: K = ``long_steps`` steps at ε, fewer if the exact orbit
+      grows higher than :data:`~exact_khk.studies.scaling.MAX_EXACT_BITS` first.
+
+    >>> from exact_khk.systems.expressions import ExpressionSystem
+    >>> s = ExpressionSystem.from_expressions(["x", "y"], field=["x*y", "y*y"], x0=["1", "2"], eps="1/10")
+    >>> det_polynomial(s.field("f"), s.default_x0)            # (1 - 2 eps)(1 - 4 eps)
+    Poly(8*eps**2 - 6*eps + 1, eps, domain='QQ')
+    >>> [c.name for c in system_cases(s, long_steps=30, distances=(3,))]
+    ['near-root 1e-3', 'singular (eps=1/4)', 'singular (eps=1/2)', 'long orbit 30']
+    """
+    x0 = parse_vector(list(system.default_x0 if x0 is None else x0), "x0", system.dim)
+    eps = parse_rational(system.default_eps if eps is None else eps, "eps")
+    if eps == 0:
+        raise InputError("eps: the step size must be nonzero")
+    roots = singular_step_sizes(system.field("f"), x0)
+    cases = []
+    if roots:
+        root = min(roots, key=lambda r: abs(r.mid))
+        how = "rational, exact" if root.exact else f"certified to {float(root.hi - root.lo):.0e}"
+        cases += [HardCase(f"near-root 1e-{d}", f"eps = eps* + 1e-{d}, eps* ~ {float(root.mid):.6g} the real root of "
+                           f"det(I - eps f'(x0)) nearest 0 ({how})", system, x0, root.mid + Fraction(1, 10 ** d), 2)
+                  for d in distances]
+    cases += [HardCase(f"singular (eps={r.lo})", f"det(I - eps f'(x0)) = 0 exactly at step 1 (a rational root)",
+                       system, x0, r.lo, 1) for r in roots if r.exact]
+    pts, _, err = exact_prefix(system.field("f"), x0, eps, long_steps)
+    steps = long_steps if err is not None else len(pts) - 1
+    short = "" if steps == long_steps else (f" (of {long_steps} asked: the exact orbit is "
+                                            f"{point_height(get_arith('flint'), pts[-1])} bits high at step {steps})")
+    cases.append(HardCase(f"long orbit {steps}", f"the orbit of x0 at eps = {eps}, {steps} steps{short}",
+                          system, x0, eps, steps))
+    return cases
 
 
 # --- running a case --------------------------------------------------------------
@@ -304,10 +348,10 @@ def markdown_table(results) -> str:
 
 def result_json(r: CaseResult) -> dict:
     """A case result as a JSON-ready dict (exact inputs as strings)."""
-    c, text = r.case, lambda v: [str(t) for t in v]  # noqa: E731
+    c = r.case
     return jsonable({
-        "case": c.name, "description": c.description, "n": c.system.n, "a": text(c.system.a),
-        "b": text(c.system.b), "c": text(c.system.c), "x0": text(c.x0), "eps": str(c.eps),
+        "case": c.name, "description": c.description, "system": c.system.to_json(),
+        "system_name": c.system.name, "x0": [str(t) for t in c.x0], "eps": str(c.eps),
         "steps": c.steps, "exact_status": r.exact_status, "exact_step": r.exact_step,
         "exact_seconds": r.exact_seconds, "digits": r.digits, "mp_bits_needed": r.bits_needed,
         "ball_bits_needed": r.ball_bits_needed, "outcomes": [o.__dict__ for o in r.outcomes]})

@@ -14,13 +14,16 @@ How every number is obtained (also stored in ``ScalingStudy.method``):
   exactly and |approx − exact| is computed in exact rational arithmetic; a
   ball contributes its midpoint exactly and its radius exactly;
 * errors are normwise relative: max_i |x̂_i − x_i| / max_i |x_i|, reported as
-  log10 (``None`` when the error is exactly 0);
-* H̃/K̃ drift: H̃(x̂_k) evaluated **in the arithmetic** at the computed point,
-  minus the exact H̃(x_0), relative to |H̃(x_0)| (for balls: |mid − exact| + rad,
-  an upper bound); K̃ uses the associated field g of B_0;
-* commutation residual: |Φ_f(Φ_g(x̂)) − Φ_g(Φ_f(x̂))| / |x̂|, reversibility
-  residual: |Φ_f(Φ_f(x̂), −ε) − x̂| / |x̂|, both computed in the arithmetic (the
-  exact values are 0), evaluated exactly; balls: |mid| + rad;
+  log10 (``None`` when the error is exactly 0; absolute when the reference is 0);
+* the diagnostics are what the system declares (:func:`declared`): for every
+  integral I, its drift I(x̂_k) evaluated **in the arithmetic** at the computed
+  point, minus the exact I(x_0), relative to |I(x_0)| (for balls: |mid − exact|
+  + rad, an upper bound) — for the Lie–Poisson family H̃ and K̃ (associated field
+  g of B_0); for every field g declared to commute with f, the commutation
+  residual |Φ_f(Φ_g(x̂)) − Φ_g(Φ_f(x̂))| / |x̂| (the largest over the fields);
+  for every system the reversibility residual |Φ_f(Φ_f(x̂), −ε) − x̂| / |x̂|;
+  residuals are computed in the arithmetic (the exact values are 0) and
+  evaluated exactly; balls: |mid| + rad;
 * time per step: wall-clock time of the orbit step alone (``time.perf_counter``).
 
 >>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
@@ -32,6 +35,8 @@ How every number is obtained (also stored in ``ScalingStudy.method``):
 True
 >>> st.runs[2].encloses                                           # certified enclosures
 True
+>>> st.integrals, sorted(st.runs[1].rows[0].drift_log10)         # the declared integrals' drifts
+(('H~', 'K~'), ['H~', 'K~'])
 """
 
 from __future__ import annotations
@@ -44,31 +49,37 @@ from fractions import Fraction
 
 import flint
 
-from exact_khk.arith import get_arith
+from exact_khk.arith import get_arith, point_height
 from exact_khk.arith.ball import BallArith, ball_mid, ball_rad, contains_exact
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError, UndecidedError
-from exact_khk.systems.lie_poisson.invariants import Htilde, PoleError
 from exact_khk.kahan.map import KahanMap
 from exact_khk.parsing import parse_rational, parse_vector
+from exact_khk.systems.base import Function
+from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.systems.lie_poisson.system import b0_signs
 
 DEFAULT_ARITHS = ("float", "mp:53", "mp:64", "mp:113", "mp:256", "mp:1024", "mp:4096",
                   "ball:64", "ball:256", "ball:1024", "ball:4096")
 LOG10_2 = math.log10(2)
+#: the exact reference orbit stops past this height (bits of its largest numerator or
+#: denominator).  Heights that double each step (a non-integrable map) pass it within
+#: about 20 steps, where one exact step already takes seconds; the Lie–Poisson orbits
+#: grow by about 9 bits per step (n = 3).
+MAX_EXACT_BITS = 1 << 19
 
 METHOD = {
     "reference": "exact orbit in python-flint fmpq",
     "error": "normwise relative max_i|x_i - exact_i| / max_i|exact_i|, computed exactly from the "
              "binary value (balls: midpoint); log10; None = exactly 0",
     "radius": "balls: max_i rad_i / max_i|exact_i| (certified bound on the error), log10",
-    "h_drift": "|H~(x_k) - H~(x_0)| / |H~(x_0)|: H~(x_k) evaluated in the arithmetic at the computed "
-               "point, H~(x_0) exact; balls: |mid - exact| + rad; log10",
-    "k_drift": "as h_drift for K~ (Hessian B_0 Hs)",
-    "commutation": "|Phi_f(Phi_g(x_k)) - Phi_g(Phi_f(x_k))| / |x_k| in the arithmetic, g = field of "
-                   "B_0; evaluated exactly (balls: |mid| + rad); log10",
+    "drift": "per declared integral I (see 'declared'): |I(x_k) - I(x_0)| / |I(x_0)| (absolute when "
+             "I(x_0) = 0): I(x_k) evaluated in the arithmetic at the computed point, I(x_0) exact; balls: "
+             "|mid - exact| + rad; log10",
+    "commutation": "max over the fields g declared to commute with f of |Phi_f(Phi_g(x_k)) - "
+                   "Phi_g(Phi_f(x_k))| / |x_k| in the arithmetic; evaluated exactly (balls: |mid| + rad); log10",
     "reversibility": "|Phi_f(Phi_f(x_k), -eps) - x_k| / |x_k| in the arithmetic; log10",
     "seconds": "wall-clock time of the orbit step alone (time.perf_counter)",
-    "encloses": "balls: every point, H~ and K~ enclosure contains the exact value and every "
+    "encloses": "balls: every point and every integral enclosure contains the exact value and every "
                 "residual enclosure contains 0 (decided in exact rational arithmetic)",
 }
 
@@ -105,7 +116,43 @@ def _err_bound(ar, e, exact):
 
 
 def _rel(num, den):
-    return log10q(num / den) if den != 0 else None
+    """log10 of num/den; of num when den = 0 (a relative size of a zero reference is meaningless)."""
+    return log10q(num / den if den != 0 else num)
+
+
+# --- what the diagnostics check ------------------------------------------------
+
+
+class LiePoissonIntegral(Function):
+    """H̃ of a Lie–Poisson field as an integral ``I(ar, x, eps)``
+    (:func:`~exact_khk.systems.lie_poisson.invariants.Htilde`; values only)."""
+
+    def __init__(self, name, fld, text):
+        self.name, self.fld, self.text = name, fld, text
+
+    def __call__(self, ar, x, eps):
+        return Htilde(self.fld, x, eps, ar)
+
+
+def declared(system) -> tuple[dict, dict]:
+    """What the diagnostics check: ({name: integral ``I(ar, x, eps)``}, {name: field
+    declared to commute with f}).
+
+    A system's :meth:`~exact_khk.systems.base.System.integrals` and the fields after
+    ``'f'`` in its :meth:`~exact_khk.systems.base.System.field_names`; the
+    Lie–Poisson family, whose theorems its own certificate checks, gives H̃ of f,
+    K̃ of the associated field g of B_0, and that g.
+
+    >>> from exact_khk.systems.lie_poisson import default_system
+    >>> ints, fields = declared(default_system())
+    >>> list(ints), list(fields)
+    (['H~', 'K~'], ['g[-++]'])
+    """
+    if system.kind == "lie-poisson":
+        f, g = system.field("f"), system.field("g", signs=b0_signs(system.n))
+        return ({"H~": LiePoissonIntegral("H~", f, "x^T (I - eps^2 (M J(x))^2)^-1 M x, M = Hs"),
+                 "K~": LiePoissonIntegral("K~", g, f"as H~ with M = B_0 Hs, B_0 = {g.signs}")}, {g.label: g})
+    return system.integrals(), {name: system.field(name) for name in system.field_names()[1:]}
 
 
 # --- records -------------------------------------------------------------------
@@ -113,14 +160,17 @@ def _rel(num, den):
 
 @dataclass(frozen=True)
 class StepRow:
-    """One orbit point in one arithmetic, compared with the exact point (see METHOD)."""
+    """One orbit point in one arithmetic, compared with the exact point (see METHOD).
+
+    ``drift_log10`` has one entry per declared integral whose value could be
+    computed here (no entry at a pole, or without diagnostics); the log10 values
+    are None when the quantity is exactly 0."""
 
     arith: str
     step: int
     error_log10: float | None
     radius_log10: float | None = None
-    h_drift_log10: float | None = None
-    k_drift_log10: float | None = None
+    drift_log10: dict = field(default_factory=dict)  # declared integral name -> log10 drift
     commutation_log10: float | None = None
     reversibility_log10: float | None = None
     encloses: bool | None = None
@@ -167,7 +217,9 @@ class ArithRun:
 
 @dataclass(frozen=True)
 class ScalingStudy:
-    """Result of :func:`scaling_study`: the runs, the exact timing and how numbers were obtained."""
+    """Result of :func:`scaling_study`: the runs, the exact timing, how numbers were
+    obtained, and the names of the integrals and commuting fields the diagnostics
+    checked (empty without diagnostics)."""
 
     system: object
     x0: tuple
@@ -177,6 +229,8 @@ class ScalingStudy:
     exact_final_height_bits: int
     runs: tuple
     method: dict
+    integrals: tuple = ()
+    commuting: tuple = ()
 
     def rows(self):
         return [r for run in self.runs for r in run.rows]
@@ -185,9 +239,12 @@ class ScalingStudy:
 # --- one orbit -----------------------------------------------------------------
 
 
-def exact_prefix(fld, x0, eps, steps):
+def exact_prefix(fld, x0, eps, steps, max_bits=None):
     """(points, seconds per step, error): the exact orbit (python-flint ``fmpq``) up
-    to the first undefined step; ``error`` is that step's SingularStepError or None."""
+    to the first undefined step, or to the first point higher than ``max_bits``
+    (included; default :data:`MAX_EXACT_BITS`); ``error`` is that step's
+    SingularStepError or None."""
+    max_bits = MAX_EXACT_BITS if max_bits is None else max_bits
     phi = KahanMap(fld, eps, "flint")
     pts, err = [phi.point(x0, "x0")], None
     t = time.perf_counter()
@@ -197,14 +254,23 @@ def exact_prefix(fld, x0, eps, steps):
         except SingularStepError as exc:
             err = exc.at_step(k)
             break
+        if point_height(phi.arith, pts[-1]) > max_bits:
+            break
     return pts, (time.perf_counter() - t) / max(len(pts) - 1, 1), err
 
 
-def exact_orbit(fld, x0, eps, steps):
-    """(points, seconds per step) of the exact orbit; raises SingularStepError."""
-    pts, sec, err = exact_prefix(fld, x0, eps, steps)
+def exact_orbit(fld, x0, eps, steps, max_bits=None):
+    """(points, seconds per step) of the exact orbit; raises SingularStepError, and
+    InputError when a point before step ``steps`` is higher than ``max_bits``
+    (default :data:`MAX_EXACT_BITS`; the last point may be higher)."""
+    max_bits = MAX_EXACT_BITS if max_bits is None else max_bits
+    pts, sec, err = exact_prefix(fld, x0, eps, steps, max_bits)
     if err is not None:
         raise err
+    if len(pts) <= steps:
+        raise InputError(f"steps: the exact reference orbit is {point_height(get_arith('flint'), pts[-1])} bits "
+                         f"high at step {len(pts) - 1} (more than {max_bits}): its heights grow too fast for "
+                         f"{steps} steps (the map is likely not integrable); choose at most {len(pts) - 1} steps")
     return pts, sec
 
 
@@ -221,7 +287,9 @@ def _slope(ks, ys):
 
 def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progress=None) -> ArithRun:
     """Iterate ``steps`` Kahan steps of ``system.field('f')`` in ``arith``
-    and compare every point with the exact orbit ``exact`` (computed if None).
+    and compare every point with the exact orbit ``exact`` (computed if None);
+    ``diagnostics``: also the drifts and residuals of what the system declares
+    (:func:`declared`).
 
     Never raises for a singular or undecided step: the run stops there and its
     ``status`` says why.  Near-singular warnings are caught and recorded (the
@@ -235,13 +303,11 @@ def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progr
         exact, _ = exact_orbit(fld, x0, eps, steps)
     exact = exact[: steps + 1]
     phi = KahanMap(fld, eps, ar)
-    g = system.field("g", signs=b0_signs(system.n)) if diagnostics else None
-    phi_g = KahanMap(g, eps, ar) if diagnostics else None
-    ball = isinstance(ar, BallArith)
+    integrals, commuting = declared(system) if diagnostics else ({}, {})
+    maps = [KahanMap(g, eps, ar) for g in commuting.values()]
     flint_ar = get_arith("flint")
-    if diagnostics:
-        h0 = Htilde(fld, exact[0], eps, flint_ar)
-        k0 = Htilde(g, exact[0], eps, flint_ar)
+    start = {name: I(flint_ar, exact[0], eps) for name, I in integrals.items()}
+    ball = isinstance(ar, BallArith)
     rows, times, status, failed, message, conds = [], [], "ok", None, "", []
     with ar.local():
         x = phi.point(x0, "x0")
@@ -279,7 +345,7 @@ def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progr
             if diagnostics and (y is not None or k == steps):
                 with warnings.catch_warnings():  # diagnostics only: the orbit step recorded its own
                     warnings.simplefilter("ignore", NearSingularWarning)
-                    extra = _diagnostics(ar, fld, g, phi, phi_g, x, y, eps, h0, k0, ball)
+                    extra = _diagnostics(ar, phi, maps, integrals, start, x, y, eps, ball)
                 if ball:
                     encl = encl and extra.pop("encl")
             rows.append(StepRow(ar.name, k, err, rad, encloses=encl, condition=cond,
@@ -307,33 +373,35 @@ def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progr
                     useless, encloses, max(conds) if conds else None, tuple(rows))
 
 
-def _diagnostics(ar, fld, g, phi, phi_g, x, y, eps, h0, k0, ball):
-    """Invariant drifts and residuals at x (y = Φ_f(x), computed if None); see METHOD."""
-    out = {}
+def _diagnostics(ar, phi, maps, integrals, start, x, y, eps, ball):
+    """Integral drifts and residuals at x (y = Φ_f(x), computed if None); see METHOD.
+    ``maps``: the Kahan maps of the commuting fields; ``start``: the exact I(x_0)."""
+    # undefined here: PoleError, SingularStepError, UndecidedError (balls), float overflow
+    undefined = ArithmeticError
     xn = _norm([to_fmpq(ar, t) for t in x])
     zero = flint.fmpq(0)
-    encl = True
-    try:
-        h = Htilde(fld, x, eps, ar)
-        kk = Htilde(g, x, eps, ar)
-        out["h_drift_log10"] = _rel(_err_bound(ar, h, h0), abs(h0))
-        out["k_drift_log10"] = _rel(_err_bound(ar, kk, k0), abs(k0))
-        if ball:
-            encl = contains_exact(h, h0) and contains_exact(kk, k0)
-    except (SingularStepError, PoleError, UndecidedError):
-        pass
+    drift, out, encl = {}, {}, True
+    for name, I in integrals.items():
+        try:
+            v = I(ar, x, eps)
+            drift[name] = _rel(_err_bound(ar, v, start[name]), abs(start[name]))
+        except undefined:
+            continue
+        encl = encl and (not ball or contains_exact(v, start[name]))
+    out["drift_log10"] = drift
+
+    def residual(key, pairs):  # max_i |u_i - v_i| / |x| over the pairs (u, v), exactly 0 for exact maps
+        nonlocal encl
+        res = [a - b for u, v in pairs for a, b in zip(u, v)]
+        out[key] = _rel(max(_err_bound(ar, r, zero) for r in res), xn)
+        encl = encl and (not ball or all(contains_exact(r, zero) for r in res))
+
     try:
         y = phi.step(x) if y is None else y
-        fg = phi.step(phi_g.step(x))
-        gf = phi_g.step(y)
-        res = [a - b for a, b in zip(fg, gf)]
-        out["commutation_log10"] = _rel(max(_err_bound(ar, r, zero) for r in res), xn)
-        back = phi.with_eps(-phi.eps).step(y)
-        res2 = [a - b for a, b in zip(back, x)]
-        out["reversibility_log10"] = _rel(max(_err_bound(ar, r, zero) for r in res2), xn)
-        if ball:
-            encl = encl and all(contains_exact(r, zero) for r in res + res2)
-    except (SingularStepError, PoleError, UndecidedError):
+        residual("reversibility_log10", [(phi.with_eps(-phi.eps).step(y), x)])
+        if maps:
+            residual("commutation_log10", [(phi.step(m.step(x)), m.step(y)) for m in maps])
+    except undefined:
         pass
     if ball:
         out["encl"] = encl
@@ -381,7 +449,11 @@ def scaling_study(system, x0, eps, steps, ariths=DEFAULT_ARITHS, diagnostics=Tru
             bar.close()
     last = exact[-1]
     height = max(max(int(t.p).bit_length(), int(t.q).bit_length()) for t in last)
-    return ScalingStudy(system, tuple(x0), eps, steps, t_exact, height, tuple(runs), dict(METHOD))
+    integrals, commuting = declared(system) if diagnostics else ({}, {})
+    method = dict(METHOD, declared={"integrals": {name: getattr(I, "text", "") for name, I in integrals.items()},
+                                    "commuting_fields": list(commuting)})
+    return ScalingStudy(system, tuple(x0), eps, steps, t_exact, height, tuple(runs), method,
+                        tuple(integrals), tuple(commuting))
 
 
 # --- precision needed ------------------------------------------------------------
@@ -512,19 +584,20 @@ def jsonable(obj):
 
 def study_json(study: ScalingStudy) -> dict:
     """The study as a JSON-ready dict (summaries, per-step rows, method)."""
-    s = study.system
-    return jsonable({"system": {"n": s.n, "a": [str(t) for t in s.a], "b": [str(t) for t in s.b],
-                       "c": [str(t) for t in s.c]},
-            "x0": [str(t) for t in study.x0], "eps": str(study.eps), "steps": study.steps,
-            "exact": {"arith": "flint", "seconds_per_step": study.exact_seconds_per_step,
-                      "final_height_bits": study.exact_final_height_bits},
-            "method": study.method, "runs": [r.summary() for r in study.runs],
-            "rows": [asdict(r) for r in study.rows()]})
+    return jsonable({"system": study.system.to_json(), "system_name": study.system.name,
+                     "integrals": list(study.integrals), "commuting_fields": list(study.commuting),
+                     "x0": [str(t) for t in study.x0], "eps": str(study.eps), "steps": study.steps,
+                     "exact": {"arith": "flint", "seconds_per_step": study.exact_seconds_per_step,
+                               "final_height_bits": study.exact_final_height_bits},
+                     "method": study.method, "runs": [r.summary() for r in study.runs],
+                     "rows": [asdict(r) for r in study.rows()]})
 
 
 def write_study(study: ScalingStudy, out_dir, plots=True) -> list:
     """Write ``scaling.csv``, ``scaling.json`` and (``plots``) ``work_precision.png`` and
-    ``error_vs_step.png`` into ``out_dir``; returns the paths written."""
+    ``error_vs_step.png`` into ``out_dir``; returns the paths written.  The CSV has a
+    column ``drift_log10[NAME]`` per declared integral, and ``commutation_log10``
+    only when the system declares commuting fields."""
     import csv
     import json
     import pathlib
@@ -532,12 +605,18 @@ def write_study(study: ScalingStudy, out_dir, plots=True) -> list:
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "scaling.csv", out / "scaling.json"]
-    names = list(StepRow.__dataclass_fields__)
+    columns = []  # (header, value of a row); one drift column per declared integral
+    for k in StepRow.__dataclass_fields__:
+        if k == "drift_log10":
+            columns += [(f"drift_log10[{name}]", lambda r, name=name: r.drift_log10.get(name))
+                        for name in study.integrals]
+        elif k != "commutation_log10" or study.commuting:
+            columns.append((k, lambda r, k=k: getattr(r, k)))
     with open(paths[0], "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(names)
+        w.writerow([head for head, _ in columns])
         for r in study.rows():
-            w.writerow(["" if getattr(r, k) is None else getattr(r, k) for k in names])
+            w.writerow(["" if value(r) is None else value(r) for _, value in columns])
     paths[1].write_text(json.dumps(study_json(study), indent=1) + "\n")
     if plots:
         paths += plot_study(study, out)
@@ -554,7 +633,7 @@ def plot_study(study: ScalingStudy, out_dir) -> list:
     import matplotlib.pyplot as plt
 
     out = pathlib.Path(out_dir)
-    title = f"n={study.system.n}, eps={study.eps}, K={study.steps} steps"
+    title = f"{study.system.name}, eps={study.eps}, K={study.steps} steps"
     fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
     stopped = 0
     for run in study.runs:

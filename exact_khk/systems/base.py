@@ -79,6 +79,8 @@ class System:
     variables: tuple = ()
     default_x0: tuple = ()
     default_eps = Fraction(1, 10)
+    #: steps certified by default (a system file may lower it where heights grow fast)
+    default_steps = 20
 
     @staticmethod
     def from_expressions(variables, **parts) -> "System":

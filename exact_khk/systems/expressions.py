@@ -289,11 +289,16 @@ class ExpressionSystem(System):
                 for row in K]
 
     def _read_defaults(self, table):
-        extra = [k for k in table if k not in ("x0", "eps")]
+        extra = [k for k in table if k not in ("x0", "eps", "steps")]
         if extra:
-            raise InputError(self._at(f"defaults: unknown key(s) {', '.join(map(repr, extra))} (known: x0, eps)"))
+            raise InputError(self._at(f"defaults: unknown key(s) {', '.join(map(repr, extra))} (known: x0, eps, steps)"))
         spec = {}
         self.default_eps = Fraction(1, 10)
+        if "steps" in table:
+            steps = table["steps"]
+            if not isinstance(steps, int) or isinstance(steps, bool) or not 1 <= steps <= 10 ** 6:
+                raise InputError(self._at(f"defaults steps: expected an integer from 1 to 10^6, got {steps!r}"))
+            spec["steps"] = self.default_steps = steps
         if "eps" in table:
             spec["eps"] = _spec_value(table["eps"], self._at("defaults eps"))
             self.default_eps = _rational(table["eps"], self._at("defaults eps"))

@@ -1,4 +1,4 @@
-"""Integrals of the Kahan maps of the Lie–Poisson family (MATH.md, (tH 4)).
+"""Integrals of the Kahan maps of the Lie–Poisson family (docs/conventions.md, "The integrals H̃ and K̃", (tH 4)).
 
 For a Lie–Poisson field f(x) = J(x) M x (M = Hs for f, B Hs for an associated
 field g):
@@ -17,24 +17,50 @@ Fraction(229600, 64011)
 
 from __future__ import annotations
 
-from fractions import Fraction
+import math
+import warnings
 
 from exact_khk.linalg import circulant
-from exact_khk.arith import get_arith
-from exact_khk.errors import InputError, PoleError
+from exact_khk.arith import get_arith, to_element
+from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
 from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
-from exact_khk.parsing import parse_rational
 
 
 def _eps(ar, eps):
-    """ε as an element of ``ar``: from a rational (string, int, Fraction) or an element
-    (of ``ar``, or of its base for a dual context)."""
-    if type(eps) is type(ar.zero) and not isinstance(eps, (int, str)):
-        return eps
-    if isinstance(eps, (str, int, Fraction)) or (isinstance(eps, float) and ar.exact):
-        return ar.convert(parse_rational(eps, "eps"))
-    return ar.convert(eps)
+    """ε as an element of ``ar``, read as the Kahan map reads it
+    (:func:`exact_khk.arith.to_element`: ``'1/10'``, int, Fraction, backend
+    rationals, elements of ``ar`` or of its base for a dual context; binary
+    floats only in floating arithmetics); ε = 0 is refused."""
+    e = to_element(ar, eps, "eps")
+    if ar.is_zero(e) is True:
+        raise InputError("eps: the step size must be nonzero")
+    return e
+
+
+def _point(ar, x, dim, name="x"):
+    """A point as a list of elements of ``ar`` (strings, Fractions, … converted; floats
+    only in floating arithmetics), with its dimension checked."""
+    if isinstance(x, (str, bytes)):
+        raise InputError(f"{name}: expected a sequence of {dim} numbers, got a string")
+    try:
+        coords = list(x)
+    except TypeError:
+        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {type(x).__name__}") from None
+    if len(coords) != dim:
+        raise InputError(f"{name}: expected {dim} coordinates, got {len(coords)}")
+    zero_type = type(ar.zero)
+    if ar.rational and all(type(t) is zero_type for t in coords):
+        return coords
+    out = [to_element(ar, t, f"{name}[{i}]") for i, t in enumerate(coords)]
+    if not ar.exact and not all(ar.is_finite(t) for t in out):
+        raise InputError(f"{name}: expected finite coordinates")
+    return out
+
+
+def _floating(ar) -> bool:
+    """``float`` and ``mp:P`` (not balls, which carry their own error bounds, nor duals)."""
+    return not ar.exact and getattr(ar, "fourier", False)
 
 
 def hessian_in(ar, field):
@@ -66,6 +92,7 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     if method not in ("auto", "dense"):
         raise InputError(f"method: expected 'auto' or 'dense', got {method!r}")
     e = _eps(ar, eps)
+    x = _point(ar, x, field.dim)
     if method == "auto" and ar.rational and circulant.flint is not None and field.system.n >= HTILDE_STRUCTURED_MIN_N:
         st = circulant.circulant_structure(field)
         if st is not None:
@@ -78,11 +105,104 @@ def Htilde(field, x, eps, arith=None, method="auto"):
 
 
 def _pole(ar, x, e):
+    if not ar.exact:
+        return NumericalError(f"H~ cannot be evaluated in {ar.name} at x = ({_fmt_point(ar, x)}), "
+                              f"eps = {ar.format(e)}: a pivot of I - eps^2 (M J(x))^2 is exactly 0 in "
+                              f"floating point (not a proven pole; use more bits or an exact arithmetic)",
+                              math.inf)
     return PoleError("H~ has a pole at x = (" + ", ".join(ar.format(t) for t in x)
                      + f"), eps = {ar.format(e)}: I - eps^2 (M J(x))^2 is singular")
 
 
+def _fmt_point(ar, x, width=200):
+    text = ", ".join(ar.format(t) for t in x)
+    return text if len(text) <= width else text[:width] + "..."
+
+
+def floating_policy(ar, cond, values, what, x, e):
+    """The conditioning policy of floating steps (:mod:`exact_khk.kahan.map`) for a
+    floating evaluation of ``what`` (H~, its gradient): raise
+    :class:`~exact_khk.errors.NumericalError` when a value is not finite
+    (overflow) or κ·2^-p ≥ 1 (κ the 1-norm condition estimate of the solved
+    matrix: no correct bit can be guaranteed); warn with
+    :class:`~exact_khk.errors.NearSingularWarning` when κ ≥ 2^(p/2)."""
+    if any(not ar.is_finite(t) for t in values):
+        raise NumericalError(f"{what} overflows {ar.name} at x = ({_fmt_point(ar, x)}), eps = {ar.format(e)}: "
+                             f"a value is beyond the range of the arithmetic (use mp:P or an exact "
+                             f"arithmetic)", math.inf)
+    if cond is None:
+        return
+    lost = math.inf if cond != cond or math.isinf(cond) else (math.log2(cond) if cond > 0 else 0.0)
+    if lost >= ar.prec:
+        raise NumericalError(f"{what} cannot be evaluated in {ar.name} at x = ({_fmt_point(ar, x)}), "
+                             f"eps = {ar.format(e)}: I - eps^2 (M J(x))^2 is numerically singular "
+                             f"(condition estimate {cond:.3g} >= 2^{ar.prec}, no bit can be trusted; not a "
+                             f"proven pole: use more bits or an exact arithmetic)", cond)
+    if lost >= ar.prec / 2:
+        warnings.warn(NearSingularWarning(
+            f"{what} at eps = {ar.format(e)} is ill-conditioned: condition estimate {cond:.3g} of "
+            f"I - eps^2 (M J(x))^2 in {ar.name} (about {lost:.0f} of {ar.prec} bits at risk)", cond),
+            stacklevel=3)
+
+
+def _ldexp(ar, t, k):
+    """t·2^k in a binary floating arithmetic (exact unless it leaves the range)."""
+    if hasattr(ar, "ctx"):
+        return ar.ctx.ldexp(t, k)
+    try:
+        return math.ldexp(t, k)
+    except OverflowError:
+        return math.copysign(math.inf, t)
+
+
+def _htilde_floating(ar, field, x, e):
+    """H̃ in ``float``/``mp:P``, scaled so that nothing overflows, with the floating
+    conditioning policy (:func:`floating_policy`).
+
+    H̃ is homogeneous: J is linear, so H̃(λy, ε) = λ² H̃(y, λε).  With λ = 2^k
+    (exact) and y = x/λ of magnitude about 1, ε' = λε, S = M J(y):
+
+    * |ε'| ≤ 1:  H̃(x, ε) = λ² yᵀ (I − ε'² S²)^{-1} M y;
+    * |ε'| > 1:  H̃(x, ε) = ε^{-2} yᵀ (δ I − S²)^{-1} M y with δ = ε'^{-2},
+
+    the same rational function, but no intermediate value is larger than the
+    result requires (at x ≈ 10^160 in float64, S² would overflow)."""
+    big = max(ar.magnitude(t) for t in x)
+    if big == 0:
+        return ar.zero
+    if not math.isfinite(big):  # a magnitude beyond float range (mp:P): scale by its exponent
+        k = int(ar.ctx.mag(max(x, key=lambda t: abs(t)))) if hasattr(ar, "ctx") else 0
+    else:
+        k = math.frexp(big)[1]
+    y = [_ldexp(ar, t, -k) for t in x]
+    ep = _ldexp(ar, e, k)
+    M = hessian_in(ar, field)
+    N = len(y)
+    S = matmul(M, field.system.J(y))
+    S2 = matmul(S, S)
+    My = [[sum((M[i][j] * y[j] for j in range(N)), ar.zero)] for i in range(N)]
+    small = ar.magnitude(ep) <= 1
+    if small:
+        e2 = ep * ep
+        R = [[(ar.one if i == j else ar.zero) - e2 * S2[i][j] for j in range(N)] for i in range(N)]
+    else:
+        delta = ar.one / (ep * ep)
+        R = [[(delta if i == j else ar.zero) - S2[i][j] for j in range(N)] for i in range(N)]
+    try:
+        z, cond = solve(ar, R, My)
+    except SingularMatrix:
+        raise _pole(ar, x, e) from None
+    floating_policy(ar, cond, [t[0] for t in z], "H~", x, e)
+    value = sum((y[i] * z[i][0] for i in range(N)), ar.zero)
+    # times λ² = 2^(2k), or (λ/ε')² = 1/ε² in the second form
+    value = _ldexp(ar, value, 2 * k) if small else value / (e * e)
+    floating_policy(ar, None, [value], "H~", x, e)
+    return value
+
+
 def _htilde(ar, field, x, e):
+    if _floating(ar):
+        return _htilde_floating(ar, field, x, e)
     M = hessian_in(ar, field)
     x = list(x)
     S = matmul(M, field.system.J(x))
@@ -105,10 +225,11 @@ def shift_index(n: int, l: int) -> list[int]:
 
 def q_coefficients(system, x, arith=None):
     """[q_0, …, q_{n-1}] at x: q_l = tr((Aᵀ)^l (J(x) Hs)²)/(2n), so that
-    (J(x) Hs)² = Σ_l q_l A^l (MATH.md)."""
+    (J(x) Hs)² = Σ_l q_l A^l (docs/conventions.md)."""
     ar = get_arith(arith)
     n = system.n
-    S = matmul(system.J(list(x)), hessian_in(ar, system.field("f")))
+    x = _point(ar, x, system.dim)
+    S = matmul(system.J(x), hessian_in(ar, system.field("f")))
     S2 = matmul(S, S)
     two_n = ar.convert(2 * n)
     return [sum((S2[i][s] for i, s in enumerate(shift_index(n, l))), ar.zero) / two_n for l in range(n)]
@@ -118,7 +239,7 @@ def Pi(system, x, eps, arith=None):
     """The invariant Poisson tensor by its definition Π(x) = J − ε² J Hs J Hs J (J = J(x))."""
     ar = get_arith(arith)
     e = _eps(ar, eps)
-    J = system.J(list(x))
+    J = system.J(_point(ar, x, system.dim))
     JH = matmul(J, hessian_in(ar, system.field("f")))
     T = matmul(matmul(JH, JH), J)
     e2 = e * e
@@ -130,7 +251,8 @@ def Pi_from_q(system, x, eps, arith=None):
     ar = get_arith(arith)
     e = _eps(ar, eps)
     e2 = e * e
-    J = system.J(list(x))
+    x = _point(ar, x, system.dim)
+    J = system.J(x)
     q = q_coefficients(system, x, ar)
     out = [[(ar.one - e2 * q[0]) * t for t in row] for row in J]
     for l in range(1, system.n):
@@ -166,19 +288,20 @@ def grad_Htilde(field, x, eps, arith=None):
     e = _eps(ar, eps)
     M = hessian_in(ar, field)
     n, N = field.system.n, len(M)
-    x = list(x)
+    x = _point(ar, x, field.dim)
     S = matmul(M, field.system.J(x))
     S2 = matmul(S, S)
     e2 = e * e
     R = [[(ar.one if i == j else ar.zero) - e2 * S2[i][j] for j in range(N)] for i in range(N)]
     with ar.local():
         try:
-            zw, _ = solve(ar, R, [[t] for t in matvec(M, x)])
+            zw, cond = solve(ar, R, [[t] for t in matvec(M, x)])
             ww, _ = solve(ar, transpose(R), [[t] for t in x])
         except SingularMatrix:
-            raise PoleError("H~ has a pole at x = (" + ", ".join(ar.format(t) for t in x)
-                            + f"), eps = {ar.format(e)}: I - eps^2 (M J(x))^2 is singular") from None
+            raise _pole(ar, x, e) from None
     z, w = [r[0] for r in zw], [r[0] for r in ww]
+    if _floating(ar):
+        floating_policy(ar, cond, z + w, "grad H~", x, e)
     Mt = transpose(M)
     a = matvec(Mt, w)
     b = matvec(S, z)
@@ -194,4 +317,4 @@ def grad_Htilde_dual(field, x, eps, arith=None):
 
     ar = get_arith(arith)
     e = _eps(ar, eps)
-    return gradient(ar, lambda d, xd: Htilde(field, xd, e, d), list(x))
+    return gradient(ar, lambda d, xd: Htilde(field, xd, e, d), _point(ar, x, field.dim))

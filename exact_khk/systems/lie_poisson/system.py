@@ -1,4 +1,4 @@
-"""The Lie–Poisson family of Petrera & Suris, in the conventions of MATH.md.
+"""The Lie–Poisson family of Petrera & Suris, in the conventions of docs/conventions.md.
 
 Phase space Q^{2n}, x = (u, v) with u = x[0:n], v = x[n:2n] (0-based).
 
@@ -30,6 +30,7 @@ exact_khk.errors.NotRationalError: signs '+-++' split the class {j : gcd(j, 4) =
 from __future__ import annotations
 
 import random
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from math import gcd
@@ -288,15 +289,28 @@ class LiePoissonSystem(System):
             return self.field("f")
         return self.field("g", signs, cyclotomic=True)
 
-    def field_from_hessian(self, M, label="f") -> "LiePoissonField":
-        """The field f(x) = J(x) M x for any 2n×2n matrix M (no admissibility check)."""
+    def field_from_hessian(self, M, label="f", structure=None) -> "LiePoissonField":
+        """The field f(x) = J(x) M x for any 2n×2n matrix M (no admissibility check).
+
+        ``M`` may be a :class:`LazyHessian` (built on first use) and ``structure``
+        the field's :class:`~exact_khk.linalg.circulant.CirculantStructure`, known
+        from a, b, c: the structured step then never builds the (2n)² matrix."""
         N = self.dim
-        if len(M) != N or any(len(r) != N for r in M):
-            raise InputError(f"hessian: expected a {N}x{N} matrix")
+        if isinstance(M, LazyHessian):
+            if len(M) != N:
+                raise InputError(f"hessian: expected a {N}x{N} matrix")
+            rows = M
+        else:
+            if len(M) != N or any(len(r) != N for r in M):
+                raise InputError(f"hessian: expected a {N}x{N} matrix")
+            rows = tuple(tuple(r) for r in M)
         # The quadratic terms are built on first use (LiePoissonField.terms):
         # the structured step never needs them, and for large n they are huge.
-        return LiePoissonField(N, None, tuple(() for _ in range(N)), tuple(0 for _ in range(N)), label,
-                               system=self, hessian=tuple(tuple(r) for r in M))
+        fld = LiePoissonField(N, None, tuple(() for _ in range(N)), tuple(0 for _ in range(N)), label,
+                              system=self, hessian=rows)
+        if structure is not None:
+            fld._cache["circulant"] = structure
+        return fld
 
     def field(self, kind: str = "f", signs=None, power: int = 0,
               cyclotomic: bool = False) -> "LiePoissonField":
@@ -313,16 +327,24 @@ class LiePoissonSystem(System):
         if key in self._fields:
             return self._fields[key]
         if kind == "f":
-            fld = self.field_from_hessian(self.hamiltonian_hessian(power),
-                                          "f" if power == 0 else f"f_{power}")
+            fld = self.field_from_hessian(LazyHessian(self.dim, lambda: self.hamiltonian_hessian(power)),
+                                          "f" if power == 0 else f"f_{power}",
+                                          structure_from_system(self, "f", power=power))
         elif kind == "g":
             s = format_signs(parse_signs(signs if signs is not None else b0_signs(self.n), self.n))
-            B = self.involution(s, cyclotomic=cyc)
-            fld = self.field_from_hessian(mat_mul(B, self.hessian), f"g[{s}]")
+            if cyc:
+                fld = self.field_from_hessian(mat_mul(self.involution(s, cyclotomic=True), self.hessian),
+                                              f"g[{s}]")
+            else:
+                involution_circulant(self.n, s)  # a non-rational pattern raises here, at once
+                fld = self.field_from_hessian(
+                    LazyHessian(self.dim, lambda: mat_mul(self.involution(s), self.hessian)), f"g[{s}]",
+                    structure_from_system(self, "g", s))
             object.__setattr__(fld, "signs", s)
         elif kind == "control":
-            C = self.shift if self.n >= 3 else mat_add(eye(self.dim), self.shift, 2, 1)
-            fld = self.field_from_hessian(mat_mul(C, self.hessian), "control")
+            C = (lambda: self.shift) if self.n >= 3 else (lambda: mat_add(eye(self.dim), self.shift, 2, 1))
+            fld = self.field_from_hessian(LazyHessian(self.dim, lambda: mat_mul(C(), self.hessian)), "control",
+                                          structure_from_system(self, "control"))
         else:
             raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
         self._fields[key] = fld
@@ -343,18 +365,131 @@ def default_system() -> "LiePoissonSystem":
     return LiePoissonSystem.from_vectors(*DEFAULT_VECTORS)
 
 
-def random_point(n: int, seed: int, bound: int = 3) -> tuple:
-    """A reproducible small-integer point of Q^{2n} (not all zero)."""
+def hankel_singular(u) -> bool:
+    """Whether X(u) (and so J(x) for x = (u, v)) is singular, for rational u.
+
+    X(u) is singular iff a DFT value û_j = Σ_i u_i ω^{ij} (ω = e^{2πi/n}) vanishes,
+    iff gcd(Σ_i u_i t^i, tⁿ − 1) ≠ 1 (one polynomial gcd, fast for any n).  The
+    set is invariant under every Kahan map of the family (each {û_j = 0} is an
+    invariant linear subspace of the fields); it contains u = 0, u with equal
+    coordinates, the hyperplane Σu = 0 and, for even n, Σ(−1)^i u_i = 0.
+
+    >>> hankel_singular([1, 1, 1]), hankel_singular([1, -1, 0]), hankel_singular([1, 2, 0])
+    (True, True, False)
+    """
+    import flint
+
+    qs = [Fraction(t) for t in u]
+    n = len(qs)
+    den = 1
+    for q in qs:
+        den = den * q.denominator // gcd(den, q.denominator)
+    p = flint.fmpz_poly([int(q * den) for q in qs])
+    if p == 0:
+        return True
+    return p.gcd(flint.fmpz_poly([-1] + [0] * (n - 1) + [1])).degree() > 0
+
+
+#: largest n for which :func:`random_point` also tests a given system and ε
+#: (equilibrium, pole of H̃, singular first step: dense exact work, O(n³))
+RANDOM_POINT_SYSTEM_CHECK_MAX_N = 16
+#: draws before :func:`random_point` gives up the system-dependent conditions
+_MAX_DRAWS = 200
+
+
+def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tuple:
+    """A reproducible small-integer point of Q^{2n}, off the known degenerate sets.
+
+    Points are drawn from one random stream per ``seed`` (integers in
+    [-bound, bound]); a draw is rejected, and the next one taken, when
+
+    * X(u) is singular (:func:`hankel_singular`: u = 0, equal coordinates,
+      Σu = 0, an alternating sum 0 for even n, …) — an invariant set where
+      J(x) is singular, h(x, x̃) is undefined and negative controls cannot fail;
+
+    and, when a ``system`` (and ``eps``, default :data:`DEFAULT_EPS`) is given and
+    n ≤ :data:`RANDOM_POINT_SYSTEM_CHECK_MAX_N`, when
+
+    * x is an equilibrium (Hs x = 0: every map of the family fixes it);
+    * H̃(x, ε) has a pole, or the first step of Φ_f is singular;
+    * Φ_f(x) has X(u) singular (x on the critical set of Φ_f, which Φ_f maps
+      into the invariant singular set, where Φ_f⁻¹ is undefined).
+
+    A draw that is not rejected is the same as before these rules, so points
+    that were fine stay the same.  After 200 draws the system-dependent rules
+    are dropped (a system whose every small point is degenerate, e.g. Hs = 0).
+    """
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+        raise InputError(f"n: expected a positive integer, got {n!r}")
+    if not isinstance(bound, int) or bound < 1:
+        raise InputError(f"bound: expected a positive integer, got {bound!r}")
+    check_system = system is not None and n <= RANDOM_POINT_SYSTEM_CHECK_MAX_N
     rng = random.Random(f"x0-{seed}")
+    draws = 0
     while True:
         x = tuple(Fraction(rng.randint(-bound, bound)) for _ in range(2 * n))
-        if any(x):
+        if not any(x) or hankel_singular(x[:n]):
+            continue
+        draws += 1
+        if not check_system or draws > _MAX_DRAWS or not _degenerate_for(system, x, eps):
             return x
+
+
+def _degenerate_for(system, x, eps) -> bool:
+    """The system-dependent rejection rules of :func:`random_point`."""
+    from exact_khk.arith import get_arith
+    from exact_khk.errors import PoleError, SingularStepError
+    from exact_khk.kahan.map import KahanMap
+    from exact_khk.systems.lie_poisson.invariants import Htilde
+
+    eps = DEFAULT_EPS if eps is None else eps
+    if not any(sum((h * t for h, t in zip(row, x)), Fraction(0)) for row in system.hessian):
+        return True
+    ar = get_arith("fraction")
+    try:
+        Htilde(system.field("f"), x, eps, ar)
+        y = KahanMap(system.field("f"), eps, ar, method="dense").step(x)
+    except (PoleError, SingularStepError):
+        return True
+    return hankel_singular(y[:system.n])
 
 
 def b0_signs(n: int) -> str:
     """The sign pattern of B_0 = I - (2/n)(𝟙 ⊕ 𝟙): '-' then n-1 '+'."""
     return "-" + "+" * (n - 1)
+
+
+class LazyHessian(Sequence):
+    """The rows of a 2n×2n Hessian, built by ``build()`` on first access to an entry.
+
+    The named fields of a :class:`LiePoissonSystem` know their circulant
+    structure from a, b, c in O(n) to O(n log n); their (2n)² matrix (and its
+    O((2n)³) product with an involution) is built only when a dense path needs
+    it, so that ``exact-khk orbit --n 20000`` on the structured path stays O(n)
+    in memory."""
+
+    def __init__(self, dim, build):
+        self._dim, self._build, self._rows = dim, build, None
+
+    def _get(self):
+        if self._rows is None:
+            self._rows = tuple(tuple(r) for r in self._build())
+        return self._rows
+
+    def __len__(self):
+        return self._dim
+
+    def __getitem__(self, i):
+        return self._get()[i]
+
+    def __iter__(self):
+        return iter(self._get())
+
+    def __eq__(self, other):
+        return tuple(self) == tuple(other)
+
+    def __repr__(self):
+        return f"LazyHessian({self._dim}x{self._dim}, {'built' if self._rows is not None else 'not built'})"
 
 
 @dataclass(frozen=True, eq=False)
@@ -393,6 +528,22 @@ class LiePoissonField(QuadraticField):
         return hit
 
 
+def _correlate(coeffs, w):
+    """(Σ_k c_k w_{(j+k) mod n})_j by one python-flint polynomial product: the
+    coefficient of t^j in (Σ_i w_i t^i)(Σ_k c_k t^{(−k) mod n}) mod tⁿ − 1."""
+    import flint
+
+    n = len(w)
+    q = lambda t: flint.fmpq(Fraction(t).numerator, Fraction(t).denominator)  # noqa: E731
+    W = flint.fmpq_poly([q(t) for t in w])
+    C = flint.fmpq_poly([q(coeffs[-k % n]) for k in range(n)])
+    full = (W * C).coeffs()
+    out = [Fraction(0)] * n
+    for i, c in enumerate(full):
+        out[i % n] += Fraction(int(c.p), int(c.q))
+    return tuple(out)
+
+
 def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.CirculantStructure:
     """The structure of ``system.field(kind, signs, power)`` computed from the vectors a, b, c
     alone, in O(n²) (building the field itself costs O((2n)³) memory).
@@ -401,9 +552,14 @@ def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.Ci
     """
     n = system.n
 
-    def left(coeffs, w):  # first row of (Σ_k coeffs[k] P^k) X(w)
-        return tuple(sum((c * w[(j + k) % n] for k, c in enumerate(coeffs) if c), Fraction(0))
-                     for j in range(n))
+    def left(coeffs, w):  # first row of (Σ_k coeffs[k] P^k) X(w): Σ_k c_k w_{j+k}
+        nonzero = [(k, c) for k, c in enumerate(coeffs) if c]
+        if len(nonzero) == 1 and nonzero[0][1] == 1:  # a shift: A^p X(w) = X(w shifted by p)
+            k = nonzero[0][0]
+            return tuple(w[k:]) + tuple(w[:k])
+        if len(nonzero) <= 4 or n <= 64:
+            return tuple(sum((c * w[(j + k) % n] for k, c in nonzero), Fraction(0)) for j in range(n))
+        return _correlate(coeffs, w)
 
     unit = lambda k: [Fraction(int(i == k % n)) for i in range(n)]  # noqa: E731
     if kind == "f":

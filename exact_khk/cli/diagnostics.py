@@ -1,0 +1,125 @@
+"""``exact-khk degrees`` and ``exact-khk find-integrals``: integrability diagnostics
+(a thin view of :mod:`exact_khk.diagnostics`; docs/diagnostics.md)."""
+
+from __future__ import annotations
+
+from exact_khk.cli.options import add_system_options, check_output, system_from_args, write_json
+from exact_khk.errors import InputError
+
+
+def register(sub):
+    p = sub.add_parser("degrees", help="degree growth of the iterates of a Kahan map, its recurrence and "
+                       "dynamical degree",
+                       description="Degrees d_k of the iterates Phi^k (projective degree: numerators and common "
+                       "denominator in lowest terms), computed on random lines over F_p; the shortest integer "
+                       "recurrence, the dynamical degree and the growth class; heights of the exact orbit of x0.")
+    add_system_options(p, steps_default=20)
+    _field_options(p)
+    p.add_argument("--primes", default="2", help="number of random 62-bit primes, or a comma-separated list (default 2)")
+    p.add_argument("--lines", type=int, default=1, help="random lines per prime (default 1)")
+    p.add_argument("--line-seed", type=int, default=0, help="seed of the random primes and lines (default 0)")
+    p.add_argument("--exact", type=int, default=0, metavar="K",
+                   help="also compose the first K iterates exactly over Q (where affordable) to confirm")
+    p.add_argument("--confirm", type=int, default=3,
+                   help="terms beyond the fit that must confirm the recurrence before growth is classified (default 3)")
+    p.add_argument("--no-heights", action="store_true", help="skip the heights of the exact orbit of x0")
+    p.add_argument("--max-bits", type=int, default=100_000, help="stop the height orbit past this height (default 100000)")
+    p.add_argument("--plot", metavar="FILE.png", help="plot degree and log-height against the step (needs matplotlib)")
+    p.add_argument("--json", action="store_true", help="print one JSON object instead of the summary")
+    p.set_defaults(func=cmd_degrees)
+
+    q = sub.add_parser("find-integrals", help="discover conserved rational functions from orbits (HK bases)",
+                       description="Evaluate candidate monomials on orbits, compute the kernels modulo primes, "
+                       "lift them to Q and report conserved ratios of kernel polynomials, each checked exactly on "
+                       "a fresh orbit (docs/diagnostics.md).")
+    add_system_options(q, steps_default=0)
+    _field_options(q)
+    g = q.add_mutually_exclusive_group()
+    g.add_argument("--degree", type=int, help="candidates: all monomials of degree <= D (default 2)")
+    g.add_argument("--monomials", help="candidates: a comma-separated list such as '1,x*y,z^2'")
+    q.add_argument("--homogeneous", action="store_true", help="with --degree: monomials of degree exactly D")
+    q.add_argument("--orbits", type=int, default=3, help="random orbits (default 3; 4 are used for pencils)")
+    q.add_argument("--primes", default="2", help="initial number of random primes, or a list (default 2)")
+    q.add_argument("--line-seed", type=int, default=0, help="seed of the random orbits and primes (default 0)")
+    q.add_argument("--verify-steps", type=int, default=6, help="steps of the fresh exact orbit of the check (default 6)")
+    q.add_argument("--json", action="store_true", help="print one JSON object instead of the summary")
+    q.set_defaults(func=cmd_find_integrals)
+
+
+def _field_options(p):
+    p.add_argument("--field", default="f",
+                   help="Lie–Poisson family: f, g (see --signs) or control; --system: f or a field of the file")
+    p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
+
+
+def _field_spec(system, args):
+    if args.signs is not None:
+        if system.kind != "lie-poisson" or args.field != "g":
+            raise InputError("--signs applies only to --field g of the Lie–Poisson family")
+        return f"g[{args.signs}]"
+    return args.field
+
+
+def _primes(text):
+    text = str(text).strip()
+    if text.isdigit() and "," not in text:
+        return int(text)
+    try:
+        return [int(t) for t in text.split(",") if t.strip()]
+    except ValueError:
+        raise InputError(f"--primes: expected a count or a comma-separated list of primes, got {text!r}") from None
+
+
+def cmd_degrees(args):
+    from exact_khk.diagnostics import degree_sequence, plot_growth
+
+    if args.plot:
+        check_output(args.plot, "--plot")
+    system, x0, eps = system_from_args(args)
+    try:
+        res = degree_sequence(system, steps=args.steps, eps=eps, field=_field_spec(system, args),
+                              primes=_primes(args.primes), lines=args.lines, seed=args.line_seed, exact=args.exact,
+                              confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits)
+    except InputError as exc:  # name the command-line options
+        raise InputError(str(exc).replace("steps:", "--steps:").replace("primes:", "--primes:")
+                         .replace("lines:", "--lines:").replace("exact:", "--exact:")) from None
+    if args.plot:
+        plot_growth(args.plot, degrees=res, heights=res.heights, title=res.label)
+    if args.json:
+        write_json({"system": system.to_json(), **res.to_json()}, "-")
+    else:
+        print(system.describe())
+        print(res.summary())
+        if args.plot:
+            print(f"plot written to {args.plot}")
+    return 0
+
+
+def cmd_find_integrals(args):
+    from exact_khk.diagnostics import find_integrals
+
+    system, x0, eps = system_from_args(args)
+    kw = dict(field=_field_spec(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
+              steps=args.steps or None, primes=_primes(args.primes), seed=args.line_seed,
+              x0=x0 if args.x0 is not None else None, verify_steps=args.verify_steps)
+    if args.monomials is not None:
+        if args.homogeneous:
+            raise InputError("--homogeneous applies only to --degree")
+        kw["monomials_list"] = [t.strip() for t in args.monomials.split(",") if t.strip()]
+    else:
+        kw["degree"] = 2 if args.degree is None else args.degree
+    try:
+        res = find_integrals(system, **kw)
+    except InputError as exc:
+        msg = str(exc)
+        for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0"):
+            if msg.startswith(name + ":"):
+                msg = "--" + name.replace("_", "-") + msg[len(name):]
+                break
+        raise InputError(msg) from None
+    if args.json:
+        write_json({"system": system.to_json(), "eps": str(eps), **res.to_json()}, "-")
+    else:
+        print(system.describe())
+        print(res.summary())
+    return 0

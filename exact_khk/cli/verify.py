@@ -1,0 +1,75 @@
+"""``exact-khk verify CERT.json [--json]``: re-check a saved certificate (a thin view of
+:func:`exact_khk.certification.verify.verify`).
+
+Exit status: 0 VERIFIED (the recorded orbit, integral values and status are
+correct, whatever the status is); 1 NOT VERIFIED (a check fails, or the
+certificate was computed in an inexact arithmetic and cannot be re-checked
+exactly); 2 an unreadable or malformed file (one line on stderr).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+from exact_khk.certification.verify import verify
+from exact_khk.cli.options import write_json
+from exact_khk.errors import InputError
+
+#: the largest certificate file read (bytes)
+MAX_CERTIFICATE = 200_000_000
+
+
+def register(sub):
+    p = sub.add_parser("verify", help="re-check a saved certificate (orbit, integral values, status) "
+                       "by a separate minimal exact code path",
+                       description="Re-check a certificate written by 'exact-khk certify --json FILE': every "
+                       "orbit point is the Kahan step of the previous one (the linear equation, checked by "
+                       "substitution, and a nonzero determinant), every recorded integral value is recomputed, "
+                       "conservation and the status agree with the recorded checks. Plain Fraction arithmetic, "
+                       "independent of the library's solvers (docs/verify.md). Exit status 0 VERIFIED, "
+                       "1 NOT VERIFIED, 2 unreadable or malformed file.")
+    p.add_argument("certificate", metavar="CERT.json", help="the certificate file")
+    p.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    p.set_defaults(func=cmd_verify)
+
+
+def read_certificate(path) -> dict:
+    """The JSON object in ``path``; InputError (one line, naming the file) if it cannot be read."""
+    try:
+        size = os.stat(path).st_size
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if os.path.isdir(path):
+        raise InputError(f"{path}: is a folder, not a certificate file")
+    if size > MAX_CERTIFICATE:
+        raise InputError(f"{path}: the file has {size} bytes, more than the limit of {MAX_CERTIFICATE}")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            data = json.load(fh)
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
+    except (ValueError, RecursionError) as exc:  # e.g. an integer beyond a digit limit, nesting too deep
+        raise InputError(f"{path}: not a readable JSON certificate ({type(exc).__name__}: {exc})") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: expected a JSON object (a certificate), got a {type(data).__name__}")
+    return data
+
+
+def cmd_verify(args):
+    data = read_certificate(args.certificate)
+    try:
+        report = verify(data)
+    except InputError as exc:
+        raise InputError(f"{args.certificate}: {exc}") from None
+    if args.json:
+        write_json(report.to_json(), "-")
+    else:
+        print(report.summary())
+    return 0 if report.ok else 1

@@ -1,0 +1,408 @@
+"""Degree growth of the iterates Φ^k of a Kahan map, by restriction to random lines over F_p.
+
+**What is reported.**  For ε a fixed rational, one Kahan step
+Φ(x) = x + 2ε(I − εf'(x))^{-1} f(x) is a birational map of affine N-space.  Its
+iterate Φ^k is written with a common denominator in lowest terms,
+Φ^k = (P_1, …, P_N)/Q with gcd(P_1, …, P_N, Q) = 1, and
+
+    d_k = deg Φ^k = max(deg P_1, …, deg P_N, deg Q)
+
+is the degree of the *projective* map [x_0 : x] ↦ [x_0^{d} Q(x/x_0) : x_0^{d} P(x/x_0)]
+of P^N (the homogenisation by an extra coordinate x_0).  This is the degree the
+literature on degree growth uses; it is the same for homogeneous and
+non-homogeneous fields (a homogeneous quadratic field does *not* make Φ
+homogeneous: Φ(λx, ε) = λΦ(x, λε)).  d_0 = 1 (the identity).
+
+**How.**  With (Q, P) the homogeneous coordinates of a point, one step is the
+integer-coefficient linear system M(Q, P) y = r(Q, P) of
+:meth:`~exact_khk.systems.quadratic.QuadraticField.integer_rows` (M, r linear in
+(Q, P)); Cramer's rule gives the degree-N homogeneous polynomial map
+C(Q, P) = (det M, adj(M) r) whose projective class is Φ.  Along a line
+ℓ(t) = a + t b (a, b random in F_p^N) the point (1, a + t b) is iterated in
+F_p[t]^{N+1}: fraction-free elimination (Bareiss, exact divisions in
+``nmod_poly``) gives C of the current point, and the gcd of its N + 1
+coordinates is divided out at every step.  The degree of the reduced vector is
+the degree of the curve Φ^k(ℓ).
+
+**Never an overcount.**  Let G = (G_0, …, G_N) be the coprime integral forms of
+degree d_k representing Φ^k.  The k-fold formal composite C^{∘k} equals H·G
+over Z (Gauss's lemma), and reduction mod p commutes with composition, so
+whenever the computation never meets the zero vector the computed point is
+proportional to G_p(ℓ(s, t)) (ℓ homogenised); its reduced degree is d_k minus
+the degree of the common factor of those N + 1 binary forms: ≤ d_k.
+
+**Undercount bound (Schwartz–Zippel).**  Call p *good* for k when G mod p has
+coprime components (all but finitely many p: those dividing the content of
+the resultant below).  For random u, w the resultant of the binary forms
+Σ u_i G_i(ℓ) and Σ w_i G_i(ℓ) is a polynomial of total degree ≤ 2 d(d + 1) in
+(a, b, u, w), not identically zero mod a good p, and it vanishes whenever the
+restriction has a common factor.  Hence for one random line
+
+    Pr[undercount of d_k] ≤ 2 d_k (d_k + 1) / p,
+
+and the reported degree, the maximum over independent (prime, line) runs, is
+too small only if every run undercounts: probability ≤ Π_runs 2 d(d+1)/p for
+the good primes among them (the bound is stated at the reported d_k; a bad
+prime undercounts at every line, which is why several primes are used and
+runs that disagree with the maximum are reported).
+
+>>> from exact_khk.systems.expressions import ExpressionSystem
+>>> euler = ExpressionSystem.from_expressions(["x", "y", "z"], field=["y*z", "-2*x*z", "x*y"])
+>>> r = degree_sequence(euler, steps=10, eps="1/10")
+>>> r.degrees
+(1, 3, 9, 19, 33, 51, 73, 99, 129, 163, 201)
+>>> r.fit.growth, r.fit.polynomial
+('polynomial', '2*k^2 + 1')
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from dataclasses import dataclass, field as dc_field
+from fractions import Fraction
+
+import flint
+
+from exact_khk.errors import InputError
+from exact_khk.parsing import parse_rational
+from exact_khk.systems.quadratic import QuadraticField
+
+MAX_STEPS = 100_000
+MAX_DIM = 64
+DEFAULT_PRIME_BITS = 62
+
+
+# --- shared helpers (also used by integrals.py) ---------------------------------------
+
+
+def check_primes(primes, name="primes", count_default=2, seed=0) -> tuple:
+    """A tuple of primes: ``primes`` an int (that many random primes in [2^61, 2^62),
+    reproducible from ``seed``) or a list of primes (each checked, 2 < p < 2^63)."""
+    if primes is None:
+        primes = count_default
+    if isinstance(primes, bool):
+        raise InputError(f"{name}: expected a count or a list of primes, got {primes!r}")
+    if isinstance(primes, str):
+        primes = [t for t in primes.replace(" ", "").split(",") if t]
+    if isinstance(primes, int):
+        if not 1 <= primes <= 64:
+            raise InputError(f"{name}: expected between 1 and 64 primes, got {primes}")
+        return random_primes(primes, seed)
+    try:
+        out = tuple(int(p) for p in primes)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected a count or a list of primes, got {primes!r}") from None
+    if not out:
+        raise InputError(f"{name}: the list of primes is empty")
+    for p in out:
+        if not 2 < p < 2 ** 63 or not flint.fmpz(p).is_prime():
+            raise InputError(f"{name}: {p} is not an odd prime below 2^63")
+    return out
+
+
+def random_primes(count: int, seed=0, bits: int = DEFAULT_PRIME_BITS) -> tuple:
+    """``count`` distinct random primes in [2^(bits-1), 2^bits), reproducible from ``seed``."""
+    rng = random.Random(f"primes-{seed}-{bits}")
+    out = []
+    while len(out) < count:
+        p = rng.randrange(2 ** (bits - 1), 2 ** bits) | 1
+        if flint.fmpz(p).is_prime() and p not in out:
+            out.append(p)
+    return tuple(out)
+
+
+def resolve_field(system, field="f") -> tuple:
+    """(system or None, QuadraticField) from a System (and a field name such as
+    ``'f'``, ``'g'``, ``'g[-++]'``, ``'control'``), a catalogue name / system file,
+    or a QuadraticField."""
+    if isinstance(system, QuadraticField):
+        return None, system
+    from exact_khk.systems.catalogue import resolve
+
+    system = resolve(system)
+    if isinstance(field, QuadraticField):
+        return system, field
+    if not isinstance(field, str):
+        raise InputError(f"field: expected a field name, got {field!r}")
+    if system.kind == "lie-poisson":
+        kind, _, signs = field.partition("[")
+        if kind not in ("f", "g", "control"):
+            raise InputError(f"field: expected f, g, g[signs] or control for the Lie–Poisson family, got {field!r}")
+        return system, system.field(kind, signs=signs.rstrip("]") or None)
+    return system, system.field(field)
+
+
+def check_count(value, name, low, high):
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise InputError(f"{name}: expected an integer in [{low}, {high}], got {value!r}")
+    return value
+
+
+def eps_of(system, eps):
+    eps = (system.default_eps if system is not None else Fraction(1, 10)) if eps is None \
+        else parse_rational(eps, "eps")
+    if eps == 0:
+        raise InputError("eps: the step size must be nonzero")
+    return Fraction(eps)
+
+
+# --- one step in a polynomial ring ----------------------------------------------------
+
+
+class _Degenerate(ArithmeticError):
+    """The iterated point became zero, or the step matrix is singular along the curve."""
+
+
+def bareiss(M, r, exact_div):
+    """(det M, [det·y_i]) for M y = r over an integral domain of polynomials, by
+    fraction-free elimination (Bareiss) and back substitution.
+
+    >>> P = flint.fmpz_poly
+    >>> det, ys = bareiss([[P([2]), P([0, 1])], [P([1]), P([3])]], [P([1]), P([0, 0, 1])], lambda a, b: a // b)
+    >>> det, ys
+    ((-1)*x + 6, [(-1)*x^3 + 3, 2*x^2 + (-1)])
+    """
+    N = len(M)
+    A = [list(M[i]) + [r[i]] for i in range(N)]
+    prev = None
+    for k in range(N):
+        cands = [i for i in range(k, N) if not A[i][k].is_zero()]
+        if not cands:
+            raise _Degenerate("singular step matrix")
+        piv = min(cands, key=lambda i: _deg(A[i][k]))
+        A[k], A[piv] = A[piv], A[k]
+        rk, akk = A[k], A[k][k]
+        for i in range(k + 1, N):
+            row, aik = A[i], A[i][k]
+            for j in range(k + 1, N + 1):
+                v = akk * row[j] if aik.is_zero() else akk * row[j] - aik * rk[j]
+                row[j] = v if prev is None else exact_div(v, prev)
+        prev = akk
+    det = A[N - 1][N - 1]
+    ys = [None] * N
+    ys[N - 1] = A[N - 1][N]
+    for i in range(N - 2, -1, -1):
+        s = A[i][N] * det
+        for j in range(i + 1, N):
+            s = s - A[i][j] * ys[j]
+        ys[i] = exact_div(s, A[i][i])
+    return det, ys
+
+
+def _deg(p):
+    return p.degree() if hasattr(p, "degree") else p.total_degree()
+
+
+def kahan_rows(fld: QuadraticField, eps: Fraction):
+    """Integer (V, R): M = (Σ_l V[i·N+j][l] w_l), r = (Σ_l R[i][l] w_l) for w = (P, Q)."""
+    return fld.integer_rows(eps.numerator, eps.denominator)
+
+
+def step_polys(w, V, R, zero, exact_div, gcd_of):
+    """One Kahan step on the homogeneous point w = (P_1..P_N, Q) of polynomials,
+    reduced by the gcd of its coordinates (``gcd_of``)."""
+    N = len(w) - 1
+    def comb(coeffs):
+        s = zero
+        for l, c in enumerate(coeffs):
+            if c:
+                s = s + w[l] * c
+        return s
+    M = [[comb(V[i * N + j]) for j in range(N)] for i in range(N)]
+    r = [comb(R[i]) for i in range(N)]
+    det, ys = bareiss(M, r, exact_div)
+    out = ys + [det]
+    if all(c.is_zero() for c in out):
+        raise _Degenerate("zero point")
+    return gcd_of(out)
+
+
+def _nmod_gcd_reduce(rng, p):
+    def reduce(vec):
+        nz = [c for c in vec if not c.is_zero()]
+        comb = nz[0]
+        for c in nz[1:]:
+            comb = comb + c * rng.randrange(1, p)
+        g = nz[0].gcd(comb) if len(nz) > 1 else nz[0]
+        out = []
+        for c in vec:
+            q, rem = divmod(c, g)
+            if not rem.is_zero():  # the random combination's gcd was too large: exact gcd
+                g = nz[0]
+                for c2 in nz[1:]:
+                    g = g.gcd(c2)
+                return [c2 // g for c2 in vec]
+            out.append(q)
+        return out
+    return reduce
+
+
+def line_degrees(fld, eps, p, steps, rng, max_degree=None):
+    """d_0..d_steps of Φ restricted to one random line over F_p (see the module docstring);
+    stops early once a degree exceeds ``max_degree``."""
+    V, R = kahan_rows(fld, eps)
+    V = [[c % p for c in row] for row in V]
+    R = [[c % p for c in row] for row in R]
+    N = fld.dim
+    P = lambda cs: flint.nmod_poly(cs, p)  # noqa: E731
+    w = [P([rng.randrange(p), rng.randrange(p)]) for _ in range(N)] + [P([1])]
+    zero, reduce = P([]), _nmod_gcd_reduce(rng, p)
+    degs = [1]
+    for _ in range(steps):
+        w = step_polys(w, V, R, zero, lambda a, b: a // b, reduce)
+        degs.append(max(_deg(c) for c in w))
+        if max_degree is not None and degs[-1] > max_degree:
+            break
+    return degs
+
+
+def exact_degrees(fld, eps, steps, max_terms=200_000):
+    """d_1..d_steps exactly, by composing Φ with itself as a rational map over Q
+    (python-flint ``fmpz_mpoly``, gcds and contents removed every step); stops
+    before a step whose Cramer output could have more than ``max_terms`` terms
+    (C(N·d + N, N) for the current degree d).  No line, no prime: these
+    are the degrees themselves."""
+    N = fld.dim
+    ctx = flint.fmpz_mpoly_ctx.get(tuple(f"x{i}" for i in range(N)), "degrevlex")
+    V, R = kahan_rows(fld, eps)
+    w = list(ctx.gens()) + [ctx.from_dict({(0,) * N: 1})]
+    zero = ctx.from_dict({})
+
+    def reduce(vec):
+        g = zero
+        for c in vec:
+            g = c if g.is_zero() else g.gcd(c)
+            if g.is_constant():  # the integer content is removed below
+                break
+        out = vec if g.is_constant() else [c / g for c in vec]
+        cont = math.gcd(*(int(k) for c in out for k in c.coeffs()))
+        return [c / cont for c in out] if cont > 1 else out
+
+    degs = [1]
+    for _ in range(steps):
+        if math.comb(N * degs[-1] + N, N) > max_terms:  # the dense size of the Cramer output
+            break
+        w = step_polys(w, V, R, zero, lambda a, b: a / b, reduce)
+        degs.append(max(c.total_degree() for c in w))
+    return degs
+
+
+# --- the result ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DegreeSequence:
+    """Degrees d_0..d_K of Φ^k (the maximum over all runs), the runs, the exact
+    degrees if asked, the undercount bound and the recurrence fit
+    (:class:`~exact_khk.diagnostics.recurrence.RecurrenceFit`)."""
+
+    label: str
+    dim: int
+    eps: Fraction
+    degrees: tuple
+    runs: tuple            # ((prime, line index, (d_0, ...)), ...)
+    exact: tuple           # exact d_0.. over Q (may be shorter), () if not asked
+    failed_runs: int
+    undercount_bound: float
+    fit: object
+    seconds: float
+    heights: object = None
+    notes: tuple = dc_field(default=())
+
+    @property
+    def disagreeing(self) -> tuple:
+        """(prime, line) of the runs that undercount somewhere (bad prime or line)."""
+        return tuple((p, i) for p, i, d in self.runs if tuple(d) != self.degrees[:len(d)])
+
+    def to_json(self) -> dict:
+        return {"field": self.label, "dim": self.dim, "eps": str(self.eps), "degrees": list(self.degrees),
+                "degree_kind": "projective degree of Phi^k (max degree of numerators and common denominator)",
+                "runs": [{"prime": p, "line": i, "degrees": list(d)} for p, i, d in self.runs],
+                "disagreeing_runs": [list(t) for t in self.disagreeing], "failed_runs": self.failed_runs,
+                "exact_degrees": list(self.exact), "undercount_bound": self.undercount_bound,
+                "fit": self.fit.to_json(), "seconds": self.seconds,
+                "heights": self.heights.to_json() if self.heights is not None else None,
+                "notes": list(self.notes)}
+
+    def summary(self) -> str:
+        lines = [f"degrees of Phi^k for {self.label} (dimension {self.dim}, eps = {self.eps}), k = 0..{len(self.degrees) - 1}:",
+                 "  " + ", ".join(map(str, self.degrees)),
+                 f"  {len(self.runs)} run(s) over F_p on random lines (primes "
+                 f"{', '.join(str(p) for p in sorted({p for p, _, _ in self.runs}))}); "
+                 f"P(undercount) <= {self.undercount_bound:.3g} at good primes (Schwartz–Zippel, 2d(d+1)/p per run)"]
+        if self.disagreeing:
+            lines.append("  runs undercounting (bad prime or line): " + ", ".join(f"p={p} line {i}" for p, i in self.disagreeing))
+        if self.exact:
+            ok = tuple(self.exact) == self.degrees[:len(self.exact)]
+            lines.append(f"  exact over Q (composition): {', '.join(map(str, self.exact))} "
+                         f"({'agrees' if ok else 'DISAGREES'})")
+        lines.append("  " + self.fit.summary().replace("\n", "\n  "))
+        if self.heights is not None:
+            lines.append("  " + self.heights.summary().replace("\n", "\n  "))
+        lines += [f"  note: {n}" for n in self.notes]
+        lines.append(f"  time {self.seconds:.2f} s")
+        return "\n".join(lines)
+
+
+def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, seed=0, exact=0,
+                    exact_terms=10_000, confirm=3, heights=False, x0=None, max_bits=200_000, max_degree=20_000):
+    """Degrees d_0..d_steps of the iterates of the Kahan map of ``field`` (module docstring).
+
+    ``system`` a System, catalogue name, system file or QuadraticField; ``primes``
+    a count or list of primes; ``lines`` random lines per prime; ``exact`` the
+    number of iterates also composed exactly over Q (while the Cramer output stays
+    below ``exact_terms`` terms); the iteration stops once a degree exceeds
+    ``max_degree`` (exponential growth); ``heights=True`` adds
+    :func:`~exact_khk.diagnostics.heights.height_growth` of the orbit of ``x0``.
+    """
+    from exact_khk.diagnostics.recurrence import fit_recurrence, too_short
+
+    t0 = time.perf_counter()
+    sysobj, fld = resolve_field(system, field)
+    eps = eps_of(sysobj, eps)
+    check_count(steps, "steps", 1, MAX_STEPS)
+    check_count(lines, "lines", 1, 64)
+    check_count(exact, "exact", 0, 50)
+    check_count(max_degree, "max_degree", 1, 10 ** 7)
+    if fld.dim > MAX_DIM:
+        raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")
+    primes = check_primes(primes, seed=seed)
+    runs, failed = [], 0
+    for p in primes:
+        rng = random.Random(f"line-{seed}-{p}")
+        for i in range(lines):
+            for _attempt in range(5):
+                try:
+                    runs.append((p, i, tuple(line_degrees(fld, eps, p, steps, rng, max_degree))))
+                    break
+                except _Degenerate:
+                    failed += 1
+    if not runs:
+        raise InputError("primes: every run degenerated (the step matrix is singular along every line "
+                         "tried: choose other primes)")
+    length = min(len(r[2]) for r in runs)
+    degs = tuple(max(r[2][k] for r in runs) for k in range(length))
+    bound = max((math.prod(min(1.0, 2 * d * (d + 1) / p) for p, _, _ in runs) for d in degs), default=0.0)
+    ex = tuple(exact_degrees(fld, eps, exact, exact_terms)) if exact else ()
+    notes = []
+    if length < steps + 1:
+        notes.append(f"stopped after k = {length - 1}: the degree passed max_degree = {max_degree}")
+    if any(a > b for a, b in zip(degs, ex)):
+        notes.append("exact degrees below the modular ones: this is impossible; please report it")
+    bad = [p for p in primes if eps.numerator % p == 0 or eps.denominator % p == 0]
+    if bad:
+        notes.append(f"prime(s) {', '.join(map(str, bad))} divide eps = {eps}: the map degenerates there (bad primes)")
+    hts = None
+    if heights:
+        from exact_khk.diagnostics.heights import height_growth
+        hts = height_growth(fld, x0 if x0 is not None else (sysobj.default_x0 if sysobj is not None else None),
+                            eps, steps=max(4, min(steps, 60)), max_bits=max_bits)
+    label = f"{sysobj.name if sysobj is not None else 'field'} {fld.label}"
+    try:
+        fit = fit_recurrence(degs, confirm=confirm)
+    except InputError as exc:
+        fit = too_short(degs, str(exc))
+    return DegreeSequence(label, fld.dim, eps, degs, tuple(runs), ex, failed, bound,
+                          fit, time.perf_counter() - t0, hts, tuple(notes))

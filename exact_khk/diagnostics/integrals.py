@@ -1,0 +1,339 @@
+"""Integral discovery from orbits: the Hirota–Kimura-basis method (Petrera–Pfadler–Suris).
+
+**Kernels.**  Given candidate monomials φ_1, …, φ_m (all monomials of degree ≤ D,
+or a user list) and an orbit x_k = Φ^k(x_0), the *orbit kernel*
+K(x_0) = {c : Σ_j c_j φ_j(x_k) = 0 for all k} is the space of polynomials in the
+span that vanish on the orbit.  A conserved I = N/D with N, D in the span gives
+N − I(x_0) D ∈ K(x_0); so does every multiple x_j·P of a kernel polynomial P
+that stays in the span ('trivial' vectors: T = Σ_j x_j·(K ∩ span S_j),
+S_j = {φ : x_j φ ∈ span}).  K(x_0) is computed over F_p as the nullspace of the
+(orbit length) × m evaluation matrix (python-flint ``nmod_mat``), for several
+orbits and primes.
+
+**Integrals.**  W = Σ_i K(x_i) over several generic orbits is spanned by
+polynomials with rational coefficients, found modulo several primes and lifted
+by Chinese remaindering and rational reconstruction (canonical reduced echelon
+basis; more primes until the lift is stable).  When K(x_0) has codimension 1 in
+W for every orbit (no trivial vectors), the evaluation vector (W_1(x), …, W_w(x))
+along an orbit is proportional to a fixed vector, so every ratio W_j/W_w is an
+integral: these are reported, after an exact check (rational arithmetic) that
+each is conserved on a fresh orbit that was not used to find it.
+
+**Where it cannot conclude** (reported in ``warnings``):
+
+* orbit too short — fewer points than candidates + margin, or the rank of the
+  evaluation matrix still grew in the last ``margin`` rows (then K is too big);
+* an orbit on a smaller invariant set — a periodic orbit mod p, or a kernel
+  larger than that of other random orbits (the generic dimension is the
+  minimum over orbits; larger ones are flagged and not used);
+* trivial vectors present or codimension ≠ 1 — the kernel dimension is
+  reported but integrals are not extracted (use a smaller degree or a list);
+* lift unstable or the exact check failing — the integral is not reported.
+
+>>> from exact_khk.systems.expressions import ExpressionSystem
+>>> euler = ExpressionSystem.from_expressions(["x", "y", "z"], field=["y*z", "-2*x*z", "x*y"])
+>>> res = find_integrals(euler, degree=2, eps="1/10")
+>>> res.kernel_dim, res.trivial_dim, len(res.integrals), res.independent
+(2, 0, 2, 2)
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from dataclasses import dataclass, field as dc_field
+from fractions import Fraction
+from math import comb
+
+import flint
+
+from exact_khk.diagnostics.degrees import check_count, check_primes, eps_of, random_primes, resolve_field
+from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, lift, monomial_text,
+                                           monomials, orbit_kernel_mod, parse_monomials, poly_text, to_mpoly,
+                                           trivial_dim)
+from exact_khk.diagnostics.pencils import pencil_integrals, ratio_integrals
+from exact_khk.errors import InputError, SingularStepError
+
+MAX_MONOMIALS = 3000
+
+
+# --- exact evaluation and verification -------------------------------------------------
+
+
+def _exact_orbit(fld, eps, x0, steps):
+    from exact_khk.kahan.map import KahanMap
+    phi = KahanMap(fld, eps, "flint")
+    return phi.orbit(x0, steps)
+
+
+def verify_exact(num: dict, den: dict, fld, eps, x0, steps) -> bool:
+    """True when num/den (dict polynomials) is conserved along the exact orbit of
+    ``x0`` (``steps`` steps, flint rationals) and den(x_0) ≠ 0.
+
+    Evaluated fraction-free: with x = ξ/δ (δ the common denominator) and the
+    homogenisations P^h, Q^h (degrees a, b), P(x)/Q(x) = P^h(ξ, δ) δ^b / (Q^h(ξ, δ) δ^a)."""
+    N = fld.dim
+    (n, a), (d, b) = _homogenised(num, N), _homogenised(den, N)
+    ref = None
+    for x in _exact_orbit(fld, eps, x0, steps):
+        delta = math.lcm(*(int(t.q) for t in x))
+        pt = [flint.fmpz(int(t.p) * (delta // int(t.q))) for t in x] + [flint.fmpz(delta)]
+        nv, dv = n(*pt) * flint.fmpz(delta) ** b, d(*pt) * flint.fmpz(delta) ** a
+        if ref is None:
+            if dv == 0:
+                return False
+            ref = (nv, dv)
+        elif nv * ref[1] != ref[0] * dv:
+            return False
+    return True
+
+
+def _homogenised(poly: dict, N: int):
+    """(P^h as fmpz_mpoly in x0..x(N-1), w; deg P) for a polynomial with rational coefficients
+    (scaled to integers: the ratio changes by a constant, which conservation ignores)."""
+    deg = max((sum(e) for e in poly), default=0)
+    den = math.lcm(*(c.denominator for c in poly.values())) if poly else 1
+    ctx = flint.fmpz_mpoly_ctx.get(tuple(f"x{i}" for i in range(N)) + ("w",), "degrevlex")
+    return ctx.from_dict({tuple(e) + (deg - sum(e),): int(c * den) for e, c in poly.items()}), deg
+
+
+@dataclass(frozen=True)
+class Integral:
+    """A conserved rational function num/den (coefficients over the candidates)."""
+
+    numerator: str
+    denominator: str
+    num: tuple       # ((exponents, Fraction), ...)
+    den: tuple
+    verified: bool
+
+    def polynomials(self):
+        """(numerator, denominator) as dicts {exponent tuple: Fraction}."""
+        return dict(self.num), dict(self.den)
+
+    def to_json(self) -> dict:
+        return {"numerator": self.numerator, "denominator": self.denominator, "verified": self.verified}
+
+
+@dataclass(frozen=True)
+class IntegralSearch:
+    """What :func:`find_integrals` found (module docstring)."""
+
+    label: str
+    candidates: tuple          # monomial texts
+    orbit_dims: tuple          # kernel dimension of each orbit (mod the first prime)
+    kernel_dim: int            # generic dimension
+    trivial_dim: int
+    by_degree: tuple           # ((D, dim K_D, new_D), ...) in degree mode (kernels.by_degree)
+    span_dim: int              # w = dim W
+    integrals: tuple
+    independent: int
+    primes: tuple
+    warnings: tuple
+    seconds: float
+    notes: tuple = dc_field(default=())
+
+    @property
+    def new_dim(self) -> int:
+        """Kernel directions that are not products of smaller kernel polynomials."""
+        return self.kernel_dim - self.trivial_dim
+
+    def to_json(self) -> dict:
+        return {"field": self.label, "candidates": list(self.candidates), "orbit_kernel_dims": list(self.orbit_dims),
+                "kernel_dim": self.kernel_dim, "trivial_dim": self.trivial_dim, "new_dim": self.new_dim,
+                "kernel_dim_by_degree": [list(t) for t in self.by_degree], "span_dim": self.span_dim,
+                "integrals": [i.to_json() for i in self.integrals], "independent": self.independent,
+                "primes": list(self.primes), "warnings": list(self.warnings), "notes": list(self.notes),
+                "seconds": self.seconds}
+
+    def summary(self) -> str:
+        out = [f"integral search for {self.label}: {len(self.candidates)} candidate monomials",
+               f"  orbit kernel dimensions {list(self.orbit_dims)}: generic {self.kernel_dim} "
+               f"({self.trivial_dim} trivial = products with smaller kernel polynomials, {self.new_dim} new)"]
+        if self.by_degree:
+            out.append("  kernel dimension by degree (new directions): "
+                       + ", ".join(f"<= {d}: {k} ({new})" for d, k, new in self.by_degree))
+        for i, f in enumerate(self.integrals, 1):
+            out.append(f"  I{i} = ({_short(f.numerator)}) / ({_short(f.denominator)})"
+                       + ("" if f.verified else "  [NOT verified]"))
+        if self.integrals:
+            out.append(f"  {sum(f.verified for f in self.integrals)} verified exactly on a fresh orbit; "
+                       f"{self.independent} functionally independent")
+        out += [f"  warning: {w}" for w in self.warnings] + [f"  note: {n}" for n in self.notes]
+        out.append(f"  time {self.seconds:.2f} s")
+        return "\n".join(out)
+
+
+def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None, homogeneous=False,
+                   orbits=3, steps=None, margin=None, primes=None, seed=0, x0=None, verify_steps=6,
+                   max_primes=16):
+    """Search conserved rational functions of the Kahan map whose numerator and
+    denominator lie in the span of the candidates (module docstring).
+
+    ``degree``: all monomials of degree ≤ degree (== with ``homogeneous``), or
+    ``monomials_list`` (texts or exponent tuples); ``orbits`` random orbits (at
+    least 2; 4 are used for pencils) plus ``x0`` if given, of ``steps`` steps
+    (default: candidates + 2·margin); ``primes`` a list, or a count of random
+    primes to start with (default 2; more are drawn, up to ``max_primes``, until
+    the rational lift is confirmed by a prime it was not computed from)."""
+    t0 = time.perf_counter()
+    sysobj, fld = resolve_field(system, field)
+    eps = eps_of(sysobj, eps)
+    N = fld.dim
+    variables = list(getattr(sysobj, "variables", ()) or ())
+    if len(variables) != N or sysobj.kind == "lie-poisson":
+        variables = [f"x{i}" for i in range(N)]
+    if (degree is None) == (monomials_list is None):
+        raise InputError("degree: give either degree or monomials_list")
+    if degree is not None:
+        check_count(degree, "degree", 1, 40)
+        count = comb(N + degree - 1, degree) if homogeneous else comb(N + degree, degree)
+        if count > MAX_MONOMIALS:
+            raise InputError(f"degree: {count} candidate monomials of degree <= {degree} in {N} variables "
+                             f"exceed {MAX_MONOMIALS}; choose a smaller degree or a list")
+        exps = monomials(N, degree, homogeneous)
+    else:
+        exps = parse_monomials(monomials_list, variables)
+        if len(exps) > MAX_MONOMIALS:
+            raise InputError(f"monomials: {len(exps)} candidates exceed {MAX_MONOMIALS}")
+    m = len(exps)
+    check_count(orbits, "orbits", 2, 50)
+    margin = check_count(margin if margin is not None else max(8, m // 10), "margin", 1, 10_000)
+    steps = check_count(steps if steps is not None else m + 2 * margin, "steps", 1, 1_000_000)
+    check_count(verify_steps, "verify_steps", 1, 1000)
+    plist = list(check_primes(primes, seed=seed))
+    rng = random.Random(f"integrals-{seed}")
+    if x0 is not None and len(x0) != N:
+        raise InputError(f"x0: expected {N} coordinates, got {len(x0)}")
+    starts = ([tuple(Fraction(t) for t in x0)] if x0 is not None else []) + [_point(rng, N) for _ in range(orbits)]
+    job = _Job(fld, eps, exps, steps, margin, variables, [], [])
+    if steps + 1 < m + margin:
+        job.warnings.append(f"orbit too short: {steps + 1} points for {m} candidates (+ margin {margin}); "
+                            f"the kernel has dimension >= {m - steps - 1} for that reason alone")
+    p0 = plist[0]
+    ks = [k for k in (job.kernel(x, p0) for x in starts) if k is not None]
+    while len([k for k in ks if k.stable and not k.periodic]) < 4 and len(starts) < orbits + 6:
+        starts.append(_point(rng, N))  # more orbits (4 are needed for pencils)
+        k = job.kernel(starts[-1], p0)
+        if k is not None:
+            ks.append(k)
+    good = [k for k in ks if k.stable and not k.periodic]
+    for k in ks:
+        if k.periodic:
+            job.warnings.append(f"orbit of {_fmt(k.x0)} is periodic mod p (a finite set): its kernel is spurious")
+        elif not k.stable:
+            job.warnings.append(f"orbit of {_fmt(k.x0)} too short: the rank still grew in its last {margin} points")
+    if len(good) < 2:
+        job.warnings.append("fewer than two usable orbits: nothing concluded")
+        return job.result(sysobj, ks, 0, 0, (), 0, (), 0, (p0,), t0)
+    d = min(k.dim for k in good)
+    for k in good:
+        if k.dim > d:
+            job.warnings.append(f"orbit of {_fmt(k.x0)} has a {k.dim}-dimensional kernel > generic {d}: it lies on "
+                                f"a smaller invariant set (not used)")
+    generic = [k for k in good if k.dim == d]
+    tdim = trivial_dim(generic[0].basis, exps, p0)
+    table = by_degree(generic[0].basis, exps, p0) if degree is not None and not homogeneous else ()
+    if table:
+        tdim = d - table[-1][2]
+    w = _rref_rows([v for k in generic for v in k.basis], m, p0)[1]
+    integrals, independent, used = (), 0, (p0,)
+    low = next((D for D, dim, _ in table if dim), None)
+    if d == 0:
+        job.notes.append("no polynomial in the span vanishes on the orbits: no integral of this shape")
+    elif table and low < degree:
+        sub = find_integrals(system, degree=low, field=field, eps=eps, orbits=orbits, primes=plist, seed=seed,
+                             verify_steps=verify_steps, max_primes=max_primes)
+        integrals, independent, used = sub.integrals, sub.independent, sub.primes
+        job.notes += [f"integrals extracted at degree {low}, where the kernel first appears"] + list(sub.notes)
+        job.warnings += list(sub.warnings)
+        for D, new in [(D, new) for D, _, new in table if D > low and new]:
+            # {1} ∪ (degree exactly D) holds no product (L − c)·m of a lower-degree kernel
+            # polynomial with a monomial of degree ≥ 1: the new integrals separate there
+            top = ["1"] + [monomial_text(e, variables) for e in monomials(N, D, True)]
+            more = find_integrals(system, monomials_list=top, field=field, eps=eps, orbits=orbits, primes=plist,
+                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes)
+            found = [f for f in more.integrals if f.verified]
+            integrals += tuple(found)
+            job.notes.append(f"{new} new kernel direction(s) at degree {D}: {len(found)} integral(s) extracted from "
+                             f"the candidates 1 and the monomials of degree exactly {D}"
+                             + ("" if found else " (" + "; ".join(more.notes) + ")"))
+        independent = independent_count([f.polynomials() for f in integrals if f.verified], rng)
+    elif tdim:
+        job.notes.append("trivial kernel vectors present: integrals not extracted")
+    else:
+        integrals, used = job.extract(generic, d, w, plist, seed, max_primes, verify_steps)
+        independent = independent_count([f.polynomials() for f in integrals if f.verified], rng)
+    return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
+
+
+def _short(text, limit=240):
+    """A long polynomial cut for the summary (``to_json`` has it in full)."""
+    if len(text) <= limit:
+        return text
+    return text[:limit].rsplit(" ", 1)[0] + f" ... ({text.count(' + ') + text.count(' - ') + 1} terms)"
+
+
+def _fmt(x):
+    return "(" + ", ".join(str(t) for t in x) + ")"
+
+
+class _Job:
+    """The fixed data of one search, and its extraction steps."""
+
+    def __init__(self, fld, eps, exps, steps, margin, variables, warnings, notes):
+        self.fld, self.eps, self.exps, self.steps, self.margin = fld, eps, exps, steps, margin
+        self.variables, self.warnings, self.notes = variables, warnings, notes
+
+    def kernel(self, x, p):
+        try:
+            return orbit_kernel_mod(self.fld, self.eps, x, self.exps, self.steps, p, self.margin)
+        except (SingularStepError, ZeroDivisionError, InputError):
+            return None
+
+    def lifted_kernels(self, xs, d, plist, seed, max_primes):
+        """The kernels of the orbits of ``xs`` over Q (canonical bases), and the primes used."""
+        per, used = [], []
+        fresh = iter(p for p in random_primes(max_primes + len(plist), seed + 1) if p not in plist)
+        for p in list(plist) + list(fresh):
+            if len(used) >= max_primes:
+                break
+            kk = [self.kernel(x, p) for x in xs]
+            if any(k is None or k.dim != d for k in kk):
+                continue  # an unlucky prime
+            per.append((p, [v for k in kk for v in k.basis]))
+            used.append(p)
+            out = lift(per)
+            if out is not None:
+                return [out[i * d:(i + 1) * d] for i in range(len(xs))], tuple(used)
+        self.warnings.append(f"rational reconstruction of the kernels not confirmed with {len(used)} primes")
+        return None, tuple(used)
+
+    def extract(self, generic, d, w, plist, seed, max_primes, verify_steps):
+        """Integrals as ratios (w = d + 1) or from pencils (w = 2d): :mod:`.pencils`."""
+        if w - d == 1:
+            K, used = self.lifted_kernels([k.x0 for k in generic[:2]], d, plist, seed, max_primes)
+            pairs = None if K is None else ratio_integrals(K, self.exps)
+        elif w == 2 * d and len(generic) >= 4:
+            K, used = self.lifted_kernels([k.x0 for k in generic[:4]], d, plist, seed, max_primes)
+            pairs = None if K is None else pencil_integrals(K, self.exps, self.notes)
+        else:
+            self.notes.append(f"orbit kernels of dimension {d} span a space of dimension {w}: neither one common "
+                              f"denominator (w = d + 1) nor independent pencils (w = 2d); integrals not extracted")
+            return (), tuple(plist[:1])
+        if not pairs:
+            return (), used
+        vx = _point(random.Random(f"verify-{seed}"), self.fld.dim)
+        out = tuple(Integral(poly_text(a, self.variables), poly_text(b, self.variables), tuple(sorted(a.items())),
+                             tuple(sorted(b.items())), verify_exact(a, b, self.fld, self.eps, vx, verify_steps))
+                    for a, b in pairs)
+        if any(not f.verified for f in out):
+            self.warnings.append("some lifted ratios failed the exact check on a fresh orbit (not integrals)")
+        return out, used
+
+    def result(self, sysobj, ks, d, tdim, table, w, integrals, independent, used, t0):
+        label = f"{sysobj.name if sysobj is not None else 'field'} {self.fld.label}"
+        return IntegralSearch(label, tuple(monomial_text(e, self.variables) for e in self.exps),
+                              tuple(k.dim for k in ks), d, tdim, table, w, tuple(integrals), independent,
+                              tuple(used), tuple(self.warnings), time.perf_counter() - t0, tuple(self.notes))

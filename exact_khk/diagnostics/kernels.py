@@ -1,0 +1,328 @@
+"""Modular kernels of monomial evaluation matrices along Kahan orbits, and their lift to Q.
+
+The building blocks of :mod:`.integrals`: candidate monomials, their evaluation
+along an orbit over F_p, the canonical kernel basis (from the reduced echelon
+form of the evaluation matrix), trivial (product) kernel vectors, and Chinese
+remaindering with rational reconstruction.
+
+>>> monomials(2, 2)
+[(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+import flint
+
+from exact_khk.errors import InputError
+
+
+# --- candidate monomials --------------------------------------------------------------
+
+
+def monomials(dim: int, degree: int, homogeneous: bool = False) -> list:
+    """Exponent tuples of the monomials in ``dim`` variables of degree ≤ ``degree``
+    (exactly ``degree`` if homogeneous), by degree then lexicographically.
+
+    >>> monomials(2, 2)
+    [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2)]
+    """
+    out = []
+    for d in range(degree if homogeneous else 0, degree + 1):
+        out += sorted(_of_degree(dim, d), reverse=True)
+    return out
+
+
+def _of_degree(dim, d):
+    if dim == 1:
+        return [(d,)]
+    return [(i,) + rest for i in range(d + 1) for rest in _of_degree(dim - 1, d - i)]
+
+
+def parse_monomials(spec, variables) -> list:
+    """Exponent tuples from a list of monomials such as ``["1", "x*y", "z^2", "x**2*y"]``
+    (or exponent tuples), in the given variables.
+
+    >>> parse_monomials(["1", "x*y", "y^2"], ["x", "y"])
+    [(0, 0), (1, 1), (0, 2)]
+    """
+    N = len(variables)
+    index = {v: i for i, v in enumerate(variables)}
+    out = []
+    for item in spec:
+        if isinstance(item, (tuple, list)):
+            if len(item) != N or any(not isinstance(e, int) or e < 0 for e in item):
+                raise InputError(f"monomials: {item!r} is not a tuple of {N} nonnegative exponents")
+            out.append(tuple(item))
+            continue
+        exps = [0] * N
+        text = str(item).replace(" ", "").replace("**", "^")
+        if text != "1":
+            for factor in text.split("*"):
+                name, _, power = factor.partition("^")
+                if name not in index or (power and not power.isdigit()):
+                    raise InputError(f"monomials: cannot read {item!r} (variables: {', '.join(variables)})")
+                exps[index[name]] += int(power or 1)
+        out.append(tuple(exps))
+    if len(set(out)) != len(out):
+        raise InputError("monomials: the list repeats a monomial")
+    if not out:
+        raise InputError("monomials: the list is empty")
+    return out
+
+
+def monomial_text(e, variables) -> str:
+    parts = [v if k == 1 else f"{v}^{k}" for v, k in zip(variables, e) if k]
+    return "*".join(parts) or "1"
+
+
+def poly_text(poly: dict, variables) -> str:
+    """A polynomial {exponents: coefficient} as text, by degree.
+
+    >>> from fractions import Fraction as F
+    >>> poly_text({(0, 0): F(1), (2, 0): F(-1, 2), (1, 1): F(3)}, ["x", "y"])
+    '1 - 1/2*x^2 + 3*x*y'
+    """
+    parts = []
+    for e in sorted(poly, key=lambda e: (sum(e), [-k for k in e])):
+        c = poly[e]
+        if c == 0:
+            continue
+        mono = monomial_text(e, variables)
+        mag = abs(c)
+        body = str(mag) if mono == "1" else mono if mag == 1 else f"{mag}*{mono}"
+        parts.append((" - " if c < 0 else " + ") + body)
+    if not parts:
+        return "0"
+    text = "".join(parts)
+    return ("-" + text[3:]) if text.startswith(" - ") else text[3:]
+
+
+class _Evaluator:
+    """Values of the monomials at a point, each as parent × variable when possible."""
+
+    def __init__(self, exps):
+        pos = {e: i for i, e in enumerate(exps)}
+        self.plan = []
+        for e in exps:
+            j = next((j for j, k in enumerate(e) if k), None)
+            if j is None:
+                self.plan.append((None, None, e))
+                continue
+            parent = e[:j] + (e[j] - 1,) + e[j + 1:]
+            self.plan.append((pos.get(parent), j, e) if pos.get(parent, len(exps)) < len(self.plan)
+                             else (None, None, e))
+
+    def __call__(self, x, one, mod=None):
+        vals = []
+        for parent, j, e in self.plan:
+            if parent is not None:
+                v = vals[parent] * x[j]
+            else:
+                v = one
+                for xi, k in zip(x, e):
+                    if k:
+                        v = v * xi ** k
+            vals.append(v % mod if mod else v)
+        return vals
+
+
+# --- modular kernels ------------------------------------------------------------------
+
+
+def _point(rng, dim, bound=9):
+    return tuple(Fraction(rng.choice([i for i in range(-bound, bound + 1) if i]), rng.randint(1, 4))
+                 for _ in range(dim))
+
+
+def _orbit_mod(fld, eps, x0, steps, p):
+    from exact_khk.kahan.map import KahanMap
+    phi = KahanMap(fld, eps, f"gf:{p}")
+    return [[int(t) for t in pt] for pt in phi.orbit(x0, steps)]
+
+
+@dataclass
+class _OrbitKernel:
+    x0: tuple
+    basis: list          # canonical kernel basis rows (ints mod p)
+    dim: int
+    stable: bool
+    periodic: bool
+
+
+def orbit_kernel_mod(fld, eps, x0, exps, steps, p, margin) -> _OrbitKernel:
+    """The kernel K(x0) over F_p (canonical basis from the reduced echelon form of the
+    evaluation matrix) and whether its rank had stabilised."""
+    pts = _orbit_mod(fld, eps, x0, steps, p)
+    periodic = len({tuple(q) for q in pts}) < len(pts)
+    ev = _Evaluator(exps)
+    rows = [ev(q, 1, p) for q in pts]
+    m = len(exps)
+    A = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p)
+    R, rank = A.rref()
+    head = flint.nmod_mat(len(rows) - margin, m, [v for r in rows[:-margin] for v in r], p).rank() \
+        if len(rows) > margin else -1
+    pivots, row = [], 0
+    for c in range(m):
+        if row < rank and int(R[row, c]) != 0:
+            pivots.append(c)
+            row += 1
+    free = [c for c in range(m) if c not in set(pivots)]
+    basis = []
+    for f in free:
+        v = [0] * m
+        v[f] = 1
+        for i, c in enumerate(pivots):
+            v[c] = (-int(R[i, f])) % p
+        basis.append(v)
+    return _OrbitKernel(tuple(x0), basis, m - rank, head == rank, periodic)
+
+
+def orbit_kernel_exact(fld, eps, x0, exps, steps) -> list:
+    """The canonical kernel basis of K(x0) over Q, from the exact orbit (python-flint
+    ``fmpq_mat``; for cross-checks of the modular route on small cases)."""
+    from exact_khk.kahan.map import KahanMap
+    pts = KahanMap(fld, eps, "flint").orbit(x0, steps)
+    ev = _Evaluator(exps)
+    m = len(exps)
+    R, rank = flint.fmpq_mat(len(pts), m, [v for q in pts for v in ev(q, flint.fmpq(1))]).rref()
+    pivots = [next(j for j in range(m) if R[i, j] != 0) for i in range(rank)]
+    basis = []
+    for f in (c for c in range(m) if c not in set(pivots)):
+        v = [Fraction(0)] * m
+        v[f] = Fraction(1)
+        for i, c in enumerate(pivots):
+            v[c] = -Fraction(int(R[i, f].p), int(R[i, f].q))
+        basis.append(v)
+    return basis
+
+
+def _rref_rows(rows, m, p):
+    """(reduced echelon basis rows, rank) of the span of ``rows`` over F_p."""
+    if not rows:
+        return [], 0
+    R, rank = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p).rref()
+    return [[int(R[i, j]) for j in range(m)] for i in range(rank)], rank
+
+
+def _restricted(basis, keep, p):
+    """Basis vectors of K ∩ span(columns ``keep``) over F_p."""
+    d, m = len(basis), len(basis[0]) if basis else 0
+    outside = [c for c in range(m) if c not in keep]
+    if not d:
+        return []
+    if not outside:
+        return [list(v) for v in basis]
+    X, nul = flint.nmod_mat(len(outside), d, [basis[r][c] for c in outside for r in range(d)], p).nullspace()
+    return [[sum(int(X[r, k]) * basis[r][c] for r in range(d)) % p for c in range(m)] for k in range(nul)]
+
+
+def _multiples(vectors, exps, p):
+    """The vectors x_j·v (j = 0..N-1) of those v whose multiple stays in the span."""
+    pos = {e: i for i, e in enumerate(exps)}
+    out = []
+    for j in range(len(exps[0])):
+        shift = lambda e: e[:j] + (e[j] + 1,) + e[j + 1:]  # noqa: E731
+        keep = {i for i, e in enumerate(exps) if shift(e) in pos}
+        for v in _restricted(vectors, keep, p):
+            w = [0] * len(exps)
+            for i in keep:
+                w[pos[shift(exps[i])]] = v[i]
+            out.append(w)
+    return out
+
+
+def trivial_dim(basis, exps, p) -> int:
+    """dim T, T = Σ_j x_j·(K ∩ span S_j) ⊂ K (module docstring), over F_p."""
+    return _rref_rows(_multiples(basis, exps, p), len(exps), p)[1] if basis else 0
+
+
+def by_degree(basis, exps, p) -> tuple:
+    """((D, dim K_D, new_D), ...): K_D = K ∩ span(degree ≤ D), new_D = dim K_D −
+    dim(K_{D-1} + Σ_j x_j K_{D-1}) (the directions not coming from lower degrees)."""
+    top = max(sum(e) for e in exps)
+    out, prev = [], []
+    for D in range(1, top + 1):
+        KD = _restricted(basis, {i for i, e in enumerate(exps) if sum(e) <= D}, p)
+        old = _rref_rows(prev + _multiples(prev, exps, p), len(exps), p)[1] if prev else 0
+        out.append((D, len(KD), len(KD) - old))
+        prev = KD
+    return tuple(out)
+
+
+# --- lifting to Q ---------------------------------------------------------------------
+
+
+def rational_reconstruction(a: int, m: int):
+    """p/q ≡ a (mod m) with |p|, q ≤ sqrt(m/2), or None (Wang's algorithm).
+
+    >>> rational_reconstruction(Fraction(3, 7).numerator * pow(7, -1, 1009) % 1009, 1009)
+    Fraction(3, 7)
+    """
+    bound = int((m // 2) ** 0.5)
+    r0, r1, s0, s1 = m, a % m, 0, 1
+    while r1 > bound:
+        q = r0 // r1
+        r0, r1, s0, s1 = r1, r0 - q * r1, s1, s0 - q * s1
+    if s1 == 0 or abs(s1) > bound:
+        return None
+    return Fraction(r1, s1)
+
+
+def lift(rows_by_prime):
+    """Rational rows from the same echelon basis mod several primes, or None when
+    the reconstruction is not yet confirmed by a prime it was not computed from."""
+    primes = [p for p, _ in rows_by_prime]
+    if len(primes) < 2:
+        return None
+    *head, (plast, rlast) = rows_by_prime
+    M, vals = 1, None
+    for p, rows in head:
+        flat = [v for r in rows for v in r]
+        if vals is None:
+            vals = list(flat)
+        else:  # CRT
+            inv = pow(M, -1, p)
+            vals = [v + M * (((x - v) * inv) % p) for v, x in zip(vals, flat)]
+        M *= p
+    out = []
+    for v in vals:
+        q = rational_reconstruction(v, M)
+        if q is None:
+            return None
+        out.append(q)
+    check = [v for r in rlast for v in r]
+    if any(q.denominator % plast == 0 or (q.numerator * pow(q.denominator, -1, plast) - x) % plast
+           for q, x in zip(out, check)):
+        return None
+    m = len(rlast[0])
+    return [out[i * m:(i + 1) * m] for i in range(len(rlast))]
+
+
+def to_mpoly(poly: dict, dim: int):
+    """A dict polynomial as a python-flint ``fmpq_mpoly`` in x0..x(dim-1)."""
+    ctx = flint.fmpq_mpoly_ctx.get(tuple(f"x{i}" for i in range(dim)), "degrevlex")
+    return ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in poly.items()})
+
+
+def independent_count(pairs, rng) -> int:
+    """Rank of the Jacobian of the functions num/den (dict polynomials) at a random
+    small rational point, exactly: the number of functionally independent ones
+    (a lower bound, equal with high probability)."""
+    if not pairs:
+        return 0
+    N = len(next(iter(pairs[0][0] or pairs[0][1])))
+    for _ in range(5):
+        x = [flint.fmpq(rng.randint(-30, 30), rng.randint(1, 7)) for _ in range(N)]
+        rows = []
+        for num, den in pairs:
+            n, d = to_mpoly(num, N), to_mpoly(den, N)
+            n0, d0 = n(*x), d(*x)
+            if d0 == 0:
+                break
+            rows.append([d0 * n.derivative(j)(*x) - n0 * d.derivative(j)(*x) for j in range(N)])
+        else:
+            return flint.fmpq_mat(len(rows), N, [v for r in rows for v in r]).rank()
+    return 0

@@ -1,0 +1,581 @@
+"""The tasks a sweep runs, and the one function every worker calls: :func:`run_task`.
+
+A task is described by plain JSON-compatible data (its *payload*: rationals as
+strings, seeds as integers) and returns plain JSON-compatible data (its
+*record*), so that nothing unpicklable crosses a process or network boundary:
+systems, points and python-flint/mpmath numbers are built inside the worker.
+
+The registry :data:`TASKS` maps a task name to a :class:`TaskKind`: its
+function, the options it accepts (each with a checker that names the option at
+fault), the arithmetics it makes sense for and its default number of steps.
+Adding a task is one entry::
+
+    register(TaskKind("degrees", _degrees, "degree sequence of the iterates",
+                      options={"field": Option(_text, "a field of the system")}))
+
+with ``_degrees(inp)`` returning ``{"verdict": ..., "detail": ..., "figures": {...}}``
+(``figures`` flat: name -> number, string, bool or None).
+
+Verdicts.  A task function returns its own verdict (``certify``: VALID, INVALID,
+INCONCLUSIVE; ``orbit``/``probe``: OK; ``scale``: OK, WARNED, SINGULAR,
+UNDECIDED).  :func:`run_task` adds the verdicts of what was raised: SINGULAR
+(a singular Kahan step, :class:`~exact_khk.errors.SingularStepError`: the
+theorems say nothing there), UNDEFINED (an integral at its pole), UNDECIDED
+(ball arithmetic cannot decide), TIMEOUT (the per-task time limit) and ERROR
+(anything else that was raised, with its one-line message).  ERROR and TIMEOUT
+are *failed* tasks (:data:`FAILED`).
+
+Time limit inside the worker (:func:`time_limit`): in the main thread of a
+POSIX process (the local process pool, ``--workers 0``) an interval timer
+(``signal.setitimer``) raises :class:`TaskTimeout` in the task; in any other
+thread (a Dask worker runs tasks in a thread pool) a watchdog thread raises it
+asynchronously in the task's thread (``PyThreadState_SetAsyncExc``).  Either
+way the exception arrives between two Python bytecodes: a single long call into
+C (one huge python-flint solve) is interrupted only when it returns.  The
+local engine therefore also enforces a hard limit from outside: it kills the
+worker process and replaces it (see :mod:`exact_khk.sweep.run`).
+
+>>> sorted(TASKS)
+['certify', 'orbit', 'probe', 'scale']
+>>> rec = run_task({"key": "k", "params": {"task": "probe", "system": {"family": "lie-poisson", "n": 2, "seed": 1},
+...                 "point": {"seed": 1}, "eps": "1/10", "arith": "flint", "steps": 1, "options": {}}})
+>>> rec["verdict"], rec["figures"]["n"], rec["error"]
+('OK', 2, None)
+"""
+
+from __future__ import annotations
+
+import ctypes
+import datetime
+import functools
+import math
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+import warnings
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Callable
+
+from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
+
+#: version of a result line (``results.jsonl``)
+RECORD_FORMAT = 1
+#: verdicts of failed tasks (rerun with ``--only failed``)
+FAILED = ("ERROR", "TIMEOUT")
+#: verdicts that :func:`run_task` gives from what was raised
+ENGINE_VERDICTS = ("SINGULAR", "UNDEFINED", "UNDECIDED", "TIMEOUT", "ERROR")
+#: longest error/detail message kept in a record (characters)
+MAX_MESSAGE = 500
+
+
+class TaskTimeout(BaseException):
+    """Raised inside a task that exceeds its time limit (a BaseException, so that
+    no ``except Exception`` inside the libraries swallows it)."""
+
+
+# --- options -----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Option:
+    """A task option: ``check(value, where, context) -> normalised value`` raises an
+    InputError naming ``where``; ``applies`` is 'any', 'lie-poisson' or 'expressions'
+    (the kind of system the option makes sense for)."""
+
+    check: Callable
+    help: str
+    applies: str = "any"
+
+
+def _positive_int(value, where, ctx=None):
+    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+        raise InputError(f"{where}: expected a positive integer, got {value!r}")
+    return value
+
+
+def _bool(value, where, ctx=None):
+    if not isinstance(value, bool):
+        raise InputError(f"{where}: expected true or false, got {value!r}")
+    return value
+
+
+def _text(value, where, ctx=None):
+    if not isinstance(value, str) or not value.strip():
+        raise InputError(f"{where}: expected a non-empty string, got {value!r}")
+    return value.strip()
+
+
+def _seconds(value, where, ctx=None):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) and type(value).__name__ != "Decimal":
+        raise InputError(f"{where}: expected a number of seconds, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value) or value < 0:
+        raise InputError(f"{where}: expected a non-negative number of seconds, got {value!r}")
+    return value
+
+
+def _int_list(value, where, ctx=None):
+    if isinstance(value, int) and not isinstance(value, bool):
+        value = [value]
+    if not isinstance(value, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        raise InputError(f"{where}: expected a list of integers (system seeds), got {value!r}")
+    return sorted(set(value))
+
+
+def _signs(value, where, ctx=None):
+    """'b0' (B_0 = '-+…+' for every n), 'default' (every rational involution but ±I)
+    or a list of sign patterns (all of the same length n)."""
+    from exact_khk.parsing import format_signs, parse_signs
+
+    if value in ("b0", "default"):
+        return value
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not value or not all(isinstance(s, str) for s in value):
+        raise InputError(f"{where}: expected 'b0', 'default' or a list of sign patterns such as ['-++'], "
+                         f"got {value!r}")
+    out = []
+    for i, s in enumerate(value):
+        n = len(s.strip())
+        try:
+            out.append(format_signs(parse_signs(s, n)))
+        except InputError as exc:
+            raise InputError(f"{where}[{i}]: {exc}") from None
+        if ctx is not None and ctx.get("ns") and any(m != n for m in ctx["ns"]):
+            raise InputError(f"{where}[{i}]: {s!r} is a pattern for n = {n}, but the sweep has n = "
+                             f"{', '.join(map(str, ctx['ns']))}; use 'b0' for B_0 at every n")
+    return out
+
+
+def _claims(value, where, ctx=None):
+    from exact_khk.certification.generic import CLAIMS
+
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not value or not all(isinstance(c, str) for c in value):
+        raise InputError(f"{where}: expected a list of claims among {', '.join(CLAIMS)}, got {value!r}")
+    for c in value:
+        if c not in CLAIMS:
+            raise InputError(f"{where}: unknown claim {c!r}; expected some of {', '.join(CLAIMS)}")
+    return list(dict.fromkeys(value))
+
+
+def _method(value, where, ctx=None):
+    from exact_khk.kahan.map import METHODS
+
+    if value not in METHODS:
+        raise InputError(f"{where}: expected one of {', '.join(METHODS)}, got {value!r}")
+    return value
+
+
+# --- the task kinds ---------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TaskInput:
+    """What a task function receives: the system, x0 (Fractions), ε (Fraction), the
+    arithmetic's name, the number of steps and the (normalised) options."""
+
+    system: object
+    x0: tuple
+    eps: Fraction
+    arith: str
+    steps: int
+    options: dict
+    params: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class TaskKind:
+    """One kind of task (see the module docstring).
+
+    ``run(inp: TaskInput) -> {"verdict", "detail", "figures"}``; ``arith``: 'any',
+    'exact' or 'floating' (checked when the spec is read); ``verdicts``: those
+    ``run`` returns; ``ok``: the verdict that means "as expected" (the summary's
+    success share); ``min_steps``: the smallest number of steps accepted;
+    ``figures``: the figures the summary shows first (all are recorded).
+    """
+
+    name: str
+    run: Callable
+    help: str
+    options: dict = field(default_factory=dict)
+    default_steps: int = 10
+    min_steps: int = 1
+    arith: str = "any"
+    verdicts: tuple = ("OK",)
+    ok: str = "OK"
+    figures: tuple = ()
+
+
+#: task name -> TaskKind
+TASKS: dict = {}
+
+
+def register(kind: TaskKind) -> TaskKind:
+    """Add (or replace) a task kind in :data:`TASKS`."""
+    TASKS[kind.name] = kind
+    return kind
+
+
+def _names(checks) -> str:
+    shown = [c.name for c in checks[:4]]
+    more = f" and {len(checks) - 4} more" if len(checks) > 4 else ""
+    return "; ".join(shown) + more
+
+
+def _certify(inp: TaskInput) -> dict:
+    from exact_khk.certification import certify
+    from exact_khk.systems.lie_poisson.system import b0_signs
+
+    opts = dict(inp.options)
+    if opts.get("signs") == "b0":
+        opts["signs"] = [b0_signs(inp.system.n)]
+    elif opts.get("signs") == "default":
+        opts.pop("signs")
+    cert = certify(inp.system, inp.x0, inp.eps, inp.steps, inp.arith, **opts)
+    checks = cert.checks
+    wrong = [c for c in checks if c.wrong]
+    open_ = [c for c in checks if not c.passed and not c.wrong]
+    status = cert.status
+    detail = ("" if status == "VALID" else f"false: {_names(wrong)}" if wrong
+              else f"undecided or did not fail: {_names(open_)}")
+    return {"verdict": status, "detail": detail, "figures": {
+        "checks": len(checks), "claims": sum(c.expected for c in checks),
+        "controls": sum((not c.expected) and c.applicable for c in checks),
+        "inapplicable": sum(not c.applicable for c in checks),
+        "false": len(wrong), "open": len(open_), "height_bits": cert.height_bits, "path": cert.path or None}}
+
+
+def _orbit(inp: TaskInput) -> dict:
+    from exact_khk.arith import get_arith, point_height
+    from exact_khk.kahan.map import KahanMap
+
+    ar = get_arith(inp.arith)
+    name = inp.options.get("field", "f")
+    system = inp.system
+    if system.kind == "lie-poisson" and name not in ("f", "control"):
+        from exact_khk.certification.lie_poisson import expresses_omega
+        from exact_khk.systems.lie_poisson.system import b0_signs
+
+        signs = b0_signs(system.n) if name in ("g", "b0") else name
+        fld = system.field("g", signs=signs, cyclotomic=expresses_omega(ar, system.n))
+    else:
+        fld = system.field(name)
+    phi = KahanMap(fld, inp.eps, ar, method=inp.options.get("method", "auto"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        pts = phi.orbit(inp.x0, inp.steps)
+    figures = {"steps": inp.steps, "path": phi.path,
+               "near_singular_warnings": sum(1 for w in caught if "condition" in str(w.message).lower())}
+    if ar.rational:
+        heights = [point_height(ar, p) for p in pts]
+        figures.update(final_height_bits=heights[-1], max_height_bits=max(heights),
+                       height_growth_exponent=_growth_exponent(heights), heights=heights)
+    if ar.rational or not ar.exact:
+        norm = max((abs(ar.to_float(t)) for t in pts[-1]), default=0.0)
+        figures["final_abs_max"] = norm if math.isfinite(norm) else str(norm)
+    return {"verdict": "OK", "detail": "", "figures": figures}
+
+
+def _growth_exponent(heights) -> float | None:
+    """Least-squares slope of log(height) against log(k) over the second half of the
+    orbit (k ≥ K/2, k ≥ 1): the exponent p of a growth like k^p (1 linear, 2
+    quadratic); for exponential growth it increases with K; None for fewer than 2
+    points."""
+    K = len(heights) - 1
+    ks = [k for k in range(max(1, K // 2), K + 1) if heights[k] > 0]
+    if len(ks) < 2:
+        return None
+    xs = [math.log(k) for k in ks]
+    ys = [math.log(heights[k]) for k in ks]
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    sxx = sum((x - mx) ** 2 for x in xs)
+    if sxx == 0:
+        return None
+    return round(sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx, 6)
+
+
+def _scale(inp: TaskInput) -> dict:
+    from exact_khk.studies.scaling import jsonable, run_orbit
+
+    run = run_orbit(inp.system, inp.x0, inp.eps, inp.steps, inp.arith,
+                    diagnostics=inp.options.get("diagnostics", True))
+    summary = run.summary()
+    for k in ("seconds_per_step", "message", "arith", "rows"):
+        summary.pop(k, None)
+    figures = dict(summary)
+    last = {}
+    for row in run.rows:  # the last value of each integral's drift
+        last.update({k: v for k, v in (row.drift_log10 or {}).items()})
+    for name, v in sorted(last.items()):
+        figures[f"drift_log10[{name}]"] = v
+    verdict = {"ok": "OK", "warned": "WARNED", "singular": "SINGULAR", "undecided": "UNDECIDED"}.get(
+        run.status, run.status.upper())
+    return {"verdict": verdict, "detail": _one_line(run.message), "figures": jsonable(figures)}
+
+
+def _probe(inp: TaskInput) -> dict:
+    """An engine probe: no mathematics.  Sleeps ``sleep`` seconds; raises at the
+    system seeds in ``fail``; runs for an hour in Python (short sleeps, which
+    the time limit interrupts) at the seeds in ``slow``; blocks in one long C
+    call that the in-worker limit cannot interrupt at the seeds in ``hang``;
+    kills its own process at the seeds in ``crash``.  For tests of the engine
+    and for measuring its overhead."""
+    seed = inp.params.get("system", {}).get("seed")
+    opts = inp.options
+    if seed in opts.get("fail", ()):
+        raise RuntimeError(f"probe failure at seed {seed}")
+    if seed in opts.get("crash", ()):  # the worker process dies (local engine only: inline, it is the command)
+        os.kill(os.getpid(), signal.SIGKILL)
+    if seed in opts.get("slow", ()):  # an hour of short sleeps: a long computation in Python
+        end = time.monotonic() + 3600
+        while time.monotonic() < end:
+            time.sleep(0.01)
+    if seed in opts.get("hang", ()):
+        import hashlib
+
+        hashlib.pbkdf2_hmac("sha256", b"probe", b"hang", 2 ** 31 - 1)  # one C call, many minutes
+    if opts.get("sleep"):
+        time.sleep(opts["sleep"])
+    n = getattr(inp.system, "n", inp.system.dim)
+    return {"verdict": "OK", "detail": "", "figures": {
+        "n": n, "seed": seed, "value": (n * 7 + (seed or 0) * 3) % 11, "eps": float(inp.eps)}}
+
+
+register(TaskKind(
+    "certify", _certify, "certify the orbit (exact_khk.certify): VALID / INVALID / INCONCLUSIVE",
+    options={"signs": Option(_signs, "involutions: 'b0', 'default' or a list of sign patterns", "lie-poisson"),
+             "poisson_points": Option(_positive_int, "Poisson-map checks at this many orbit points",
+                                      "lie-poisson"),
+             "identities": Option(_text, "a gf:P arithmetic for the Schwartz–Zippel identity checks",
+                                  "lie-poisson"),
+             "prove": Option(_bool, "add the symbolic proofs (n = 2 only)", "lie-poisson"),
+             "claims": Option(_claims, "the claims to certify (system files)", "expressions")},
+    verdicts=("VALID", "INVALID", "INCONCLUSIVE"), ok="VALID", figures=("height_bits", "false", "open")))
+register(TaskKind(
+    "orbit", _orbit, "iterate the Kahan map: heights and their growth, the last point's size",
+    options={"field": Option(_text, "the field: f, control, g (B_0) or a sign pattern (Lie–Poisson), "
+                                    "or a field of the system file"),
+             "method": Option(_method, "how each step is solved (auto, dense, structured, split)")},
+    min_steps=0, figures=("final_height_bits", "height_growth_exponent", "final_abs_max")))
+register(TaskKind(
+    "scale", _scale, "a floating or ball orbit against the exact one: error, bits lost per step, drifts",
+    options={"diagnostics": Option(_bool, "also the integrals' drifts and the residuals")},
+    arith="floating", verdicts=("OK", "WARNED", "SINGULAR", "UNDECIDED"),
+    figures=("final_error_log10", "bits_left", "loss_rate", "drift_log10[H~]")))
+register(TaskKind(
+    "probe", _probe, "engine probe (no mathematics): sleeps, fails or hangs on request",
+    options={"sleep": Option(_seconds, "seconds every probe sleeps"),
+             "fail": Option(_int_list, "system seeds at which the probe raises"),
+             "slow": Option(_int_list, "system seeds at which the probe sleeps an hour"),
+             "hang": Option(_int_list, "system seeds at which the probe blocks in C"),
+             "crash": Option(_int_list, "system seeds at which the probe kills its worker process "
+                                        "(local engine only)")},
+    min_steps=0, figures=("value",)))
+
+
+# --- building the inputs inside the worker -----------------------------------------
+
+
+_SYSTEMS: dict = {}
+
+
+def build_system(params: dict, system_spec=None):
+    """The system of a task: the Lie–Poisson family from (n, seed), or a system
+    file's spec (``system_spec``, shipped with the payload; cached by digest)."""
+    s = params["system"]
+    if s.get("family") == "lie-poisson":
+        from exact_khk.systems.lie_poisson.system import LiePoissonSystem, default_system
+
+        if s.get("default"):
+            return default_system()
+        return LiePoissonSystem.random(s["n"], s["seed"], s.get("bound", 3))
+    digest = s.get("digest")
+    if digest not in _SYSTEMS:
+        from exact_khk.systems.expressions import ExpressionSystem
+
+        if system_spec is None:  # a catalogue name alone (no spec shipped)
+            from exact_khk.systems.catalogue import load
+
+            system = load(s["name"])
+        else:
+            system = ExpressionSystem.from_json(system_spec)
+        if len(_SYSTEMS) > 64:
+            _SYSTEMS.clear()
+        _SYSTEMS[digest] = system
+    return _SYSTEMS[digest]
+
+
+def build_point(params: dict, system) -> tuple:
+    """x0 of a task: a seed (``random_point``), explicit coordinates, or the default."""
+    from exact_khk.parsing import parse_vector
+
+    p = params["point"]
+    if "x0" in p:
+        return parse_vector(p["x0"], "x0", system.dim)
+    if "seed" in p:
+        if system.kind == "lie-poisson":
+            from exact_khk.systems.lie_poisson.system import random_point
+
+            return random_point(system.n, p["seed"])
+        return system.random_point(p["seed"])
+    return parse_vector(list(system.default_x0), "x0", system.dim)
+
+
+# --- the time limit ------------------------------------------------------------------
+
+
+@contextmanager
+def time_limit(seconds):
+    """Raise :class:`TaskTimeout` in the body after ``seconds`` (None or 0: no limit);
+    see the module docstring for how."""
+    if not seconds:
+        yield
+        return
+    if hasattr(signal, "setitimer") and threading.current_thread() is threading.main_thread():
+        with _alarm(seconds):
+            yield
+    else:
+        with _watchdog(seconds):
+            yield
+
+
+@contextmanager
+def _alarm(seconds):
+    state = {"armed": True}
+
+    def handler(signum, frame):
+        if state["armed"]:
+            state["armed"] = False
+            raise TaskTimeout()
+
+    old = signal.signal(signal.SIGALRM, handler)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        state["armed"] = False
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+
+
+@contextmanager
+def _watchdog(seconds):
+    tid = threading.get_ident()
+    lock = threading.Lock()
+    state = {"armed": True, "fired": False}
+    set_exc = ctypes.pythonapi.PyThreadState_SetAsyncExc
+
+    def fire():
+        with lock:
+            if state["armed"]:
+                state["fired"] = True
+                set_exc(ctypes.c_ulong(tid), ctypes.py_object(TaskTimeout))
+
+    timer = threading.Timer(seconds, fire)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        with lock:
+            state["armed"] = False
+            timer.cancel()
+            if state["fired"]:
+                set_exc(ctypes.c_ulong(tid), None)  # clear it if still pending
+
+
+# --- running one task ----------------------------------------------------------------
+
+
+@functools.lru_cache(maxsize=1)
+def _versions() -> dict:
+    from exact_khk.certification.records import library_versions
+
+    return library_versions()
+
+
+def _one_line(text, limit: int = MAX_MESSAGE) -> str:
+    text = " ".join(str(text or "").split())
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def error_text(exc: BaseException) -> str:
+    """``Type: message`` on one line (cut to :data:`MAX_MESSAGE` characters)."""
+    msg = _one_line(exc)
+    return _one_line(f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__)
+
+
+def worker_info(engine: str = "local") -> dict:
+    """Where a task ran: the engine, host, process id and (Dask) worker address."""
+    info = {"engine": engine, "host": socket.gethostname(), "pid": os.getpid()}
+    if "distributed" in sys.modules:
+        try:
+            from distributed import get_worker
+
+            info["address"] = get_worker().address
+            info["engine"] = "dask"
+        except (ImportError, ValueError, AttributeError):
+            pass
+    return info
+
+
+def now_iso() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds")
+
+
+def make_record(payload: dict, verdict: str, *, detail: str = "", figures=None, error=None,
+                seconds: float = 0.0, cpu_seconds=None, worker=None, versions=None) -> dict:
+    """One result line (see docs/sweeps.md for the fields)."""
+    return {"format": RECORD_FORMAT, "key": payload["key"], "params": payload["params"],
+            "verdict": verdict, "detail": detail, "figures": figures or {}, "error": error,
+            "seconds": round(seconds, 6),
+            "cpu_seconds": None if cpu_seconds is None else round(cpu_seconds, 6),
+            "worker": worker or {}, "finished": now_iso(),
+            "versions": versions if versions is not None else _versions()}
+
+
+def run_task(payload: dict) -> dict:
+    """Run one task (``payload``: ``key``, ``params``, optional ``timeout`` in seconds,
+    ``engine``, ``system_spec``) and return its record; never raises (except
+    KeyboardInterrupt): what a task raises becomes its verdict."""
+    if hasattr(sys, "set_int_max_str_digits"):
+        sys.set_int_max_str_digits(0)  # exact figures may be huge integers
+    params = payload["params"]
+    timeout = payload.get("timeout")
+    t0, c0 = time.perf_counter(), time.thread_time()
+    detail, figures, error = "", {}, None
+    try:
+        with time_limit(timeout):
+            kind = TASKS.get(params["task"])
+            if kind is None:
+                raise InputError(f"task: unknown task {params['task']!r} in this worker "
+                                 f"(available: {', '.join(sorted(TASKS))})")
+            system = build_system(params, payload.get("system_spec"))
+            from exact_khk.parsing import parse_rational
+
+            inp = TaskInput(system, build_point(params, system), parse_rational(params["eps"], "eps"),
+                            params["arith"], params["steps"], dict(params.get("options", {})), params)
+            out = kind.run(inp)
+        verdict, detail, figures = out["verdict"], _one_line(out.get("detail", "")), out.get("figures", {})
+    except TaskTimeout:
+        verdict, error = "TIMEOUT", f"time limit of {timeout:g} s exceeded"
+    except SingularStepError as exc:
+        verdict, detail = "SINGULAR", _one_line(exc)
+    except PoleError as exc:
+        verdict, detail = "UNDEFINED", _one_line(exc)
+    except UndecidedError as exc:
+        verdict, detail = "UNDECIDED", _one_line(exc)
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:  # noqa: BLE001 - recorded (MemoryError, RecursionError too), never fatal
+        verdict, error = "ERROR", error_text(exc)
+    return make_record(payload, verdict, detail=detail, figures=figures, error=error,
+                       seconds=time.perf_counter() - t0, cpu_seconds=time.thread_time() - c0,
+                       worker=worker_info(payload.get("engine", "local")))

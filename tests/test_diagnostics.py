@@ -1,0 +1,300 @@
+"""Integrability diagnostics: degree growth, recurrence fit, integral discovery, heights."""
+
+import json
+import random
+import subprocess
+import sys
+from fractions import Fraction as F
+
+import flint
+import pytest
+
+from exact_khk import InputError, LiePoissonSystem, get_arith
+from exact_khk.cli.main import main
+from exact_khk.diagnostics import degree_sequence, exact_degrees, find_integrals, fit_recurrence, height_growth
+from exact_khk.diagnostics.degrees import _Degenerate, line_degrees, resolve_field
+from exact_khk.diagnostics.integrals import _Job, verify_exact
+from exact_khk.diagnostics.kernels import monomials, orbit_kernel_exact
+from exact_khk.systems.expressions import ExpressionSystem
+from exact_khk.systems.lie_poisson.invariants import grad_Htilde
+
+from .conftest import DATA
+
+GOOD = 2749534618746033473  # a prime near 2^61.3
+
+EULER = ExpressionSystem.from_expressions(["x", "y", "z"], field=["y*z", "-2*x*z", "x*y"], name="euler")
+LV = ExpressionSystem.from_expressions(["u", "v"], field=["u - u*v", "u*v - v"], name="lv")
+
+
+def golden_cases():
+    return json.loads((DATA / "golden_degrees.json").read_text())["cases"]
+
+
+def system_of(case):
+    if "lie_poisson" in case:
+        lp = case["lie_poisson"]
+        return LiePoissonSystem.from_vectors(lp["a"], lp["b"], lp["c"]), case["field_kind"]
+    return ExpressionSystem.from_expressions(case["variables"], field=case["field"]), "f"
+
+
+# --- degrees --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("case", golden_cases(), ids=lambda c: c["name"])
+def test_degrees_match_sympy_golden(case):
+    """Modular degrees on random lines and exact composition over Q equal SymPy's
+    composition along a fixed rational line (scripts/generate_degree_golden.py)."""
+    system, kind = system_of(case)
+    gold = case["degrees"]
+    res = degree_sequence(system, steps=len(gold) - 1, eps=case["eps"], field=kind)
+    assert list(res.degrees) == gold
+    assert not res.disagreeing
+    _, fld = resolve_field(system, kind)
+    ex = exact_degrees(fld, F(case["eps"]), 3, max_terms=3000)
+    assert len(ex) >= 2 and ex == gold[:len(ex)]
+
+
+def test_exact_mode_reported_and_agrees():
+    res = degree_sequence(EULER, steps=10, eps="1/10", exact=3)
+    assert res.exact == (1, 3, 9, 19)
+    assert "agrees" in res.summary()
+    assert res.fit.growth == "polynomial" and res.fit.polynomial_degree == 2 and res.fit.polynomial == "2*k^2 + 1"
+
+
+def test_non_integrable_control_is_exponential():
+    res = degree_sequence(LV, steps=12, eps="1/10")
+    assert res.degrees == tuple(2 ** k for k in range(13))
+    assert res.fit.growth == "exponential"
+    dd = res.fit.dynamical_degree
+    assert dd.minimal_polynomial == "x - 2" and dd.enclosure == ("2.0000000000", "2.0000000000")
+    cat = degree_sequence("lotka-volterra", steps=10)
+    assert cat.fit.growth == "exponential"
+
+
+def test_lie_poisson_growth_is_polynomial_and_fast_enough():
+    s = LiePoissonSystem.random(3, 1)
+    res = degree_sequence(s, steps=20, primes=1)
+    assert res.degrees[:4] == (1, 6, 12, 18)
+    assert res.fit.growth == "polynomial" and res.fit.polynomial_degree == 1
+    assert res.fit.dynamical_degree.coefficients == (1, -1)
+
+
+def test_forced_bad_prime_undercounts_and_is_reported():
+    """A prime dividing the numerator of eps makes the map the identity mod p: it
+    undercounts at every line; the maximum over primes is still right, the bad
+    run is listed and the note names the prime."""
+    alone = degree_sequence(EULER, steps=4, eps="3/10", primes=[3])
+    assert alone.degrees == (1, 1, 1, 1, 1)  # an undercount, never an overcount
+    res = degree_sequence(EULER, steps=4, eps="3/10", primes=[3, GOOD])
+    assert res.degrees == (1, 3, 9, 19, 33)
+    assert (3, 0) in res.disagreeing and any("3" in n and "bad" in n for n in res.notes)
+
+
+def test_undercount_frequency_within_schwartz_zippel_bound():
+    """Over a small prime, the fraction of random lines that undercount d_k stays
+    below the stated bound 2 d (d + 1) / p; never an overcount."""
+    _, fld = resolve_field(EULER, "f")
+    true = [1, 3, 9]
+    for p in (101, 1009):
+        rng, under, lines = random.Random(7), [0, 0, 0], 0
+        for _ in range(300):
+            try:
+                d = line_degrees(fld, F(1, 10), p, 2, rng)
+            except _Degenerate:
+                continue
+            lines += 1
+            assert all(a <= b for a, b in zip(d, true))
+            for k in range(3):
+                under[k] += d[k] < true[k]
+        for k in range(1, 3):
+            assert under[k] / lines <= 2 * true[k] * (true[k] + 1) / p
+    res = degree_sequence(EULER, steps=3, eps="1/10")
+    assert 0 < res.undercount_bound < 1e-20
+
+
+@pytest.mark.parametrize("kw, name", [
+    (dict(primes=[4]), "primes"), (dict(primes=[101, 15]), "primes"), (dict(steps=0), "steps"),
+    (dict(steps=10 ** 9), "steps"), (dict(lines=0), "lines"), (dict(primes="x"), "primes")])
+def test_degree_input_errors(kw, name):
+    with pytest.raises(InputError, match=name):
+        degree_sequence(EULER, **kw)
+
+
+# --- recurrence -----------------------------------------------------------------------
+
+
+def test_recurrence_refuses_short_sequences():
+    with pytest.raises(InputError, match="sequence"):
+        fit_recurrence([1, 3, 9, 19])
+    short = fit_recurrence([1, 3, 9, 19, 33])  # order 3 needs 6 terms, then 3 to confirm
+    assert short.growth == "undetermined" and "too short" in short.reason
+    assert fit_recurrence([1, 3, 9, 19, 33, 51, 73, 99, 129]).growth == "polynomial"
+
+
+def test_recurrence_refuses_non_integer_fit():
+    fit = fit_recurrence([1, 2, 3, 5, 7, 11, 13, 17, 19, 23])  # primes: no recurrence
+    assert fit.growth == "undetermined"
+
+
+def test_dynamical_degree_certified_enclosure():
+    fib = fit_recurrence([1, 2, 3, 5, 8, 13, 21, 34, 55, 89, 144])
+    lo, hi = (F(t) for t in fib.dynamical_degree.enclosure)
+    phi = (1 + 5 ** 0.5) / 2
+    assert lo <= F(phi) <= hi and hi - lo <= F(1, 10 ** 10)
+    assert fib.dynamical_degree.minimal_polynomial == "x^2 - x - 1"
+    quasi = fit_recurrence([1, 2, 1, 2, 1, 2, 1, 2, 1, 2])
+    assert quasi.growth == "bounded"
+
+
+# --- integrals ------------------------------------------------------------------------
+
+
+def grad_ratio(num, den, x):
+    def val(p, j=None):
+        s = F(0)
+        for e, c in p.items():
+            if j is not None and e[j] == 0:
+                continue
+            t = c * (e[j] if j is not None else 1)
+            for i, k in enumerate(e):
+                t *= x[i] ** int(k - (i == j))
+            s += t
+        return s
+    n0, d0 = val(num), val(den)
+    return [(d0 * val(num, j) - n0 * val(den, j)) / d0 ** 2 for j in range(len(x))]
+
+
+def rank(rows):
+    return flint.fmpq_mat(len(rows), len(rows[0]), [flint.fmpq(v.numerator, v.denominator)
+                                                    for r in rows for v in r]).rank()
+
+
+def test_euler_top_integrals_recovered():
+    res = find_integrals(EULER, degree=3, eps="1/10")
+    assert res.kernel_dim == 8 and res.trivial_dim == 8 and res.new_dim == 0
+    assert [t[1:] for t in res.by_degree] == [(0, 0), (2, 2), (8, 0)]
+    assert len(res.integrals) == 2 and all(f.verified for f in res.integrals) and res.independent == 2
+    # x^2 - z^2 and y^2 + 2 z^2 (Casimir-like quadratics of the flow) combine to the found ones
+    x = [F(2, 3), F(-1, 5), F(7, 4)]
+    found = [grad_ratio(*f.polynomials(), x) for f in res.integrals]
+    known = grad_ratio({(2, 0, 0): F(1), (0, 0, 2): F(-1)}, {(0, 2, 0): F(1), (0, 0, 2): F(2)}, x)
+    assert rank(found + [known]) == 2
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_lie_poisson_rediscovers_htilde_and_ktilde(n):
+    """From orbits alone: n independent verified integrals; H~ and K~ are functions
+    of them (Jacobian rank); for the non-associated control field they are not."""
+    s = LiePoissonSystem.random(n, 1)
+    ar = get_arith("fraction")
+    rng = random.Random(3)
+    x = [F(rng.randint(-5, 5), rng.randint(1, 3)) for _ in range(2 * n)]
+    H = grad_Htilde(s.field("f"), [ar(t) for t in x], "1/10", ar)
+    K = grad_Htilde(s.field("g"), [ar(t) for t in x], "1/10", ar)
+    for kind, dependent in (("f", True), ("g", True), ("control", False)):
+        res = find_integrals(s, degree=2, field=kind)
+        assert res.kernel_dim == n and len(res.integrals) == n and res.independent == n
+        assert all(f.verified for f in res.integrals)
+        G = [grad_ratio(*f.polynomials(), x) for f in res.integrals]
+        assert (rank(G + [H]) == n) is dependent and (rank(G + [K]) == n) is dependent
+
+
+def test_control_finds_nothing():
+    for D in (2, 4):
+        res = find_integrals(LV, degree=D, eps="1/10")
+        assert res.kernel_dim == 0 and res.integrals == () and all(t[1] == 0 for t in res.by_degree)
+
+
+def test_modular_and_exact_kernels_agree():
+    exps = monomials(3, 2)
+    _, fld = resolve_field(EULER, "f")
+    job = _Job(fld, F(1, 10), exps, 25, 8, ["x", "y", "z"], [], [])
+    x0 = (F(1, 2), F(-3), F(2, 7))
+    lifted, _ = job.lifted_kernels([x0], 2, [GOOD], 0, 8)
+    assert lifted[0] == orbit_kernel_exact(fld, F(1, 10), x0, exps, 25)
+
+
+def test_verification_rejects_non_integrals():
+    _, fld = resolve_field(EULER, "f")
+    x0 = (F(1), F(2), F(3))
+    assert verify_exact({(2, 0, 0): F(1), (0, 0, 2): F(-1)}, {(0, 2, 0): F(1), (0, 0, 2): F(2)}, fld, F(1, 10), x0, 5)
+    assert not verify_exact({(1, 0, 0): F(1)}, {(0, 1, 0): F(1)}, fld, F(1, 10), x0, 5)
+
+
+def test_short_orbit_and_special_orbit_are_flagged():
+    res = find_integrals(EULER, degree=2, eps="1/10", steps=5)
+    assert any("too short" in w for w in res.warnings)
+    fixed = find_integrals(EULER, degree=2, eps="1/10", x0=["0", "0", "0"])  # a fixed point
+    assert any("periodic" in w for w in fixed.warnings)
+    assert fixed.kernel_dim == 2
+
+
+@pytest.mark.parametrize("kw, name", [
+    (dict(degree=60), "degree"), (dict(), "degree"), (dict(monomials_list=["x*w"]), "monomials"),
+    (dict(degree=2, x0=["1", "2"]), "x0"), (dict(degree=2, primes=[9]), "primes"), (dict(degree=2, orbits=1), "orbits")])
+def test_integral_input_errors(kw, name):
+    with pytest.raises(InputError, match=name):
+        find_integrals(EULER, eps="1/10", **kw)
+
+
+def test_user_monomial_list():
+    res = find_integrals(EULER, monomials_list=["1", "x^2", "y^2", "z^2"], eps="1/10")
+    assert res.kernel_dim == 2 and len(res.integrals) == 2 and all(f.verified for f in res.integrals)
+
+
+# --- heights --------------------------------------------------------------------------
+
+
+def test_height_growth_classes():
+    assert height_growth(LV.field("f"), ["1/2", "1/3"], "1/10", steps=14).growth == "exponential"
+    assert height_growth(EULER.field("f"), ["1", "2", "3"], "1/10", steps=24).growth == "quadratic"
+    s = LiePoissonSystem.random(3, 1)
+    assert height_growth(s.field("f"), ["1", "2", "-1", "1/2", "0", "1"], "1/10", steps=30).growth == "linear"
+
+
+# --- command line ---------------------------------------------------------------------
+
+
+def test_cli_degrees_and_find_integrals(capsys, tmp_path):
+    assert main(["degrees", "--system", "euler-top", "--steps", "8", "--exact", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "1, 3, 9, 19, 33" in out and "polynomial of degree 2" in out
+    assert main(["degrees", "--system", "lotka-volterra", "--steps", "8", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["fit"]["growth"] == "exponential" and d["degrees"][:4] == [1, 2, 4, 8]
+    assert main(["find-integrals", "--system", "euler-top", "--degree", "2", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["kernel_dim"] == 2 and len(d["integrals"]) == 2
+    assert main(["find-integrals", "--n", "2", "--seed", "1", "--field", "control"]) == 0
+    assert "2 functionally independent" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, what", [
+    (["degrees", "--primes", "4,6"], "--primes"), (["degrees", "--steps", "0"], "--steps"),
+    (["find-integrals", "--degree", "99"], "--degree"), (["find-integrals", "--monomials", "q*r"], "--monomials"),
+    (["degrees", "--signs", "-++"], "--signs")])
+def test_cli_input_errors(argv, what, capsys):
+    assert main(argv) == 2
+    assert what in capsys.readouterr().err
+
+
+def test_cli_plot(tmp_path):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "g.png"
+    assert main(["degrees", "--system", "euler-top", "--steps", "10", "--plot", str(out)]) == 0
+    assert out.stat().st_size > 1000
+
+
+@pytest.mark.slow
+def test_fifty_iterates_of_a_six_dimensional_map():
+    s = LiePoissonSystem.random(3, 1)
+    res = degree_sequence(s, steps=50, primes=1)
+    assert res.degrees[-1] == 300 and res.fit.polynomial == "6*k for k >= 1"
+
+
+@pytest.mark.slow
+def test_diagnostics_table_quick(tmp_path):
+    out = tmp_path / "d.md"
+    subprocess.run([sys.executable, "scripts/diagnostics_table.py", "--quick", "--out", str(out)], check=True)
+    text = out.read_text()
+    assert "| lie-poisson" in text and "euler-top" in text
