@@ -299,22 +299,33 @@ the integrals found (Jacobian rank at a random rational point).
 
 ## Findings
 
-* Every Lie–Poisson Kahan map tried — f, the associated g *and* the
-  non-associated control — has **linear** degree growth (dynamical degree 1,
-  closed forms such as d_k = 2n·k), linear height growth, and n independent
-  rational integrals that are ratios of quadratics (pencils, some conjugate
-  over the cyclotomic field, given by rational symmetric functions).  For f and
-  g, H̃ and K̃ are functions of the integrals found from orbits alone; for the
-  control they are not (its integrals are different ones).  So degree growth
-  and integral counts do not single out the associated fields: the
-  non-associated control is a control for the *claims* H̃, K̃, Π, not an example
-  of non-integrability.
-* The Kahan Lotka–Volterra map (u' = u(a − bv), v' = v(cu − d)) has d_k = 2^k
-  (λ = 2, exponential), no integral of degree ≤ 4, and heights doubling per step.
-* The Euler top has d_k = 2k² + 1 and two quadratic-ratio integrals; the
-  Lagrange top quadratic growth with one linear integral and three new kernel
-  directions at degree 2 (counted; not extracted, the kernel there contains
-  products with the linear one).
+* Every Lie–Poisson Kahan map in the table — f, the associated g *and* the
+  non-associated control — has **linear** degree growth (dynamical degree 1;
+  closed forms such as d_k = 2n·k, or d_k = a·k + b after a short transient); the
+  heights of exact orbits grow linearly too (e.g. n = 3, seed 1: `exact-khk
+  degrees --n 3 --seed 1`).  The control grows like f and g: degree growth does
+  not single out the associated fields.
+* For the generic Hessians the degree ≤ 2 search finds n independent rational
+  integrals, ratios of quadratics forming n pencils (some conjugate over a
+  cyclotomic field, then given by rational symmetric functions of degree 4), all
+  checked exactly on a fresh orbit.  For f and g, H̃ and K̃ are functions of them
+  ("2/2"); for the control they are not ("0/2"): its integrals are different
+  ones.  The non-associated control is therefore a control for the *claims*
+  H̃, K̃, Π of the certificate, not an example of non-integrability.
+* Some random Hessians are degenerate (repeating patterns in a, c, e.g. n = 4,
+  seeds 2 and 3): a linear kernel vector appears whose span over orbits is not
+  one of the two shapes the extraction splits (one denominator, independent
+  pencils), so the integrals there are counted ("kernel dim by degree") but not
+  written as formulas, and H̃, K̃ are not recovered ("0/2").
+* The Kahan Lotka–Volterra map has d_k = 2^k (λ = 2, exponential), no integral of
+  degree ≤ 4, and heights doubling per step; the classic Hénon–Heiles potential
+  (b = −a) grows with ratios ≈ 2.3 per step, too fast to confirm a recurrence
+  within the degree cap (not classified), and has the one CMOQ integral (degree
+  4) — the separable catalogue case b = a has quadratic growth and two cubic
+  integrals (its two planar energies).
+* The Euler top has d_k = 2k² + 1 and two quadratic-ratio integrals; the Lagrange
+  top has quadratic growth, one linear integral and three new kernel directions
+  at degree 2 (counted; their structure is mixed, not split into formulas).
 
 ## Limits
 

@@ -10,24 +10,32 @@ S_j = {φ : x_j φ ∈ span}).  K(x_0) is computed over F_p as the nullspace of 
 (orbit length) × m evaluation matrix (python-flint ``nmod_mat``), for several
 orbits and primes.
 
-**Integrals.**  W = Σ_i K(x_i) over several generic orbits is spanned by
-polynomials with rational coefficients, found modulo several primes and lifted
-by Chinese remaindering and rational reconstruction (canonical reduced echelon
-basis; more primes until the lift is stable).  When K(x_0) has codimension 1 in
-W for every orbit (no trivial vectors), the evaluation vector (W_1(x), …, W_w(x))
-along an orbit is proportional to a fixed vector, so every ratio W_j/W_w is an
-integral: these are reported, after an exact check (rational arithmetic) that
-each is conserved on a fresh orbit that was not used to find it.
+**Integrals.**  The kernels of a few generic orbits are found modulo several
+primes and lifted to Q by Chinese remaindering and rational reconstruction
+(canonical bases; more primes until a prime not used for the lift confirms
+it).  With W = Σ_i K(x_i), :mod:`.pencils` writes the integrals as ratios of
+kernel polynomials when W has one common denominator (dim W = dim K + 1) or
+consists of independent pencils N_a − h_a D_a (dim W = 2 dim K; pencils
+conjugate over a number field give rational symmetric functions).  Each is
+reported only after an exact check (rational arithmetic) that it is conserved
+on a fresh orbit not used to find it; ``independent`` is the rank of their
+Jacobian at a random rational point.  In degree mode the table ``by_degree``
+gives dim K ∩ span(degree ≤ D) and the *new* directions (not in
+K_{D-1} + Σ_j x_j K_{D-1}); integrals are extracted at the lowest degree with a
+kernel, and new directions at a higher degree D from the candidates
+{1} ∪ {degree exactly D}, which hold no product of a lower-degree kernel
+polynomial with a non-constant monomial.
 
-**Where it cannot conclude** (reported in ``warnings``):
+**Where it cannot conclude** (``warnings`` and ``notes``):
 
 * orbit too short — fewer points than candidates + margin, or the rank of the
   evaluation matrix still grew in the last ``margin`` rows (then K is too big);
 * an orbit on a smaller invariant set — a periodic orbit mod p, or a kernel
   larger than that of other random orbits (the generic dimension is the
   minimum over orbits; larger ones are flagged and not used);
-* trivial vectors present or codimension ≠ 1 — the kernel dimension is
-  reported but integrals are not extracted (use a smaller degree or a list);
+* trivial vectors, or a span W of another shape (mixed denominators,
+  hyperplane-type relations) — the kernel dimensions are reported, the
+  integrals are not written as formulas;
 * lift unstable or the exact check failing — the integral is not reported.
 
 >>> from exact_khk.systems.expressions import ExpressionSystem
