@@ -61,6 +61,7 @@ import mpmath
 from mpmath import libmp
 
 from exact_khk.errors import InputError
+from exact_khk.parsing import _short
 
 #: the largest precision P (bits) of ``mp:P`` and ``ball:P``: one number of 10⁶ bits
 #: takes 125 kB and one multiplication about a millisecond, so a 2n×2n solve
@@ -584,11 +585,6 @@ def to_element(ar, value, name: str = "value"):
                          f"{ar.name} ({exc})") from None
 
 
-def _short(value, width: int = 60) -> str:
-    text = repr(value)
-    return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
-
-
 def to_fraction(ar, value):
     """The exact rational value of ``value`` (an element of ``ar``, or anything
     :func:`to_element` reads) as a :class:`~fractions.Fraction`; a point (list or
@@ -647,3 +643,29 @@ def exact_arith_names() -> list[str]:
         except InputError:
             pass
     return out
+
+
+def as_point(ar, x, dim: int, name: str = "x"):
+    """Convert a point into a tuple of elements of ``ar``; checks the dimension.
+
+    Coordinates are read by :func:`to_element`: strings
+    (``'1/3'``, ``'0.25'``), ints, Fractions, gmpy2/python-flint rationals,
+    elements of ``ar``; binary floats (Python or numpy) only in floating
+    arithmetics, where they must be finite.  Anything else raises
+    :class:`~exact_khk.errors.InputError` naming the coordinate."""
+    if ar.rational and type(x) is tuple and len(x) == dim and all(type(t) is type(ar.zero) for t in x):
+        return x  # already a point of ar (e.g. a previous step's result)
+    if isinstance(x, (str, bytes)) or not hasattr(x, "__len__") and not hasattr(x, "__iter__"):
+        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}")
+    try:
+        coords = list(x)
+    except TypeError:
+        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}") from None
+    if len(coords) != dim:
+        raise InputError(f"{name}: expected {dim} coordinates, got {len(coords)}")
+    out = []
+    for i, t in enumerate(coords):
+        out.append(to_element(ar, t, f"{name}[{i}]"))
+        if not ar.exact and not ar.is_finite(out[-1]):
+            raise InputError(f"{name}[{i}]: expected a finite number, got {_short(t)}")
+    return tuple(out)

@@ -149,17 +149,23 @@ def cmd_integrals(args):
         x = phi.orbit(x0, args.steps, progress=progress)[-1]
     H = ar.format(Htilde(system.field("f"), x, eps, ar))
     K = {s: ar.format(Htilde(system.field("g", s, cyclotomic=True), x, eps, ar)) for s in signs}
+    return _show_integrals(args, system, x, eps, ar, {"Htilde": H, "Ktilde": K},
+                           {"H~": H} | {f"K~[{s}]": v for s, v in K.items()})
+
+
+def _show_integrals(args, system, x, eps, ar, data, lines):
+    """Print the integrals' values at x (``lines``: name -> value), or ``data`` as JSON."""
     if args.json:
-        write_json({"Htilde": H, "Ktilde": K, "system": system.to_json(), "x": [ar.format(t) for t in x],
-                    "step": args.steps, "eps": str(eps), "arith": ar.name, "exact": ar.exact,
-                    "versions": library_versions()}, "-")
+        write_json({**data, "system": system.to_json(), "x": [ar.format(t) for t in x], "step": args.steps,
+                    "eps": str(eps), "arith": ar.name, "exact": ar.exact, "versions": library_versions()}, "-")
         return 0
     print(system.describe())
     at = "x0" if args.steps == 0 else f"x_{args.steps} = Phi_f^{args.steps}(x0)"
     print(f"at {at} = ({', '.join(ar.format(t) for t in x)}), eps = {eps}, arithmetic {ar.name}")
-    print(f"H~ = {H}")
-    for s, v in K.items():
-        print(f"K~[{s}] = {v}")
+    if not lines:
+        print(f"{system.name} declares no integrals")
+    for name, v in lines.items():
+        print(f"{name} = {v}")
     return 0
 
 
@@ -172,16 +178,4 @@ def _system_integrals(args, system, x0, eps, ar):
     x = phi.orbit(x0, args.steps)[-1]
     e = ar.convert(eps)
     values = {name: ar.format(fn(ar, x, e)) for name, fn in system.integrals().items()}
-    if args.json:
-        write_json({"integrals": values, "system": system.to_json(), "x": [ar.format(t) for t in x],
-                    "step": args.steps, "eps": str(eps), "arith": ar.name, "exact": ar.exact,
-                    "versions": library_versions()}, "-")
-        return 0
-    print(system.describe())
-    at = "x0" if args.steps == 0 else f"x_{args.steps} = Phi_f^{args.steps}(x0)"
-    print(f"at {at} = ({', '.join(ar.format(t) for t in x)}), eps = {eps}, arithmetic {ar.name}")
-    if not values:
-        print(f"{system.name} declares no integrals")
-    for name, v in values.items():
-        print(f"{name} = {v}")
-    return 0
+    return _show_integrals(args, system, x, eps, ar, {"integrals": values}, values)

@@ -68,45 +68,14 @@ import warnings
 from fractions import Fraction
 
 from exact_khk.linalg import circulant
-from exact_khk.arith import _is_element as _arith_is_element, get_arith, point_height as _height, to_element
+from exact_khk.arith import _is_element as _arith_is_element, as_point, get_arith, point_height as _height, to_element  # noqa: F401
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
-from exact_khk.parsing import parse_rational
+from exact_khk.parsing import _short, parse_rational
 from exact_khk.linalg.split import split_system
 from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 
 METHODS = ("auto", "dense", "structured", "split")
-
-def as_point(ar, x, dim: int, name: str = "x"):
-    """Convert a point into a tuple of elements of ``ar``; checks the dimension.
-
-    Coordinates are read by :func:`exact_khk.arith.to_element`: strings
-    (``'1/3'``, ``'0.25'``), ints, Fractions, gmpy2/python-flint rationals,
-    elements of ``ar``; binary floats (Python or numpy) only in floating
-    arithmetics, where they must be finite.  Anything else raises
-    :class:`~exact_khk.errors.InputError` naming the coordinate."""
-    if ar.rational and type(x) is tuple and len(x) == dim and all(type(t) is type(ar.zero) for t in x):
-        return x  # already a point of ar (e.g. a previous step's result)
-    if isinstance(x, (str, bytes)) or not hasattr(x, "__len__") and not hasattr(x, "__iter__"):
-        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}")
-    try:
-        coords = list(x)
-    except TypeError:
-        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}") from None
-    if len(coords) != dim:
-        raise InputError(f"{name}: expected {dim} coordinates, got {len(coords)}")
-    out = []
-    for i, t in enumerate(coords):
-        out.append(to_element(ar, t, f"{name}[{i}]"))
-        if not ar.exact and not ar.is_finite(out[-1]):
-            raise InputError(f"{name}[{i}]: expected a finite number, got {_short(t)}")
-    return tuple(out)
-
-
-def _short(value, width: int = 60) -> str:
-    text = repr(value)
-    return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
-
 
 def _is_element(ar, t) -> bool:
     return _arith_is_element(ar, t)

@@ -21,7 +21,7 @@ import math
 import warnings
 
 from exact_khk.linalg import circulant
-from exact_khk.arith import get_arith, to_element
+from exact_khk.arith import get_arith, as_point, to_element
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
 from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
@@ -39,23 +39,9 @@ def _eps(ar, eps):
 
 
 def _point(ar, x, dim, name="x"):
-    """A point as a list of elements of ``ar`` (strings, Fractions, … converted; floats
-    only in floating arithmetics), with its dimension checked."""
-    if isinstance(x, (str, bytes)):
-        raise InputError(f"{name}: expected a sequence of {dim} numbers, got a string")
-    try:
-        coords = list(x)
-    except TypeError:
-        raise InputError(f"{name}: expected a sequence of {dim} numbers, got {type(x).__name__}") from None
-    if len(coords) != dim:
-        raise InputError(f"{name}: expected {dim} coordinates, got {len(coords)}")
-    zero_type = type(ar.zero)
-    if ar.rational and all(type(t) is zero_type for t in coords):
-        return coords
-    out = [to_element(ar, t, f"{name}[{i}]") for i, t in enumerate(coords)]
-    if not ar.exact and not all(ar.is_finite(t) for t in out):
-        raise InputError(f"{name}: expected finite coordinates")
-    return out
+    """A point as a list of elements of ``ar``, read as the Kahan map reads it
+    (:func:`exact_khk.arith.as_point`)."""
+    return list(as_point(ar, x, dim, name))
 
 
 def _floating(ar) -> bool:
