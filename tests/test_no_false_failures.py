@@ -47,9 +47,10 @@ def survey(seeds, steps):
 
 
 def test_no_false_invalid_50_systems():
-    counts, invalid, _ = survey(range(50), steps=2)
+    """50 systems, n = 2..5 (n = 6 in the slow test), 2 steps."""
+    counts, invalid, _ = survey([s for s in range(63) if s % 5 != 4][:50], steps=2)
     assert invalid == []
-    assert counts["VALID"] >= 35, counts  # most random certificates are fully decided
+    assert counts["VALID"] >= 40, counts  # most random certificates are fully decided
 
 
 @pytest.mark.slow
@@ -127,6 +128,20 @@ def test_control_degeneracy_reasons():
     assert cert.status != "INVALID"
     assert all(not cert.check(name).applicable for name in CONTROLS[:2])
     assert "rank 3 at no orbit point" in cert.check("rank of integral gradients A^i grad H~ (i < n)").detail
+
+
+def test_self_paired_b_c_make_controls_inapplicable():
+    """n >= 3 with b and c constant (found in the survey: seeds 276 and 836 at n = 3): the first
+    three controls hold identically; they are inapplicable and the certificate is VALID."""
+    for seed in (276, 836):
+        system = LiePoissonSystem.random(3, seed)
+        assert len(set(system.b)) == len(set(system.c)) == 1
+        cert = certify(system, x0=random_point(3, seed), steps=2)
+        assert cert.status == "VALID", cert.verdict()
+        assert [cert.check(name).applicable for name in CONTROLS] == [False, False, False, True]
+    s4 = LiePoissonSystem.from_vectors("1,2,0,-1", "1,-2,1,-2", "3,0,3,0")  # period 2: frequencies 0 and 2
+    degen = _ControlDegeneracy(s4, [1, 2, 0, 0, 1, 0, 0, 2], "1/10")
+    assert "period 2" in degen.commutation() and degen.non_admissible() is None
 
 
 def test_non_admissible_hessian_breaks_the_block():

@@ -15,7 +15,7 @@ time, every scalar figure — named ``figure:NAME`` where NAME is also a column
 of the axes) and, with matplotlib, ``verdicts.png`` (verdict
 counts against the first axis, one panel per value of the second),
 ``time.png`` (time per task against the first axis) and ``figures.png``
-(median of each numeric figure against the first axis).
+(mean of each main figure against the first axis).
 """
 
 from __future__ import annotations
@@ -330,9 +330,10 @@ def plot_summary(s: Summary, out_dir) -> list:
         if sv is not None:
             ax.set_title(f"{second} = {sv}", fontsize=9)
     axs[0][0].set_ylabel("tasks")
-    axs[0][-1].legend(fontsize=7, loc="upper right")
+    handles, labels = axs[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, fontsize=7, loc="center right")
     fig.suptitle(f"{s.name}: verdicts ({s.task})", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 0.86 if len(seconds) == 1 else 0.92, 1))
     paths.append(_save(fig, out / "verdicts.png"))
     plt.close(fig)
 
@@ -358,7 +359,7 @@ def plot_summary(s: Summary, out_dir) -> list:
         paths.append(_save(fig, out / "time.png"))
         plt.close(fig)
 
-    # numeric figures against the first axis (medians; one line per value of the second)
+    # numeric figures against the first axis (means; one line per value of the second)
     figs = [f for f in s.shown if f not in ("n", "seed")][:6]
     if figs:
         cols = min(3, len(figs))
@@ -372,7 +373,7 @@ def plot_summary(s: Summary, out_dir) -> list:
                             and (sv is None or r["axes"].get(second) == sv) and _number(r["figures"].get(f))]
                     if vals:
                         xs.append(pos[lv])
-                        ys.append(statistics.median(vals))
+                        ys.append(statistics.fmean(vals))
                 if xs:
                     ax.plot(xs, ys, "o-", ms=3, lw=1, label=None if sv is None else f"{second}={sv}")
             ax.set_title(f, fontsize=9)
@@ -383,7 +384,7 @@ def plot_summary(s: Summary, out_dir) -> list:
                 ax.legend(fontsize=6)
         for ax in list(axs.flat)[len(figs):]:
             ax.axis("off")
-        fig.suptitle(f"{s.name}: figures (medians)", fontsize=10)
+        fig.suptitle(f"{s.name}: figures (means)", fontsize=10)
         fig.tight_layout()
         paths.append(_save(fig, out / "figures.png"))
         plt.close(fig)
