@@ -12,6 +12,7 @@ exact_khk.errors.InputError: eps: '1/0' is not a rational number (zero denominat
 
 from __future__ import annotations
 
+import contextlib
 import re
 import sys
 from fractions import Fraction
@@ -27,24 +28,32 @@ MAX_EXPONENT = 10_000
 MAX_DIGITS = 1_000_000
 
 
+@contextlib.contextmanager
+def any_int_digits():
+    """Lift Python's 4300-digit int↔str limit inside the block and restore it after
+    (exact orbits print and parse far larger integers; the caller's setting is kept)."""
+    limit = sys.get_int_max_str_digits() if hasattr(sys, "get_int_max_str_digits") else 0
+    if limit:
+        sys.set_int_max_str_digits(0)
+    try:
+        yield
+    finally:
+        if limit:
+            sys.set_int_max_str_digits(limit)
+
+
 def _fraction(text: str) -> Fraction:
     """Fraction(text) for a validated number text, free of Python's 4300-digit
     int/str limit (exact orbits reach far larger numbers)."""
     mantissa, _, exp = text.lower().partition("e")
     if exp and abs(int(exp)) > MAX_EXPONENT:
         raise ValueError(f"exponent {exp} beyond the limit of {MAX_EXPONENT}")
-    limit = sys.get_int_max_str_digits() if hasattr(sys, "get_int_max_str_digits") else 0
-    if limit:
-        sys.set_int_max_str_digits(0)
-    try:
+    with any_int_digits():
         if "/" in mantissa:
             num, den = mantissa.split("/")
             return Fraction(int(num), int(den))
         q = Fraction(mantissa)
         return q * Fraction(10) ** int(exp) if exp else q
-    finally:
-        if limit:
-            sys.set_int_max_str_digits(limit)
 
 
 def parse_rational(value, name: str) -> Fraction:

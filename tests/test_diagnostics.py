@@ -298,3 +298,15 @@ def test_diagnostics_table_quick(tmp_path):
     subprocess.run([sys.executable, "scripts/diagnostics_table.py", "--quick", "--out", str(out)], check=True)
     text = out.read_text()
     assert "| lie-poisson" in text and "euler-top" in text
+
+
+def test_cli_orbit_reports_the_height_growth(capsys):
+    """`orbit` fits the heights of an exact orbit: the non-integrable Kahan Lotka–Volterra
+    map (heights double per step) is exponential, the Lie–Poisson orbit is not."""
+    assert main(["orbit", "--system", "lotka-volterra", "--steps", "12", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["height_growth"]["growth"] == "exponential"
+    assert main(["orbit", "--steps", "12"]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.startswith("heights (bits)") and "growth linear" in last
+    assert main(["orbit", "--steps", "12", "--arith", "float", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["height_growth"] is None   # floats have no height

@@ -33,7 +33,7 @@ SHELL_LANGS = {"bash", "sh", "shell", "console", "zsh"}
 #: commands that cannot run in the test, by a regular expression on the command,
 #: with the reason (reported as skipped)
 ALLOW = {
-    r"--dask\s+\S+": "needs a running Dask scheduler at that address",
+    r"--dask\s+(tcp|tls|ws)://": "needs a running Dask scheduler at that address",
     r"--scheduler\s+(tcp|tls|ws)://": "needs a running Dask scheduler at that address",
     r"--scheduler\s+\S*:\d+": "needs a running Dask scheduler at that address",
 }
@@ -51,14 +51,7 @@ SLOW = {
 
 #: documented commands that do not (yet) end as the text implies, by a regular expression
 #: on "path: command", with what is wrong (xfail, not strict: reported to the lead)
-KNOWN = {
-    r"certify --n 4 --seed 1 --steps 10 --signs -\+\+\+ --signs \+\+-\+":
-        "exits 4 (INCONCLUSIVE) already at HEAD: the Phi_g[++-+] orbit reaches points where the "
-        "commutation and reversibility checks are undefined (singular steps)",
-    r"certify --a 1,2 --b 0,1 --c -1,3 --x0 1,0,2,1 --eps 1/7 --arith gmpy2":
-        "exits 4 (INCONCLUSIVE) already at HEAD: Phi_g[-+](x0) = (7/90, -7/90, ...) lies on the invariant "
-        "set sum(u) = 0, where the next Kahan step at eps = 1/7 is singular",
-}
+KNOWN = {}
 
 #: a word that stands for something the reader fills in
 PLACEHOLDER = re.compile(r"<[^>]+>|\.\.\.|\b(FILE|NAME|PATH|DIR|ADDRESS|URL|SEED|N|K|P)\b")

@@ -165,6 +165,18 @@ def test_run_task_is_plain_data_and_deterministic():
                       "finished", "versions"}
 
 
+def test_run_task_keeps_the_callers_int_digit_limit():
+    """A task lifts Python's int/str digit limit only while it runs (huge exact figures),
+    and gives the caller its own setting back."""
+    before = sys.get_int_max_str_digits()
+    sys.set_int_max_str_digits(5000)
+    try:
+        run_task(parse_spec(CERTIFY, origin="s.toml").tasks()[0].payload())
+        assert sys.get_int_max_str_digits() == 5000
+    finally:
+        sys.set_int_max_str_digits(before)
+
+
 def test_local_and_dask_give_identical_results(capsys, tmp_path):
     distributed = pytest.importorskip("distributed")
     spec = tmp_path / "s.toml"

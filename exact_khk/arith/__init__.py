@@ -53,7 +53,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import sys
 import numbers
 from fractions import Fraction
 
@@ -61,7 +60,7 @@ import mpmath
 from mpmath import libmp
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import _short
+from exact_khk.parsing import _short, any_int_digits
 
 #: the largest precision P (bits) of ``mp:P`` and ``ball:P``: one number of 10⁶ bits
 #: takes 125 kB and one multiplication about a millisecond, so a 2n×2n solve
@@ -158,12 +157,8 @@ def _digits(n) -> str:
     unless told otherwise; exact orbits go far beyond)."""
     if type(n) is not int or n.bit_length() < 14_000:
         return str(n)
-    limit = sys.get_int_max_str_digits()
-    sys.set_int_max_str_digits(0)
-    try:
+    with any_int_digits():
         return str(n)
-    finally:
-        sys.set_int_max_str_digits(limit)
 
 
 def _as_fraction(value) -> Fraction:

@@ -84,7 +84,8 @@ def cmd_degrees(args):
         raise InputError(str(exc).replace("steps:", "--steps:").replace("primes:", "--primes:")
                          .replace("lines:", "--lines:").replace("exact:", "--exact:")) from None
     if args.plot:
-        plot_growth(args.plot, degrees=res, heights=res.heights, title=res.label)
+        plot_growth(args.plot, degrees=res, heights=res.heights,
+                    title=f"{res.label}, ε = {eps}, x0 = ({', '.join(map(str, x0))})")
     if args.json:
         write_json({"system": system.to_json(), **res.to_json()}, "-")
     else:

@@ -38,12 +38,14 @@ def cmd_orbit(args):
     check_resources("orbit", system, phi, x0, args.steps, dense=phi.structure is None and not phi.split)
     with Progress(args, args.steps, "orbit") as progress:
         pts = phi.orbit(x0, args.steps, progress=progress)
+    growth = _height_growth(ar, pts)
     if args.json:
         write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
                     "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
                     "method": args.method, "path": phi.path,
                     "x0": [str(t) for t in x0],
                     "orbit": [[ar.format(t) for t in p] for p in pts],
+                    "height_growth": growth.to_json() if growth else None,
                     "versions": library_versions()}, "-")
         return 0
     print(system.describe())
@@ -66,7 +68,19 @@ def cmd_orbit(args):
         if ar.exact:
             row += f"  {point_height(ar, p):>5}"
         print(row)
+    if growth:
+        print(growth.summary())
     return 0
+
+
+def _height_growth(ar, pts):
+    """The height growth of an exact rational orbit of at least 4 steps
+    (:mod:`exact_khk.diagnostics.heights`), else None."""
+    if not ar.rational or len(pts) < 5:
+        return None
+    from exact_khk.diagnostics.heights import classify_heights
+
+    return classify_heights([point_height(ar, p) for p in pts])
 
 
 

@@ -163,31 +163,41 @@ def plot_growth(path, degrees=None, heights=None, title=""):
     i = 0
     if degrees is not None:
         ax, fit = axes[i], degrees.fit
-        ks = range(len(degrees.degrees))
-        ax.plot(ks, degrees.degrees, "o", ms=3, label="d_k (mod p, max over runs)")
+        ds = list(degrees.degrees)
+        m = min(fit.fitted_on, len(ds))
         label = fit.growth if fit.growth != "polynomial" else f"polynomial, degree {fit.polynomial_degree}"
         if fit.dynamical_degree is not None:
-            label += f"; lambda in [{fit.dynamical_degree.enclosure[0][:8]}, {fit.dynamical_degree.enclosure[1][:8]}]"
-        ax.plot(ks, degrees.degrees, "-", lw=1, alpha=0.5, label=f"recurrence {fit.characteristic_text()}: {label}")
+            label += f"; λ ∈ [{fit.dynamical_degree.enclosure[0][:8]}, {fit.dynamical_degree.enclosure[1][:8]}]"
+        ax.plot(range(len(ds)), ds, "-", color="0.75", lw=1, zorder=1)
+        ax.plot(range(m), ds[:m], "o", ms=4, color="C0", label=f"d_k, fitted ({m} terms)", zorder=3)
+        ax.plot(range(m, len(ds)), ds[m:], "o", ms=5, mfc="none", color="C1",
+                label=f"d_k, confirming the fit ({len(ds) - m} terms)", zorder=3)
         if fit.growth == "exponential":
             ax.set_yscale("log")
         ax.set_xlabel("step k")
-        ax.set_ylabel("degree d_k")
-        ax.legend(fontsize=7)
+        ax.set_ylabel("degree d_k of Φ^k" + (" (log scale)" if fit.growth == "exponential" else ""))
+        ax.legend(fontsize=8, loc="upper left", title=f"χ = {fit.characteristic_text()}: {label}",
+                  title_fontsize=8)
+        ax.margins(x=0.04, y=0.12)
         i += 1
     if heights is not None:
         ax = axes[i]
         ks = list(range(len(heights.heights)))
-        ax.semilogy(ks, [max(h, 1) for h in heights.heights], "o", ms=3, label="height (bits)")
-        for model in MODELS:
+        hs = [max(h, 1) for h in heights.heights]
+        ax.semilogy(ks, hs, "o", ms=4, color="C0", label="height of x_k (bits)", zorder=3)
+        for model, colour in zip(MODELS, ("C1", "C2", "C3")):
             mark = " (chosen)" if model == heights.growth else ""
-            ax.semilogy(ks[1:], [max(heights.curve(model, k), 1e-1) for k in ks[1:]], "-", lw=1,
-                        label=f"{model} fit, rel. error {heights.models[model][1]:.2g}{mark}")
+            curve = [heights.curve(model, k) for k in ks[1:]]
+            # a polynomial fit may dip below zero, where a log axis cannot show it: leave those out
+            ax.semilogy(ks[1:], [v if v > 0 else float("nan") for v in curve], "-", color=colour,
+                        lw=2 if mark else 1, label=f"{model} fit, rel. error {heights.models[model][1]:.2g}{mark}")
+        ax.set_ylim(min(hs) / 1.5, max(hs) * 1.5)   # the data's range, not a diverging fit's
         ax.set_xlabel("step k")
         ax.set_ylabel("height of x_k (bits, log scale)")
-        ax.legend(fontsize=7, title=f"growth: {heights.growth}", title_fontsize=8)
+        ax.legend(fontsize=8, loc="lower right", title=f"height growth: {heights.growth} (heuristic fit)",
+                  title_fontsize=8)
     if title:
-        fig.suptitle(title, fontsize=9)
+        fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -62,6 +62,7 @@ from fractions import Fraction
 from typing import Callable
 
 from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
+from exact_khk.parsing import any_int_digits
 
 #: version of a result line (``results.jsonl``)
 RECORD_FORMAT = 1
@@ -545,8 +546,11 @@ def run_task(payload: dict) -> dict:
     """Run one task (``payload``: ``key``, ``params``, optional ``timeout`` in seconds,
     ``engine``, ``system_spec``) and return its record; never raises (except
     KeyboardInterrupt): what a task raises becomes its verdict."""
-    if hasattr(sys, "set_int_max_str_digits"):
-        sys.set_int_max_str_digits(0)  # exact figures may be huge integers
+    with any_int_digits():  # exact figures may be huge integers; the caller's limit is restored
+        return _run_task(payload)
+
+
+def _run_task(payload: dict) -> dict:
     params = payload["params"]
     timeout = payload.get("timeout")
     t0, c0 = time.perf_counter(), time.thread_time()
