@@ -16,6 +16,7 @@ import contextlib
 import re
 import sys
 from fractions import Fraction
+from pathlib import Path
 
 from exact_khk.errors import InputError
 
@@ -96,6 +97,52 @@ def _short(value, width: int = 60) -> str:
     """repr of ``value``, cut to ``width`` characters for a one-line message."""
     text = repr(value)
     return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
+
+
+def read_text_file(path, what: str, max_bytes: int) -> str:
+    """The UTF-8 text of a user's input file (``what``: e.g. 'system file'); every
+    problem (missing, a folder, too large, not UTF-8, unreadable) is an InputError
+    naming the file."""
+    p = Path(path)
+    try:
+        if p.is_dir():
+            raise InputError(f"{path}: is a folder, not a {what}")
+        if p.stat().st_size > max_bytes:
+            raise InputError(f"{path}: the file is larger than {max_bytes} bytes")
+        return p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such {what}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a UTF-8 text file") from None
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the {what} ({exc.strerror or exc})") from None
+
+
+def poly_text(coeffs, var: str = "x", ascending: bool = True) -> str:
+    """The text of a univariate polynomial with rational coefficients, lowest degree
+    first (``ascending``) or highest first in ``coeffs``; terms are printed from the
+    lowest degree when ascending, from the highest otherwise.
+
+    >>> poly_text([Fraction(1, 3), Fraction(-2, 3), 1], "z")
+    '1/3 - 2/3*z + z^2'
+    >>> poly_text([1, 0, -3, 2], ascending=False)
+    'x^3 - 3*x + 2'
+    """
+    coeffs = list(coeffs)
+    deg = len(coeffs) - 1
+    parts = []
+    for i, c in enumerate(coeffs):
+        if c == 0:
+            continue
+        k = i if ascending else deg - i
+        mono = "" if k == 0 else (var if k == 1 else f"{var}^{k}")
+        mag = abs(c)
+        body = str(mag) if not mono else (mono if mag == 1 else f"{mag}*{mono}")
+        parts.append(("-" if c < 0 else "+", body))
+    if not parts:
+        return "0"
+    head = ("-" if parts[0][0] == "-" else "") + parts[0][1]
+    return head + "".join(f" {s} {b}" for s, b in parts[1:])
 
 
 def parse_vector(value, name: str, length: int | None = None) -> tuple[Fraction, ...]:

@@ -39,21 +39,6 @@ HENON_HEILES = ExpressionSystem.from_expressions(
                  "H": "(p1**2 + p2**2 + q1**2 + q2**2)/2 + a*q1**2*q2 + b*q2**3/3"})
 
 
-def grad_ratio(num, den, x):
-    def val(p, j=None):
-        s = Fraction(0)
-        for e, c in p.items():
-            if j is not None and e[j] == 0:
-                continue
-            t = c * (e[j] if j is not None else 1)
-            for i, k in enumerate(e):
-                t *= x[i] ** int(k - (i == j))
-            s += t
-        return s
-    n0, d0 = val(num), val(den)
-    return [(d0 * val(num, j) - n0 * val(den, j)) / d0 ** 2 for j in range(len(x))]
-
-
 def rank(rows):
     return flint.fmpq_mat(len(rows), len(rows[0]), [flint.fmpq(Fraction(v).numerator, Fraction(v).denominator)
                                                     for r in rows for v in r]).rank()
@@ -83,7 +68,7 @@ def integral_cells(res, grads, dim):
     ok = [f for f in res.integrals if f.verified]
     rec = "—"
     if grads:
-        found = [grad_ratio(*f.polynomials(), x) for f in ok]
+        found = [f.gradient(x) for f in ok]
         rec = f"{recovered(found, [g(x) for g in grads])}/{len(grads)}"
     by = "; ".join(f"≤{d}: {k}" for d, k, _ in res.by_degree) or str(res.kernel_dim)
     return [by, f"{len(ok)} ({res.independent} indep.)", rec]

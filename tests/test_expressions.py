@@ -403,7 +403,7 @@ def test_claims_in_toml():
 def test_unreadable_files(tmp_path):
     with pytest.raises(InputError, match="no such system file"):
         load_system(tmp_path / "missing.toml")
-    with pytest.raises(InputError, match="cannot read the system file"):
+    with pytest.raises(InputError, match="is a folder, not a system file"):
         load_system(tmp_path)
     (tmp_path / "bin.toml").write_bytes(b"\xff\xfe\x00")
     with pytest.raises(InputError, match="not a UTF-8 text file"):

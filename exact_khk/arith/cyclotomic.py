@@ -47,6 +47,7 @@ import flint
 
 from exact_khk.arith import Arith, _as_fraction, register_arith
 from exact_khk.errors import InputError, NotRationalError
+from exact_khk.parsing import poly_text
 
 __all__ = ["CyclotomicField", "CycloNumber", "CycloArith", "GFArith", "BadReductionError",
            "cyclotomic_field", "DEFAULT_PRIME"]
@@ -257,18 +258,7 @@ class CycloNumber:
 
 def format_poly(p, var: str = "z") -> str:
     """'1/3 - 2/3*z + z^2' (constant term first)."""
-    parts = []
-    for k, c in enumerate(p.coeffs()):
-        if c == 0:
-            continue
-        mono = "" if k == 0 else (var if k == 1 else f"{var}^{k}")
-        mag = abs(c)
-        body = str(mag) if not mono else (mono if mag == 1 else f"{mag}*{mono}")
-        parts.append(("-" if c < 0 else "+", body))
-    if not parts:
-        return "0"
-    head = ("-" if parts[0][0] == "-" else "") + parts[0][1]
-    return head + "".join(f" {s} {b}" for s, b in parts[1:])
+    return poly_text(p.coeffs(), var)
 
 
 class CycloArith(Arith):

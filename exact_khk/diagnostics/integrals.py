@@ -58,10 +58,10 @@ import flint
 
 from exact_khk.diagnostics.degrees import check_count, check_primes, eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, lift, monomial_text,
-                                           monomials, orbit_kernel_mod, parse_monomials, poly_text, to_mpoly,
+                                           monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim)
 from exact_khk.diagnostics.pencils import pencil_integrals, ratio_integrals
-from exact_khk.errors import InputError, SingularStepError
+from exact_khk.errors import InputError, PoleError, SingularStepError
 
 MAX_MONOMIALS = 3000
 
@@ -119,6 +119,33 @@ class Integral:
     def polynomials(self):
         """(numerator, denominator) as dicts {exponent tuple: Fraction}."""
         return dict(self.num), dict(self.den)
+
+    def gradient(self, x) -> list:
+        """The exact gradient of num/den at the rational point ``x`` (Fractions; a
+        PoleError where the denominator vanishes).
+
+        >>> from fractions import Fraction as F
+        >>> r = Integral("x^2", "y", (((2, 0), F(1)),), (((0, 1), F(1)),), True)
+        >>> r.gradient([F(1), F(2)])             # (2x/y, -x^2/y^2)
+        [Fraction(1, 1), Fraction(-1, 4)]
+        """
+        x = [Fraction(t) for t in x]
+
+        def value(poly, j=None):  # poly at x, or its derivative in x_j
+            total = Fraction(0)
+            for e, c in poly:
+                if j is not None and e[j] == 0:
+                    continue
+                term = c * (e[j] if j is not None else 1)
+                for i, k in enumerate(e):
+                    term *= x[i] ** (k - (i == j))
+                total += term
+            return total
+
+        n0, d0 = value(self.num), value(self.den)
+        if d0 == 0:
+            raise PoleError(f"the denominator {self.denominator} of a found integral vanishes at the point")
+        return [(d0 * value(self.num, j) - n0 * value(self.den, j)) / d0 ** 2 for j in range(len(x))]
 
     def to_json(self) -> dict:
         return {"numerator": self.numerator, "denominator": self.denominator, "verified": self.verified}

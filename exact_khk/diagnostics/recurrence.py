@@ -50,6 +50,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
+from exact_khk.parsing import poly_text as _poly_text
 
 DIGITS = 10
 
@@ -157,20 +158,7 @@ def poly_text(coeffs, var="x") -> str:
     >>> poly_text([1, 0, -3, 2])
     'x^3 - 3*x + 2'
     """
-    deg = len(coeffs) - 1
-    parts = []
-    for i, c in enumerate(coeffs):
-        c, e = Fraction(c), deg - i
-        if c == 0:
-            continue
-        mono = "" if e == 0 else var if e == 1 else f"{var}^{e}"
-        mag = abs(c)
-        body = str(mag) if not mono else (mono if mag == 1 else f"{_frac_text(mag)}*{mono}")
-        parts.append(("-" if c < 0 else "+", body))
-    if not parts:
-        return "0"
-    text = ("-" if parts[0][0] == "-" else "") + parts[0][1]
-    return text + "".join(f" {s} {b}" for s, b in parts[1:])
+    return _poly_text([Fraction(c) for c in coeffs], var, ascending=False)
 
 
 def _linear_text(terms) -> str:

@@ -47,6 +47,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from exact_khk.errors import InputError
+from exact_khk.parsing import read_text_file
 from exact_khk.sweep.tasks import TASKS
 
 try:
@@ -174,18 +175,7 @@ class SweepSpec:
 def load_spec(path) -> SweepSpec:
     """Read a spec file; every problem is an InputError naming the file and the field."""
     p = Path(path)
-    try:
-        if p.is_dir():
-            raise InputError(f"{path}: is a folder, not a sweep spec file")
-        if p.stat().st_size > MAX_SPEC_BYTES:
-            raise InputError(f"{path}: the file is larger than {MAX_SPEC_BYTES} bytes")
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such sweep spec file") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the sweep spec ({exc.strerror or exc})") from None
+    text = read_text_file(p, "sweep spec file", MAX_SPEC_BYTES)
     return parse_spec(text, origin=str(path), base=p.parent, default_name=p.stem)
 
 

@@ -29,7 +29,6 @@ from __future__ import annotations
 import re
 from decimal import Decimal
 from fractions import Fraction
-from pathlib import Path
 
 import sympy
 from sympy.polys.rings import ring
@@ -41,6 +40,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from ..arith import _as_fraction, get_arith
 from ..errors import InputError
+from ..parsing import read_text_file
 from .base import System
 from .expression_parser import CONSTANTS, Parser, checked_polynomial, frac, number_text, short, text_of, to_polynomial
 from .functions import PolynomialTensor, RationalFunction
@@ -436,15 +436,5 @@ class ExpressionSystem(System):
 
 def load_system(path) -> ExpressionSystem:
     """Read a system file (TOML); every problem is an InputError naming the file."""
-    p = Path(path)
-    try:
-        if p.stat().st_size > MAX_FILE:
-            raise InputError(f"{path}: the file is larger than {MAX_FILE} bytes")
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such system file") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the system file ({exc.strerror or exc})") from None
+    text = read_text_file(path, "system file", MAX_FILE)
     return ExpressionSystem.from_toml(text, origin=str(path))
