@@ -391,6 +391,31 @@ def test_orbit_and_scale_tasks(tmp_path):
     assert all("final_error_log10" in r["figures"] for r in recs if r["verdict"] == "OK")
 
 
+def test_diagnostics_tasks(tmp_path):
+    """degrees and find-integrals as sweep tasks: the Lie–Poisson family's degrees grow
+    linearly with the field f and the associated g; the catalogue's Kahan Lotka–Volterra
+    map grows exponentially (λ = 2); integrals are found (and verified) for f."""
+    spec = parse_spec('task = "degrees"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = "1-2"\n[grid]\n'
+                      'steps = 14\n[options]\nfield = "g"\n', origin="d.toml")
+    run_sweep(spec, tmp_path / "d", workers=0, plots=False)
+    recs = lines(tmp_path / "d")
+    assert len(recs) == 2 and {r["verdict"] for r in recs} == {"OK"}
+    assert {(r["figures"]["growth"], r["figures"]["polynomial_degree"]) for r in recs} == {("polynomial", 1)}
+    lv = parse_spec('task = "degrees"\n[system]\ncatalogue = "lotka-volterra"\n[grid]\nsteps = 10\n',
+                    origin="lv.toml")
+    run_sweep(lv, tmp_path / "lv", workers=0, plots=False)
+    (rec,) = lines(tmp_path / "lv")
+    assert rec["figures"]["growth"] == "exponential" and rec["figures"]["dynamical_degree"] == 2.0
+    ints = parse_spec('task = "find-integrals"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = 1\n',
+                      origin="i.toml")
+    run_sweep(ints, tmp_path / "i", workers=0, plots=False)
+    (rec,) = lines(tmp_path / "i")
+    assert rec["verdict"] == "FOUND" and rec["figures"]["verified"] >= 2 and rec["figures"]["independent"] == 2
+    with pytest.raises(InputError, match="exact"):
+        parse_spec('task = "degrees"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = 1\n[grid]\narith = "float"\n',
+                   origin="x.toml").tasks()
+
+
 def test_summary_files_and_plots(tmp_path, capsys):
     pytest.importorskip("matplotlib")
     spec = tmp_path / "p.toml"

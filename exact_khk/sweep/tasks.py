@@ -18,7 +18,9 @@ with ``_degrees(inp)`` returning ``{"verdict": ..., "detail": ..., "figures": {.
 
 Verdicts.  A task function returns its own verdict (``certify``: VALID, INVALID,
 INCONCLUSIVE; ``orbit``/``probe``: OK; ``scale``: OK, WARNED, SINGULAR,
-UNDECIDED).  :func:`run_task` adds the verdicts of what was raised: SINGULAR
+UNDECIDED; ``degrees``: OK, or UNDETERMINED when the sequence is too short to
+classify; ``find-integrals``: FOUND when an integral was found and verified
+exactly, else NONE).  :func:`run_task` adds the verdicts of what was raised: SINGULAR
 (a singular Kahan step, :class:`~exact_khk.errors.SingularStepError`: the
 theorems say nothing there), UNDEFINED (an integral at its pole), UNDECIDED
 (ball arithmetic cannot decide), TIMEOUT (the per-task time limit) and ERROR
@@ -36,7 +38,7 @@ local engine therefore also enforces a hard limit from outside: it kills the
 worker process and replaces it (see :mod:`exact_khk.sweep.run`).
 
 >>> sorted(TASKS)
-['certify', 'orbit', 'probe', 'scale']
+['certify', 'degrees', 'find-integrals', 'orbit', 'probe', 'scale']
 >>> rec = run_task({"key": "k", "params": {"task": "probe", "system": {"family": "lie-poisson", "n": 2, "seed": 1},
 ...                 "point": {"seed": 1}, "eps": "1/10", "arith": "flint", "steps": 1, "options": {}}})
 >>> rec["verdict"], rec["figures"]["n"], rec["error"]
@@ -96,6 +98,12 @@ class Option:
 def _positive_int(value, where, ctx=None):
     if not isinstance(value, int) or isinstance(value, bool) or value < 1:
         raise InputError(f"{where}: expected a positive integer, got {value!r}")
+    return value
+
+
+def _nonnegative_int(value, where, ctx=None):
+    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+        raise InputError(f"{where}: expected a non-negative integer, got {value!r}")
     return value
 
 
@@ -321,6 +329,44 @@ def _scale(inp: TaskInput) -> dict:
     return {"verdict": verdict, "detail": _one_line(run.message), "figures": jsonable(figures)}
 
 
+def _field_name(inp: TaskInput) -> str:
+    """The diagnostics' field name: 'g' means B_0 for the Lie–Poisson family, a sign
+    pattern means g[signs]."""
+    name = inp.options.get("field", "f")
+    if inp.system.kind == "lie-poisson" and name not in ("f", "g", "control") and not name.startswith("g["):
+        return f"g[{name}]"
+    return name
+
+
+def _degrees(inp: TaskInput) -> dict:
+    from exact_khk.diagnostics import degree_sequence
+
+    res = degree_sequence(inp.system, steps=inp.steps, eps=inp.eps, field=_field_name(inp),
+                          primes=inp.options.get("primes", 2), seed=inp.options.get("line_seed", 0),
+                          heights=inp.options.get("heights", False), x0=inp.x0)
+    fit = res.fit
+    dd = fit.dynamical_degree
+    return {"verdict": "OK" if fit.growth != "undetermined" else "UNDETERMINED", "detail": _one_line(fit.reason),
+            "figures": {"growth": fit.growth, "polynomial_degree": fit.polynomial_degree,
+                        "dynamical_degree": dd.value if dd else None,
+                        "minimal_polynomial": dd.minimal_polynomial if dd else None,
+                        "recurrence": fit.characteristic_text(), "last_degree": res.degrees[-1],
+                        "degrees": list(res.degrees), "disagreeing_runs": len(res.disagreeing),
+                        "undercount_bound": res.undercount_bound,
+                        "height_growth": res.heights.growth if res.heights is not None else None}}
+
+
+def _find_integrals(inp: TaskInput) -> dict:
+    from exact_khk.diagnostics import find_integrals
+
+    res = find_integrals(inp.system, degree=inp.options.get("degree", 2), field=_field_name(inp), eps=inp.eps,
+                         steps=inp.steps or None, seed=inp.options.get("line_seed", 0))
+    verified = sum(1 for f in res.integrals if f.verified)
+    return {"verdict": "FOUND" if verified else "NONE", "detail": "",
+            "figures": {"kernel_dim": res.kernel_dim, "trivial_dim": res.trivial_dim, "new_dim": res.new_dim,
+                        "integrals": len(res.integrals), "verified": verified, "independent": res.independent}}
+
+
 def _probe(inp: TaskInput) -> dict:
     """An engine probe: no mathematics.  Sleeps ``sleep`` seconds; raises at the
     system seeds in ``fail``; runs for an hour in Python (short sleeps, which
@@ -370,6 +416,24 @@ register(TaskKind(
     options={"diagnostics": Option(_bool, "also the integrals' drifts and the residuals")},
     arith="floating", verdicts=("OK", "WARNED", "SINGULAR", "UNDECIDED"),
     figures=("final_error_log10", "bits_left", "loss_rate", "drift_log10[H~]")))
+register(TaskKind(
+    "degrees", _degrees, "degree growth of the iterates over F_p: recurrence, dynamical degree, growth class",
+    options={"field": Option(_text, "the field: f, control, g (B_0) or a sign pattern (Lie–Poisson), "
+                                    "or a field of the system file"),
+             "primes": Option(_positive_int, "random 62-bit primes (default 2)"),
+             "line_seed": Option(_nonnegative_int, "seed of the random primes and lines (default 0)"),
+             "heights": Option(_bool, "also the height growth of the exact orbit of the point")},
+    arith="exact", default_steps=20, min_steps=4, verdicts=("OK", "UNDETERMINED"),
+    figures=("growth", "dynamical_degree", "last_degree")))
+register(TaskKind(
+    "find-integrals", _find_integrals, "conserved rational functions discovered from orbits (HK bases), "
+    "each verified exactly",
+    options={"field": Option(_text, "the field: f, control, g (B_0) or a sign pattern (Lie–Poisson), "
+                                    "or a field of the system file"),
+             "degree": Option(_positive_int, "candidates: all monomials of degree <= D (default 2)"),
+             "line_seed": Option(_nonnegative_int, "seed of the random orbits and primes (default 0)")},
+    arith="exact", default_steps=0, min_steps=0, verdicts=("FOUND", "NONE"), ok="FOUND",  # steps 0: automatic
+    figures=("kernel_dim", "verified", "independent")))
 register(TaskKind(
     "probe", _probe, "engine probe (no mathematics): sleeps, fails or hangs on request",
     options={"sleep": Option(_seconds, "seconds every probe sleeps"),
