@@ -81,10 +81,12 @@ def _field(system, args, ar):
         raise InputError(f"--field: expected f, g or control for the Lie–Poisson family, got {args.field!r}")
     if args.signs is not None and args.field != "g":
         raise InputError("--signs applies only to --field g")
-    signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
+    if args.field != "g":
+        return system.field(args.field)
     from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω
 
-    return system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
+    signs = args.signs if args.signs is not None else b0_signs(system.n)
+    return system.field("g", signs=signs, cyclotomic=expresses_omega(ar, system.n))
 
 
 def _display(ar, t) -> str:

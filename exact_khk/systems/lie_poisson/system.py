@@ -36,8 +36,6 @@ from fractions import Fraction
 from functools import lru_cache
 from math import gcd, lcm
 
-from exact_khk.arith.cyclotomic import cyclotomic_field
-from exact_khk.linalg import circulant
 from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.parsing import format_signs, parse_signs, parse_vector
@@ -159,6 +157,8 @@ def involution_circulant_cyclotomic(n: int, signs) -> tuple:
     >>> involution_circulant_cyclotomic(3, "-++") == involution_circulant(3, "-++")
     True
     """
+    from exact_khk.arith.cyclotomic import cyclotomic_field
+
     s = parse_signs(signs, n)
     K = cyclotomic_field(n)
     return tuple(sum((s[j] * K.zeta_power(-j * k) for j in range(n)), K.zero) / n
@@ -514,7 +514,9 @@ class LiePoissonField(QuadraticField):
 
     def circulant_structure(self):
         """The circulant structure of the step's blocks (Hessian blocks cyclic Hankel), or None."""
-        return circulant.circulant_structure(self)
+        from exact_khk.linalg.circulant import circulant_structure
+
+        return circulant_structure(self)
 
     def terms(self) -> tuple:
         """The quadratic terms of f(x) = J(x) M x, built once on first use:
@@ -560,9 +562,11 @@ def _correlate(coeffs, w):
     return tuple(Fraction(v, den) for v in vals)
 
 
-def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.CirculantStructure:
-    """The structure of ``system.field(kind, signs, power)`` computed from the vectors a, b, c
-    alone, in O(n²) (building the field itself costs O((2n)³) memory).
+def structure_from_system(system, kind="f", signs=None, power=0):
+    """The :class:`~exact_khk.linalg.circulant.CirculantStructure` of ``system.field(kind,
+    signs, power)`` computed from the vectors a, b, c alone: O(n) for f and the control
+    field, O(n log n) for g (one polynomial product per block for n > 64), where the
+    dense Hessian would cost O(n²) memory and its product with B O(n³) time.
 
     First rows: A^p X(w) = X(w shifted by p); B X(w) = X(Σ_k α_k w shifted by k).
     """
@@ -587,4 +591,6 @@ def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.Ci
     else:
         raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
     a, b, c = system.a, system.b, system.c
-    return circulant.CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))
+    from exact_khk.linalg.circulant import CirculantStructure
+
+    return CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))
