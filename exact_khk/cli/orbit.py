@@ -7,7 +7,6 @@ import math
 from fractions import Fraction
 
 from exact_khk.arith import get_arith, point_height
-from exact_khk.certification.records import library_versions
 from exact_khk.cli.options import Progress, add_system_options, check_resources, system_from_args, write_json
 from exact_khk.errors import InputError
 from exact_khk.kahan.map import METHODS, KahanMap
@@ -39,6 +38,8 @@ def cmd_orbit(args):
     with Progress(args, args.steps, "orbit") as progress:
         pts = phi.orbit(x0, args.steps, progress=progress)
     if args.json:
+        from exact_khk.certification.records import library_versions
+
         write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
                     "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
                     "method": args.method, "path": phi.path,
