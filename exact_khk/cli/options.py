@@ -311,8 +311,8 @@ def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_poi
     if dense or cube_numbers:
         need = (DENSE_BYTES_PER_CUBE if dense else 0) * N ** 3 + cube_numbers * N ** 3 * _number_bytes(ar, 64)
         if need > limit:
-            hint = (" (the structured path needs O(n) memory: --method structured, or the default flint "
-                    "arithmetic)" if what == "orbit" else "")
+            hint = (" (the structured path, --method structured, needs O(n) memory with --arith float or mp:P; "
+                    "an exact structured step about 3 bytes x n x its height in bits)" if what == "orbit" else "")
             raise InputError(f"--n: {what} at n = {n} solves dense {N}x{N} systems, which need about "
                              f"{human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x (2n)^3"
                              + (f" + {cube_numbers} x (2n)^3 numbers" if cube_numbers else "")
