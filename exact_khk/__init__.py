@@ -10,24 +10,38 @@ Quick start (exact rational orbit of the Lie–Poisson family, n = 3):
 '72745/57239'
 >>> phi.inverse(pts[1]) == pts[0]                          # reversibility, exactly
 True
+
+``import exact_khk`` itself is cheap: the names of :data:`__all__` are imported
+from their modules on first use (module ``__getattr__``), so that the command
+line starts without the numerical libraries a command does not need.
 """
 
+from __future__ import annotations
+
+import importlib
+
+TYPE_CHECKING = False  # as typing.TYPE_CHECKING (type checkers read it as True), without importing typing
 __version__ = "0.1.0"
 
-from exact_khk.arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
-from exact_khk.arith import ball  # noqa: E402,F401  (registers the ball:P arithmetic)
-from exact_khk.arith import cyclotomic as cyclo  # noqa: E402,F401  (registers the cyclo:N and gf:P arithmetics)
-from exact_khk.errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
-                     PoleError, SingularStepError, UndecidedError)
-from exact_khk.kahan.map import KahanMap, kahan_step, map_jacobian, orbit
-from exact_khk.parsing import parse_rational, parse_signs, parse_vector
-from exact_khk.systems.base import System
-from exact_khk.systems.quadratic import QuadraticField
-from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs, involution_circulant,
-                      rational_sign_patterns)
-from exact_khk.systems.lie_poisson.invariants import Htilde
-from exact_khk.certification import certify
-from exact_khk.certification.records import Certificate, Check
+#: where each public name lives (imported on first access)
+_EXPORTS = {
+    "exact_khk.arith": ("Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith",
+                        "register_arith"),
+    "exact_khk.errors": ("ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "PoleError",
+                         "SingularStepError", "UndecidedError"),
+    "exact_khk.kahan.map": ("KahanMap", "kahan_step", "map_jacobian", "orbit"),
+    "exact_khk.parsing": ("parse_rational", "parse_signs", "parse_vector"),
+    "exact_khk.systems.base": ("System",),
+    "exact_khk.systems.quadratic": ("QuadraticField",),
+    "exact_khk.systems.lie_poisson.system": ("LiePoissonField", "LiePoissonSystem", "b0_signs",
+                                             "involution_circulant", "rational_sign_patterns"),
+    "exact_khk.systems.lie_poisson.invariants": ("Htilde",),
+    "exact_khk.certification": ("certify",),
+    "exact_khk.certification.records": ("Certificate", "Check"),
+}
+_WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
+#: modules once imported here for their side effects, still reachable as attributes
+_MODULES = {"ball": "exact_khk.arith.ball", "cyclo": "exact_khk.arith.cyclotomic"}
 
 __all__ = [
     "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",
@@ -38,3 +52,33 @@ __all__ = [
     "System", "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",
     "rational_sign_patterns", "Htilde", "Certificate", "Check", "certify", "__version__",
 ]
+
+
+def __getattr__(name):
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name]), name)
+    elif name in _MODULES:
+        value = importlib.import_module(_MODULES[name])
+    else:
+        raise AttributeError(f"module 'exact_khk' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | set(_MODULES))
+
+
+if TYPE_CHECKING:  # for type checkers and linters; at run time the names come from __getattr__
+    from exact_khk.arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
+    from exact_khk.certification import certify
+    from exact_khk.certification.records import Certificate, Check
+    from exact_khk.errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
+                                  PoleError, SingularStepError, UndecidedError)
+    from exact_khk.kahan.map import KahanMap, kahan_step, map_jacobian, orbit
+    from exact_khk.parsing import parse_rational, parse_signs, parse_vector
+    from exact_khk.systems.base import System
+    from exact_khk.systems.lie_poisson.invariants import Htilde
+    from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs,
+                                                      involution_circulant, rational_sign_patterns)
+    from exact_khk.systems.quadratic import QuadraticField

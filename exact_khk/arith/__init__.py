@@ -52,12 +52,10 @@ False
 from __future__ import annotations
 
 import contextlib
+import importlib
 import math
 import numbers
 from fractions import Fraction
-
-import mpmath
-from mpmath import libmp
 
 from exact_khk.errors import InputError
 from exact_khk.parsing import _short, any_int_digits
@@ -373,7 +371,9 @@ class MPArith(Arith):
     """mpmath binary floating point at ``prec`` bits, in a private context.
 
     Each instance owns its own ``mpmath.MPContext``; the global ``mpmath.mp``
-    is never touched.  Conversion of rationals is correctly rounded.
+    is never touched.  Conversion of rationals is correctly rounded.  mpmath is
+    imported here, when the first ``mp:P`` context is made (not on ``import
+    exact_khk``: it costs start-up time to every command that never uses it).
     """
 
     exact = False
@@ -382,6 +382,10 @@ class MPArith(Arith):
     def __init__(self, prec: int):
         self.prec = check_precision("mp", prec)
         self.name = f"mp:{prec}"
+        import mpmath
+        from mpmath import libmp
+
+        self._libmp = libmp
         self.ctx = mpmath.MPContext()
         self.ctx.prec = prec
         self.zero, self.one = self.ctx.zero, self.ctx.one
@@ -391,6 +395,7 @@ class MPArith(Arith):
             return +value
         if isinstance(value, float):  # its exact binary value, rounded (nan/inf kept)
             return self.ctx.mpf(float(value))
+        libmp = self._libmp
         if hasattr(value, "_mpf_"):  # an mpf of another mpmath context, rounded to this one
             return self.ctx.make_mpf(libmp.normalize(*value._mpf_, self.prec, libmp.round_nearest)
                                      if value._mpf_[1] else value._mpf_)
@@ -399,7 +404,7 @@ class MPArith(Arith):
                                                      self.prec, libmp.round_nearest))
 
     def format(self, e) -> str:
-        return libmp.to_str(e._mpf_, libmp.repr_dps(self.prec))
+        return self._libmp.to_str(e._mpf_, self._libmp.repr_dps(self.prec))
 
     def magnitude(self, e) -> float:
         return float(abs(e))
@@ -409,6 +414,7 @@ class MPArith(Arith):
 
     def from_man_exp(self, man, exp):
         """man·2^exp (integers) correctly rounded to this precision."""
+        libmp = self._libmp
         return self.ctx.make_mpf(libmp.from_man_exp(int(man), int(exp), self.prec, libmp.round_nearest))
 
     def to_fraction(self, e) -> Fraction:
@@ -464,13 +470,26 @@ class FloatArith(Arith):
 
 # --- the registry of names -------------------------------------------------
 
+def _deferred(module: str, name: str):
+    """A factory that imports ``module`` (which registers itself, replacing this
+    factory) and calls its ``name``: the arithmetics of :mod:`exact_khk.arith.ball`
+    and :mod:`exact_khk.arith.cyclotomic` (python-flint) are known by name without
+    importing them."""
+    def factory(*args):
+        return getattr(importlib.import_module(module), name)(*args)
+
+    return factory
+
+
 _FIXED = {"fraction": _fraction_arith, "gmpy2": _gmpy2_arith, "flint": _flint_arith,
           "float": FloatArith}
-_PARAMETRIZED = {"mp": MPArith}
+_PARAMETRIZED = {"mp": MPArith, "ball": _deferred("exact_khk.arith.ball", "BallArith"),
+                 "cyclo": _deferred("exact_khk.arith.cyclotomic", "CycloArith"),
+                 "gf": _deferred("exact_khk.arith.cyclotomic", "GFArith")}
 _CACHE: dict[str, Arith] = {}
 
 
-_PARAM_LETTER: dict[str, str] = {}
+_PARAM_LETTER: dict[str, str] = {"cyclo": "N"}
 
 
 def register_arith(prefix: str, factory, parametrized: bool = True, letter: str = "P"):

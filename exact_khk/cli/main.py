@@ -8,8 +8,11 @@ with no trustworthy bit (overflow, condition estimate κ·2^-p ≥ 1); 4
 inconclusive; 5 an output that cannot be written or a resource exhausted;
 70 an internal error (a bug: please report); 130 interrupted (Ctrl-C).
 
-Each command lives in a module with ``register(subparsers)``; the module list
-is :data:`COMMAND_MODULES`.
+Each command lives in a module with ``register(subparsers)``; :data:`COMMANDS`
+names the module and one-line help of each.  A run imports only the module of
+its command (``exact-khk --help`` none): the others get a stub parser with
+their one-line help, so that start-up does not pay for SymPy, mpmath, numpy,
+matplotlib or the certification code of commands that do not run.
 """
 
 from __future__ import annotations
@@ -24,22 +27,53 @@ from exact_khk.cli.options import Parser
 from exact_khk.errors import (InputError, NumericalError, OutputError, PoleError, SingularStepError,
                               UndecidedError)
 
-COMMAND_MODULES = ["exact_khk.cli.orbit", "exact_khk.cli.certify", "exact_khk.cli.verify", "exact_khk.cli.systems",
-                   "exact_khk.cli.diagnostics", "exact_khk.cli.sweep", "exact_khk.cli.study",
-                   "exact_khk.cli.liouville"]
+#: command name → (module that registers it, its one-line help as the module gives it;
+#: tests/test_startup.py checks that the two agree), in the order of ``--help``
+COMMANDS = {
+    "orbit": ("exact_khk.cli.orbit", "iterate a Kahan map and print the orbit"),
+    "certify": ("exact_khk.cli.certify", "certify integrals, commutation, reversibility, Poisson structure, "
+                "involution and rank on an orbit, with negative controls"),
+    "integrals": ("exact_khk.cli.certify", "print H~ and every K~ at a point"),
+    "verify": ("exact_khk.cli.verify", "re-check a saved certificate (orbit, integral values, status) by a "
+               "separate minimal exact code path"),
+    "systems": ("exact_khk.cli.systems", "list the catalogue of classic KHK systems (use one with --system NAME)"),
+    "degrees": ("exact_khk.cli.diagnostics", "degree growth of the iterates of a Kahan map, its recurrence and "
+                "dynamical degree"),
+    "find-integrals": ("exact_khk.cli.diagnostics", "discover conserved rational functions from orbits (HK bases)"),
+    "sweep": ("exact_khk.cli.sweep", "run one task over many systems, points and step sizes (locally or on Dask)"),
+    "scale": ("exact_khk.cli.study", "compare floating and ball orbits with the exact orbit, step by step"),
+    "hard": ("exact_khk.cli.study", "run the catalogue of hard cases (near-singular steps, ...)"),
+    "liouville": ("exact_khk.cli.liouville", "certify complete integrability (all involutions)"),
+    "prove": ("exact_khk.cli.liouville", "symbolic proofs for small n (n = 2 in seconds)"),
+}
+COMMAND_MODULES = list(dict.fromkeys(module for module, _ in COMMANDS.values()))
 
 
 # --- entry point --------------------------------------------------------------
 
 
-def build_parser():
+def build_parser(commands=None):
+    """The command-line parser.  ``commands``: the command names whose modules are
+    imported and registered in full (default: all); every other command gets a
+    stub with its one-line help (enough for ``exact-khk --help``)."""
     parser = Parser(prog="exact-khk", description="Exact certification of Kahan–Hirota–Kimura maps "
-                     "(Lie–Poisson family of Petrera & Suris).")
+                    "(Lie–Poisson family of Petrera & Suris).")
     parser.add_argument("--version", action="version", version=f"exact-khk {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).register(sub)
+    for module in COMMAND_MODULES:
+        names = [name for name, (m, _) in COMMANDS.items() if m == module]
+        if commands is None or any(name in commands for name in names):
+            importlib.import_module(module).register(sub)
+        else:
+            for name in names:
+                sub.add_parser(name, help=COMMANDS[name][1])
     return parser
+
+
+def _command(argv):
+    """The command named in ``argv`` (its first word not starting with '-'; the
+    top-level parser has no option that takes a value), or None."""
+    return next((tok for tok in argv if not tok.startswith("-")), None)
 
 
 def _join_values(argv, parser):
@@ -103,8 +137,9 @@ def main(argv=None) -> int:
 
 def _run(argv) -> int:
     try:
-        parser = build_parser()
-        args = parser.parse_args(_join_values(list(sys.argv[1:] if argv is None else argv), parser))
+        argv = list(sys.argv[1:] if argv is None else argv)
+        parser = build_parser([_command(argv)])
+        args = parser.parse_args(_join_values(argv, parser))
         if args.command is None:
             parser.print_help()
             return EXIT["input"]

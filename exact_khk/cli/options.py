@@ -14,9 +14,13 @@ an :class:`~exact_khk.errors.InputError` that names it and states the estimate:
   integer and coefficient tensors; measured 130 B exact and 230 B float at
   n = 60), the certificate's exact gradients and Jacobi sums (2n)³ numbers
   more, and the stored orbit (steps + 1)·2n numbers, whose size grows along
-  exact orbits (measured on two probe steps when 2n ≤ 64, else about 17·n
-  bits per step); the structured path (``--method structured``, or ``auto``
-  for exact flint steps at n ≥ 16) needs O(n) memory per point;
+  exact orbits (measured on two probe steps when 2n ≤ 64, else about
+  n·(2·log2 n + 5) bits per step); the structured path (``--method
+  structured``, or ``auto`` for exact flint steps at n ≥ 16) needs O(n) numbers
+  per point, and an exact structured step about
+  :data:`STRUCTURED_STEP_BYTES_PER_BIT` · n · h bytes for an output of height h
+  bits (so one exact step at n = 20 000, about 670 000 bits per coordinate, is
+  refused: about 40 GB; the float and mp:P structured steps are O(n));
 * precisions, ``cyclo:N`` and ``gf:P`` are bounded in :mod:`exact_khk.arith`.
 
 A run that lasts more than about 2 s shows progress on stderr (a tqdm bar,
@@ -30,13 +34,13 @@ import json
 import math
 import os
 import sys
+from functools import lru_cache
 
-from exact_khk.arith import arith_names, point_height
 from exact_khk.errors import InputError, SingularStepError
 from exact_khk.parsing import parse_rational, parse_vector
-from exact_khk.studies.output import check_writable, write_atomic
-from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem,
-                                                  random_point)
+
+# The rest of the library is imported inside the functions that use it: ``exact-khk
+# --help`` imports this module (for :class:`Parser`) and nothing else of the library.
 
 
 class Parser(argparse.ArgumentParser):
@@ -56,6 +60,8 @@ class Parser(argparse.ArgumentParser):
 
 
 def add_system_options(p, steps_default=20):
+    from exact_khk.systems.lie_poisson.system import DEFAULT_EPS
+
     g = p.add_argument_group("system (default: the built-in n = 3 Lie–Poisson system, see README)")
     g.add_argument("--system", metavar="NAME|FILE",
                    help="a catalogue system (see 'exact-khk systems') or a system file (.toml, see "
@@ -70,14 +76,17 @@ def add_system_options(p, steps_default=20):
     g.add_argument("--steps", type=int, default=steps_default,
                    help=f"number of steps K (default {steps_default})" if steps_default is not None else
                    "number of steps K (default 20, or the system file's [defaults] steps)")
-    g.add_argument("--arith", default=None, help=ARITH_HELP)
+    g.add_argument("--arith", default=None, help=arith_help())
     p.add_argument("--quiet", action="store_true",
                    help="no progress display on stderr (shown only for runs longer than about 2 s, and only "
                         "when stderr is a terminal)")
 
 
-def _arith_help() -> str:
-    from exact_khk.arith import MAX_PRECISION_BITS
+@lru_cache(maxsize=None)
+def arith_help() -> str:
+    """The ``--arith`` help: every arithmetic, with its bounds (made when a command's
+    parser is built: it imports :mod:`exact_khk.arith.cyclotomic` for the bounds)."""
+    from exact_khk.arith import MAX_PRECISION_BITS, arith_names
     from exact_khk.arith.cyclotomic import MAX_CYCLOTOMIC_N, MIN_PRIME
 
     names = arith_names()
@@ -87,12 +96,12 @@ def _arith_help() -> str:
             f"prime field F_P, P prime, {MIN_PRIME} <= P < 2^64")
 
 
-#: the ``--arith`` help: every arithmetic, with its bounds
-ARITH_HELP = _arith_help()
-
 
 def system_from_args(args):
     """(system, x0, eps) from parsed options, with typed errors naming the option."""
+    from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem,
+                                                      random_point)
+
     if getattr(args, "system", None) is not None:
         return _named_system(args)
     given = [v is not None for v in (args.a, args.b, args.c)]
@@ -139,12 +148,16 @@ def write_json(obj, target):
     if target in (None, "-"):
         print(text)
     else:
+        from exact_khk.studies.output import write_atomic
+
         write_atomic(target, text + "\n", "--json")
 
 
 def check_output(target, what="--json"):
     """Check an output path (not ``-``) before the work starts."""
     if target not in (None, "-"):
+        from exact_khk.studies.output import check_writable
+
         check_writable(target, what)
 
 
@@ -202,9 +215,16 @@ MAX_STEPS = 10_000_000
 MAX_MEMORY_BYTES = 4 * 2 ** 30
 #: bytes per (2n)³ of the dense 2n×2n path (its coefficient and integer tensors)
 DENSE_BYTES_PER_CUBE = 250
-#: bits per step by which exact orbit heights grow, per n, when not measured
-#: (measured at n = 16, 32, 64 from small integers: about 13·n, 16·n, 17·n)
-GROWTH_BITS_PER_N = 17
+#: bits per step by which exact orbit heights grow when not measured: about
+#: n·(2·log2 n + GROWTH_BITS_PER_N) (measured from small integers at n = 16, 32, 64:
+#: about 13·n, 16·n, 17·n per step; the first step at n = 256, 512, 1024, 2048:
+#: 19.4·n, 21.0·n, 23.2·n, 25.2·n bits)
+GROWTH_BITS_PER_N = 5
+#: the exact structured step's working memory, in bytes per n per bit of its
+#: output's height (its p-adic lift holds a few polynomials of n coefficients at
+#: twice that height): peak RSS of one step measured 2.6–3.5 · n · h at
+#: n = 256..4096 (h = 5 000 to 110 000 bits; 1.2 GB at n = 4096)
+STRUCTURED_STEP_BYTES_PER_BIT = 3
 
 
 def max_memory() -> int:
@@ -263,6 +283,8 @@ def _number_bytes(ar, bits) -> float:
 
 def _growth(phi, x0, steps, ar):
     """(height of x0 in bits, bits per step): measured on two steps when cheap, else a model."""
+    from exact_khk.arith import point_height
+
     if not ar.rational:
         return 64, 0
     h0 = point_height(ar, phi.point(x0, "x0"))
@@ -274,7 +296,7 @@ def _growth(phi, x0, steps, ar):
             return h0, 0
         hs = [point_height(ar, p) for p in pts]
         return h0, max(1, max(b - a for a, b in zip(hs, hs[1:])))
-    return h0, GROWTH_BITS_PER_N * n + 2 * h0
+    return h0, int(n * (2 * math.log2(n) + GROWTH_BITS_PER_N)) + 2 * h0
 
 
 def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_point=1, cube_numbers=0):
@@ -289,13 +311,21 @@ def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_poi
     if dense or cube_numbers:
         need = (DENSE_BYTES_PER_CUBE if dense else 0) * N ** 3 + cube_numbers * N ** 3 * _number_bytes(ar, 64)
         if need > limit:
-            hint = (" (the structured path needs O(n) memory: --method structured, or the default flint "
-                    "arithmetic)" if what == "orbit" else "")
+            hint = (" (the structured path, --method structured, needs O(n) memory with --arith float or mp:P; "
+                    "an exact structured step about 3 bytes x n x its height in bits)" if what == "orbit" else "")
             raise InputError(f"--n: {what} at n = {n} solves dense {N}x{N} systems, which need about "
                              f"{human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x (2n)^3"
                              + (f" + {cube_numbers} x (2n)^3 numbers" if cube_numbers else "")
                              + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY){hint}")
     h0, g = _growth(phi, x0, steps, ar)
+    if phi.structure is not None and ar.exact and steps:  # the last structured step's p-adic lift
+        step = STRUCTURED_STEP_BYTES_PER_BIT * n * (h0 + g * steps)
+        if step > limit:
+            raise InputError(f"--n: one exact structured step at n = {n} needs about {human_bytes(step)} of "
+                             f"working memory (estimate: {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x the step's "
+                             f"height, heights growing from {h0} by about {g} bits per step), beyond the limit of "
+                             f"{human_bytes(limit)} (EXACT_KHK_MAX_MEMORY); exact heights grow like n log n bits "
+                             f"per step: use --arith float or mp:P with --method structured for large n")
     mean_bits = h0 + g * steps / 2
     need = orbits * (steps + 1) * N * per_point * _number_bytes(ar, mean_bits)
     if need > limit:

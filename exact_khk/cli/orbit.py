@@ -7,7 +7,6 @@ import math
 from fractions import Fraction
 
 from exact_khk.arith import get_arith, point_height
-from exact_khk.certification.records import library_versions
 from exact_khk.cli.options import Progress, add_system_options, check_resources, system_from_args, write_json
 from exact_khk.errors import InputError
 from exact_khk.kahan.map import METHODS, KahanMap
@@ -40,6 +39,8 @@ def cmd_orbit(args):
         pts = phi.orbit(x0, args.steps, progress=progress)
     growth = _height_growth(ar, pts)
     if args.json:
+        from exact_khk.certification.records import library_versions
+
         write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
                     "eps": str(eps), "steps": args.steps, "arith": ar.name, "exact": ar.exact,
                     "method": args.method, "path": phi.path,
@@ -95,10 +96,12 @@ def _field(system, args, ar):
         raise InputError(f"--field: expected f, g or control for the Lie–Poisson family, got {args.field!r}")
     if args.signs is not None and args.field != "g":
         raise InputError("--signs applies only to --field g")
-    signs = args.signs if args.signs is not None else (b0_signs(system.n) if args.field == "g" else None)
+    if args.field != "g":
+        return system.field(args.field)
     from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω
 
-    return system.field(args.field, signs=signs, cyclotomic=args.field == "g" and expresses_omega(ar, system.n))
+    signs = args.signs if args.signs is not None else b0_signs(system.n)
+    return system.field("g", signs=signs, cyclotomic=expresses_omega(ar, system.n))
 
 
 def _display(ar, t) -> str:

@@ -33,10 +33,9 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from math import gcd
+from functools import lru_cache
+from math import gcd, lcm
 
-from exact_khk.arith.cyclotomic import cyclotomic_field
-from exact_khk.linalg import circulant
 from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.parsing import format_signs, parse_signs, parse_vector
@@ -107,11 +106,22 @@ def involution_circulant(n: int, signs) -> tuple[Fraction, ...]:
 
     α_k = (1/n) Σ_j s_j ω^{-jk} = (1/n) Σ_{d|n} s_d c_{n/d}(k) (Ramanujan sums);
     raises :class:`NotRationalError` if ``signs`` is not constant on the classes
-    {j : gcd(j, n) = d}.
+    {j : gcd(j, n) = d}.  α_k depends on k only through gcd(k, n), so the cost
+    is O(n) gcds (plus a sum over pairs of divisors), not n Ramanujan sums per
+    divisor: 5 ms for B_0 at n = 20 000.
+
+    >>> involution_circulant(6, "-+++++") == tuple(Fraction(int(k == 0)) - Fraction(2, 6) for k in range(6))
+    True
     """
+    return _involution_circulant(n, format_signs(parse_signs(signs, n)))
+
+
+@lru_cache(maxsize=32)
+def _involution_circulant(n: int, signs: str) -> tuple[Fraction, ...]:
     s = parse_signs(signs, n)
-    total = [Fraction(0)] * n
-    for d, cls in divisor_classes(n).items():
+    classes = divisor_classes(n)
+    sign_of = {}
+    for d, cls in classes.items():
         vals = {s[j] for j in cls}
         if len(vals) > 1:
             shown = ", ".join(format_signs([s[j]]) for j in cls)
@@ -119,10 +129,10 @@ def involution_circulant(n: int, signs) -> tuple[Fraction, ...]:
                 f"signs {format_signs(s)!r} split the class {{j : gcd(j, {n}) = {d}}} = "
                 f"{{{', '.join(map(str, cls))}}} (signs {shown}): this involution is not rational; "
                 f"it needs cyclotomic arithmetic")
-        sd = vals.pop()
-        for k in range(n):
-            total[k] += sd * ramanujan_sum(n // d, k)
-    return tuple(t / n for t in total)
+        sign_of[d] = vals.pop()
+    # α_k = (1/n) Σ_d s_d c_{n/d}(k), and c_q(k) = c_q(gcd(k, n)) for q | n: one value per divisor g = gcd(k, n)
+    by_gcd = {g: Fraction(sum(sd * ramanujan_sum(n // d, g) for d, sd in sign_of.items()), n) for g in classes}
+    return tuple(by_gcd[g] for g in map(gcd, range(n), [n] * n))
 
 
 def nontrivial_sign_patterns(n: int) -> list[str]:
@@ -147,6 +157,8 @@ def involution_circulant_cyclotomic(n: int, signs) -> tuple:
     >>> involution_circulant_cyclotomic(3, "-++") == involution_circulant(3, "-++")
     True
     """
+    from exact_khk.arith.cyclotomic import cyclotomic_field
+
     s = parse_signs(signs, n)
     K = cyclotomic_field(n)
     return tuple(sum((s[j] * K.zeta_power(-j * k) for j in range(n)), K.zero) / n
@@ -502,7 +514,9 @@ class LiePoissonField(QuadraticField):
 
     def circulant_structure(self):
         """The circulant structure of the step's blocks (Hessian blocks cyclic Hankel), or None."""
-        return circulant.circulant_structure(self)
+        from exact_khk.linalg.circulant import circulant_structure
+
+        return circulant_structure(self)
 
     def terms(self) -> tuple:
         """The quadratic terms of f(x) = J(x) M x, built once on first use:
@@ -529,24 +543,30 @@ class LiePoissonField(QuadraticField):
 
 
 def _correlate(coeffs, w):
-    """(Σ_k c_k w_{(j+k) mod n})_j by one python-flint polynomial product: the
-    coefficient of t^j in (Σ_i w_i t^i)(Σ_k c_k t^{(−k) mod n}) mod tⁿ − 1."""
+    """(Σ_k c_k w_{(j+k) mod n})_j by one python-flint integer polynomial product: the
+    coefficient of t^j in (Σ_i w_i t^i)(Σ_k c_k t^{(−k) mod n}) mod tⁿ − 1, with
+    the denominators of w and c cleared first (O(n log n), no Fraction arithmetic)."""
     import flint
 
     n = len(w)
-    q = lambda t: flint.fmpq(Fraction(t).numerator, Fraction(t).denominator)  # noqa: E731
-    W = flint.fmpq_poly([q(t) for t in w])
-    C = flint.fmpq_poly([q(coeffs[-k % n]) for k in range(n)])
-    full = (W * C).coeffs()
-    out = [Fraction(0)] * n
-    for i, c in enumerate(full):
-        out[i % n] += Fraction(int(c.p), int(c.q))
-    return tuple(out)
+    w = [Fraction(t) for t in w]
+    c = [Fraction(coeffs[-k % n]) for k in range(n)]
+    dw, dc = lcm(*(t.denominator for t in w)), lcm(*(t.denominator for t in c))
+    W = flint.fmpz_poly([t.numerator * (dw // t.denominator) for t in w])
+    C = flint.fmpz_poly([t.numerator * (dc // t.denominator) for t in c])
+    prod = W * C
+    if prod.degree() >= n:
+        prod = prod.truncate(n) + prod.right_shift(n)
+    vals = [int(t) for t in prod.coeffs()] + [0] * (n - prod.degree() - 1)
+    den = dw * dc
+    return tuple(Fraction(v, den) for v in vals)
 
 
-def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.CirculantStructure:
-    """The structure of ``system.field(kind, signs, power)`` computed from the vectors a, b, c
-    alone, in O(n²) (building the field itself costs O((2n)³) memory).
+def structure_from_system(system, kind="f", signs=None, power=0):
+    """The :class:`~exact_khk.linalg.circulant.CirculantStructure` of ``system.field(kind,
+    signs, power)`` computed from the vectors a, b, c alone: O(n) for f and the control
+    field, O(n log n) for g (one polynomial product per block for n > 64), where the
+    dense Hessian would cost O(n²) memory and its product with B O(n³) time.
 
     First rows: A^p X(w) = X(w shifted by p); B X(w) = X(Σ_k α_k w shifted by k).
     """
@@ -571,4 +591,6 @@ def structure_from_system(system, kind="f", signs=None, power=0) -> circulant.Ci
     else:
         raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
     a, b, c = system.a, system.b, system.c
-    return circulant.CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))
+    from exact_khk.linalg.circulant import CirculantStructure
+
+    return CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))
