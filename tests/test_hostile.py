@@ -339,6 +339,24 @@ def test_sigint_at_a_random_moment(tmp_path):
     assert os.listdir(tmp_path) == []  # neither out.json nor a temporary
 
 
+def test_sigint_while_the_command_line_is_imported():
+    """Ctrl-C while the console script imports the command line (the slowest part of
+    start-up): one line and exit 130, no traceback.  (An interrupt during Python's own
+    start-up, while site-packages' .pth files run, is Python's to report.)"""
+    code = ("import builtins\n"
+            "real = builtins.__import__\n"
+            "def interrupted(name, *args, **kw):\n"
+            "    if name == 'exact_khk.cli.main':\n"
+            "        raise KeyboardInterrupt\n"
+            "    return real(name, *args, **kw)\n"
+            "builtins.__import__ = interrupted\n"
+            "from exact_khk.__main__ import run\n"
+            "run()\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 130 and res.stdout == ""
+    assert res.stderr.strip().splitlines() == ["exact-khk: interrupted: stopped by the user (Ctrl-C)"], res.stderr
+
+
 @pytest.mark.slow
 @STUDY
 @pytest.mark.parametrize("args", [["scale", "--n", "20000", "--seed", "1", "--steps", "1"],
