@@ -26,7 +26,7 @@ __version__ = "0.1.0"
 #: where each public name lives (imported on first access)
 _EXPORTS = {
     "exact_khk.arith": ("Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith",
-                        "register_arith"),
+                        "register_arith", "to_fraction"),
     "exact_khk.errors": ("ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "PoleError",
                          "SingularStepError", "UndecidedError"),
     "exact_khk.kahan.map": ("KahanMap", "kahan_step", "map_jacobian", "orbit"),
@@ -38,19 +38,22 @@ _EXPORTS = {
     "exact_khk.systems.lie_poisson.invariants": ("Htilde",),
     "exact_khk.certification": ("certify",),
     "exact_khk.certification.records": ("Certificate", "Check"),
+    "exact_khk.certification.verify": ("verify",),
+    "exact_khk.diagnostics": ("degree_sequence", "find_integrals", "height_growth"),
 }
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 #: modules once imported here for their side effects, still reachable as attributes
 _MODULES = {"ball": "exact_khk.arith.ball", "cyclo": "exact_khk.arith.cyclotomic"}
 
-__all__ = [
-    "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith",
+__all__ = [  # the names of _EXPORTS (a test checks that they agree), literal for linters
+    "Arith", "arith_names", "default_arith", "exact_arith_names", "get_arith", "register_arith", "to_fraction",
     "ExactKHKError", "InputError", "NearSingularWarning", "NotRationalError", "PoleError",
     "SingularStepError", "UndecidedError",
     "KahanMap", "kahan_step", "map_jacobian", "orbit",
     "parse_rational", "parse_signs", "parse_vector",
     "System", "QuadraticField", "LiePoissonField", "LiePoissonSystem", "b0_signs", "involution_circulant",
-    "rational_sign_patterns", "Htilde", "Certificate", "Check", "certify", "__version__",
+    "rational_sign_patterns", "Htilde", "Certificate", "Check", "certify", "verify",
+    "degree_sequence", "find_integrals", "height_growth", "__version__",
 ]
 
 
@@ -70,9 +73,12 @@ def __dir__():
 
 
 if TYPE_CHECKING:  # for type checkers and linters; at run time the names come from __getattr__
-    from exact_khk.arith import Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith
+    from exact_khk.arith import (Arith, arith_names, default_arith, exact_arith_names, get_arith, register_arith,
+                                 to_fraction)
     from exact_khk.certification import certify
     from exact_khk.certification.records import Certificate, Check
+    from exact_khk.certification.verify import verify
+    from exact_khk.diagnostics import degree_sequence, find_integrals, height_growth
     from exact_khk.errors import (ExactKHKError, InputError, NearSingularWarning, NotRationalError,
                                   PoleError, SingularStepError, UndecidedError)
     from exact_khk.kahan.map import KahanMap, kahan_step, map_jacobian, orbit
