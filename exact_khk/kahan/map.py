@@ -11,8 +11,10 @@ flow):
 The step is undefined where det(I − ε f'(x)) = 0.  Exact arithmetics detect
 this exactly and raise :class:`~exact_khk.errors.SingularStepError`.
 Floating arithmetics (``float``, ``mp:P``) compute a condition estimate κ of
-I − ε f'(x) at every step (the 1-norm estimate |M|₁|M⁻¹|₁ on the dense path;
-on the structured path max_j |M_j|₁ · max_j |M_j⁻¹|₁ over the n 2×2 Fourier
+I − ε f'(x) at every step (on the dense path |M|₁|M⁻¹|₁: for ``float`` with
+M⁻¹ by LAPACK, i.e. ``numpy.linalg.cond(M, 1)``, for ``mp:P`` with |M⁻¹|₁
+estimated by LAPACK's method, a lower bound, or exact for N ≤ 5 — see
+:func:`exact_khk.linalg.dense.solve`; on the structured path max_j |M_j|₁ · max_j |M_j⁻¹|₁ over the n 2×2 Fourier
 blocks M_j, within a factor 2 of the 2-norm condition number) and
 
 * raise :class:`SingularStepError` (with κ) when a pivot is exactly zero, a
@@ -50,7 +52,11 @@ rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
 ``fraction`` may ask for the structured path explicitly.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
-results are what p-bit arithmetic gives.  ``method='structured'`` with them
+results are what p-bit arithmetic gives: the ``float`` step is LAPACK's
+partially pivoted LU in binary64 (``numpy.linalg.solve``), which *is* p = 53
+dense arithmetic, and ``mp:P`` eliminates with partial pivoting at p bits;
+both build I − εf'(x) with numpy (:mod:`exact_khk.linalg.floating`; O(n²) from
+the circulant first rows when the field declares them).  ``method='structured'`` with them
 computes each step by the DFT in ball arithmetic at p + guard bits and rounds
 the result into the arithmetic: far faster for large n (float at n = 4096 in a
 fraction of a second) and *more* accurate than a p-bit elimination, so it does
@@ -291,7 +297,7 @@ class KahanMap:
 
     def _lapack_step(self, x):
         """The ``float`` dense step (:func:`~exact_khk.linalg.floating.float_step`:
-        I − εf'(x) built by numpy, one LAPACK solve — partially pivoted LU in
+        I − εf'(x) built by numpy, ``numpy.linalg.solve`` — LAPACK's partially pivoted LU in
         binary64, i.e. p = 53 dense arithmetic — with the 1-norm κ); the point
         comes back as a tuple of Python floats, checked finite."""
         try:
