@@ -97,6 +97,8 @@ class Arith:
     integers = None
     #: binary floating point with ``from_man_exp``: the DFT (structured) step applies
     fourier = False
+    #: IEEE binary64: dense steps by LAPACK through numpy (:mod:`exact_khk.linalg.floating`)
+    lapack = False
 
     def __call__(self, value):
         """``value`` as an element of this arithmetic, read as every public function
@@ -407,7 +409,7 @@ class MPArith(Arith):
         return self._libmp.to_str(e._mpf_, self._libmp.repr_dps(self.prec))
 
     def magnitude(self, e) -> float:
-        return float(abs(e))
+        return abs(float(e))
 
     def is_finite(self, e) -> bool:
         return bool(self.ctx.isfinite(e))
@@ -432,6 +434,7 @@ class FloatArith(Arith):
     name = "float"
     exact = False
     fourier = True
+    lapack = True
     prec = 53
     zero, one = 0.0, 1.0
 
@@ -454,8 +457,7 @@ class FloatArith(Arith):
     def magnitude(self, e) -> float:
         return abs(float(e))
 
-    def is_finite(self, e) -> bool:
-        return math.isfinite(e)
+    is_finite = staticmethod(math.isfinite)
 
     def from_man_exp(self, man, exp):
         """man·2^exp (integers), correctly rounded outside the subnormal range; ±inf on overflow."""
@@ -667,7 +669,9 @@ def as_point(ar, x, dim: int, name: str = "x"):
     elements of ``ar``; binary floats (Python or numpy) only in floating
     arithmetics, where they must be finite.  Anything else raises
     :class:`~exact_khk.errors.InputError` naming the coordinate."""
-    if ar.rational and type(x) is tuple and len(x) == dim and all(type(t) is type(ar.zero) for t in x):
+    if type(x) is tuple and len(x) == dim and (
+            ar.rational and all(type(t) is type(ar.zero) for t in x)
+            or ar.lapack and all(type(t) is float for t in x) and all(map(math.isfinite, x))):
         return x  # already a point of ar (e.g. a previous step's result)
     if isinstance(x, (str, bytes)) or not hasattr(x, "__len__") and not hasattr(x, "__iter__"):
         raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}")

@@ -11,8 +11,10 @@ flow):
 The step is undefined where det(I − ε f'(x)) = 0.  Exact arithmetics detect
 this exactly and raise :class:`~exact_khk.errors.SingularStepError`.
 Floating arithmetics (``float``, ``mp:P``) compute a condition estimate κ of
-I − ε f'(x) at every step (the 1-norm estimate |M|₁|M⁻¹|₁ on the dense path;
-on the structured path max_j |M_j|₁ · max_j |M_j⁻¹|₁ over the n 2×2 Fourier
+I − ε f'(x) at every step (on the dense path |M|₁|M⁻¹|₁: for ``float`` with
+M⁻¹ by LAPACK, i.e. ``numpy.linalg.cond(M, 1)``, for ``mp:P`` with |M⁻¹|₁
+estimated by LAPACK's method, a lower bound, or exact for N ≤ 5 — see
+:func:`exact_khk.linalg.dense.solve`; on the structured path max_j |M_j|₁ · max_j |M_j⁻¹|₁ over the n 2×2 Fourier
 blocks M_j, within a factor 2 of the 2-norm condition number) and
 
 * raise :class:`SingularStepError` (with κ) when a pivot is exactly zero, a
@@ -50,7 +52,11 @@ rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
 ``fraction`` may ask for the structured path explicitly.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
-results are what p-bit arithmetic gives.  ``method='structured'`` with them
+results are what p-bit arithmetic gives: the ``float`` step is LAPACK's
+partially pivoted LU in binary64 (``numpy.linalg.solve``), which *is* p = 53
+dense arithmetic, and ``mp:P`` eliminates with partial pivoting at p bits;
+both build I − εf'(x) with numpy (:mod:`exact_khk.linalg.floating`; O(n²) from
+the circulant first rows when the field declares them).  ``method='structured'`` with them
 computes each step by the DFT in ball arithmetic at p + guard bits and rounds
 the result into the arithmetic: far faster for large n (float at n = 4096 in a
 fraction of a second) and *more* accurate than a p-bit elimination, so it does
@@ -67,7 +73,9 @@ import math
 import warnings
 from fractions import Fraction
 
-from exact_khk.linalg import circulant
+import numpy
+
+from exact_khk.linalg import circulant, floating
 from exact_khk.arith import _is_element as _arith_is_element, as_point, get_arith, point_height as _height, to_element  # noqa: F401
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
@@ -143,22 +151,35 @@ class KahanMap:
         return out
 
     def system_matrix(self, x, sign=1):
-        """I − sign·ε f'(x)."""
+        """I − sign·ε f'(x) (a list of rows)."""
+        M = self._matrix(x, sign)
+        return M.tolist() if hasattr(M, "tolist") else M
+
+    def _matrix(self, x, sign=1):
+        """I − sign·ε f'(x): a numpy array for ``float`` (binary64) and, as a list of
+        rows, built by numpy for floating arithmetics when the field's blocks are
+        circulant (:func:`~exact_khk.linalg.floating.system_matrix`, O(n²))."""
         ar, e = self.arith, self.eps if sign == 1 else -self.eps
+        if not ar.exact and floating.has_system_matrix(self.field, ar):
+            M = floating.system_matrix(self.field, ar, x, e)
+            return M if ar.lapack else M.tolist()
         Jf = self.field.jacobian(ar, x)
         return [[(ar.one if i == j else ar.zero) - e * Jf[i][j] for j in range(len(x))]
                 for i in range(len(x))]
 
     def _solve(self, M, B, x, eps):
-        """Solve M X = B, turning singularity and ill-conditioning into our errors."""
+        """Solve M X = B, turning singularity and ill-conditioning into our errors.
+        For ``float`` M and B are numpy arrays and so is X (LAPACK:
+        :func:`~exact_khk.linalg.floating.float_solve`)."""
         ar = self.arith
         with ar.local():
             try:
-                X, cond = solve(ar, M, B)
+                X, cond = floating.float_solve(M, B) if ar.lapack else solve(ar, M, B)
             except SingularMatrix:
                 raise self._singular(x, eps) from None
         if not ar.exact:
-            self._check_condition([t for row in X for t in row], cond, x, eps)
+            self._check_condition(X.ravel().tolist() if ar.lapack else [t for row in X for t in row],
+                                  cond, x, eps)
         return X
 
     def _check_condition(self, values, cond, x, eps):
@@ -166,7 +187,7 @@ class KahanMap:
         ar = self.arith
         # cond is None when the context's solver gives no estimate (balls
         # carry their own error bounds instead).
-        bad = values is None or any(not ar.is_finite(t) for t in values)
+        bad = values is None or not all(map(ar.is_finite, values))
         # compare in log2: 2.0 ** -prec underflows (and 2.0 ** (prec / 2)
         # overflows) a float for the large precisions of mp:P
         lost = math.inf if cond is not None and (cond != cond or math.isinf(cond)) else (
@@ -263,7 +284,9 @@ class KahanMap:
             return next(self._split_steps(x))
         if ar.integers is not None:
             return next(self._integer_steps(x))
-        M = self.system_matrix(x)
+        if ar.lapack:
+            return self._lapack_step(x)
+        M = self._matrix(x)
         if self.field.homogeneous:
             X = self._solve(M, [[t] for t in x], x, eps)
             return tuple(row[0] for row in X)
@@ -271,6 +294,18 @@ class KahanMap:
         X = self._solve(M, [[t] for t in fx], x, eps)
         two_eps = eps + eps
         return tuple(xi + two_eps * row[0] for xi, row in zip(x, X))
+
+    def _lapack_step(self, x):
+        """The ``float`` dense step (:func:`~exact_khk.linalg.floating.float_step`:
+        I − εf'(x) built by numpy, ``numpy.linalg.solve`` — LAPACK's partially pivoted LU in
+        binary64, i.e. p = 53 dense arithmetic — with the 1-norm κ); the point
+        comes back as a tuple of Python floats, checked finite."""
+        try:
+            z, cond = floating.float_step(self.field, self.arith, x, self.eps)
+        except SingularMatrix:
+            raise self._singular(x, self.eps) from None
+        self._check_condition(z, cond, x, self.eps)
+        return tuple(z)
 
     def _steps(self, x):
         """Φ(x), Φ²(x), … (endless); the exact dense and split paths keep their
@@ -319,7 +354,8 @@ class KahanMap:
         with self.arith.local():
             x = self.point(x)
             y = self._step(x)
-            return self._solve(self.system_matrix(x), self.system_matrix(y, sign=-1), x, self.eps)
+            D = self._solve(self._matrix(x), self._matrix(y, sign=-1), x, self.eps)
+            return D.tolist() if self.arith.lapack else D
 
 
 def _choose_path(field, ar, method, eps):

@@ -24,7 +24,9 @@ dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 :data:`SMALL_ANSWER_MIN_BITS` ≤ h <
                                 :data:`DIXON_BITS` · (N − 6)
 exact H̃ (flint, rational)       structured for n ≥ :data:`HTILDE_STRUCTURED_MIN_N`
-floating arithmetics            dense (genuine p-bit arithmetic)
+floating arithmetics            dense (genuine p-bit arithmetic); κ's ‖M⁻¹‖₁ from
+                                the inverse for N ≤ :data:`EXACT_INVERSE_MAX_N`,
+                                else estimated (``linalg.dense.solve``)
 =============================  ==================================================
 """
 
@@ -45,6 +47,10 @@ SMALL_ANSWER_MIN_BITS = 128
 #: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
 #: 40 000, 60 000 bits for N = 8, 10, 12)
 DIXON_BITS = 10_000
+#: generic floating dense solve (``mp:P``): κ from the exact inverse up to this N, where
+#: N column solves cost no more than the estimator's five triangular solves (an
+#: operation count; at N = 4 the estimate would be ~50 % of the step)
+EXACT_INVERSE_MAX_N = 5
 #: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
 HTILDE_STRUCTURED_MIN_N = 3
 

@@ -1,0 +1,186 @@
+"""The system I − εf'(x) as a numpy array, and the binary64 dense solve by LAPACK.
+
+:func:`system_matrix` builds I − εf'(x) for a floating arithmetic in one of two
+ways, both plain p-bit arithmetic (every entry a sum of rounded products, in
+some order):
+
+* a field whose Jacobian blocks are circulant (it declares a
+  :class:`~exact_khk.linalg.circulant.CirculantStructure`, as Lie–Poisson
+  fields do) from the Hankel first rows m_kl of its Hessian: with y = Mx the
+  blocks of f'(x) are the circulants with first rows (docs/conventions.md)
+
+      f11: 2 X(m21)u + X(m22)v   f12: X(m22)u
+      f21: −2 X(m11)u − X(m12)v  f22: −X(m12)u
+
+  (X(w) the cyclic Hankel matrix of w; X(m)u is one dot product per entry),
+  in O(n²) for any element type numpy holds — binary64, or mpmath numbers in
+  an object array, so that ``mp:P`` builds its system the same way;
+* any other :class:`~exact_khk.systems.quadratic.QuadraticField` (binary64
+  only) from its Jacobian terms, ∂f_i/∂x_j = Σ_k c_ijk x_k + L_ij, summed by
+  ``numpy.bincount``.
+
+:func:`float_solve` is the ``float`` arithmetic's dense solve:
+``numpy.linalg.solve`` (LAPACK ``gesv``: partially pivoted LU in binary64,
+i.e. p = 53 dense arithmetic) and the 1-norm condition number
+κ = ‖M‖₁‖M⁻¹‖₁ with M⁻¹ = ``numpy.linalg.inv(M)`` — exactly
+``numpy.linalg.cond(M, 1)``, not an estimate.  numpy exposes no LU factors for
+LAPACK's O(N²) estimator ``gecon``, so κ costs a second factorisation; one
+``gesv`` of M [X | Y] = [B | I] would save it but measured up to 1.8× slower
+than the two calls for N ≤ 256 (OpenBLAS 0.3.31).  An exactly zero pivot
+raises :class:`~exact_khk.linalg.dense.SingularMatrix`.
+
+>>> from exact_khk import LiePoissonSystem, get_arith
+>>> f = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1").field("f")
+>>> M = system_matrix(f, get_arith("float"), [1.0, 0, 0, 0, 1, 0], 0.1)
+>>> ar = get_arith("fraction")
+>>> J = f.jacobian(ar, [ar(t) for t in (1, 0, 0, 0, 1, 0)])
+>>> all(abs(M[i, j] - float((i == j) - ar("1/10") * J[i][j])) < 1e-15 for i in range(6) for j in range(6))
+True
+>>> X, cond = float_solve(numpy.array([[2.0, 1], [1, 3]]), numpy.array([[1.0], [2]]))
+>>> [round(t, 12) for t in X[:, 0].tolist()], cond
+([0.2, 0.6], 3.2)
+"""
+
+from __future__ import annotations
+
+import numpy
+from numpy.lib.stride_tricks import as_strided
+
+from exact_khk.linalg.dense import SingularMatrix
+
+
+def _data(field, ar):
+    """The field's coefficients as numpy data for ``ar`` (cached on the field):
+    ``('circulant', X, F)`` with X the (4, n, n) cyclic Hankel matrices X(m11),
+    X(m12), X(m21), X(m22) (views of one (4, 2n) array) and F :data:`_FIRST_ROWS`, or ``('terms', rows, ks, coefs, L)`` (binary64 only)."""
+    key = ("numpy system", ar.name)
+    hit = field._cache.get(key)
+    if hit is not None:
+        return hit
+    st = field.circulant_structure()
+    dtype = float if ar.lapack else object
+    if st is not None:
+        rows = [ar.convert(q) for row in st.m for w in row for q in w]
+        m = numpy.array(rows, dtype=dtype).reshape(4, st.n)
+        # the four cyclic Hankel matrices X(m_kl) as views (row k: m_kl[k], …, m_kl[k+n−1])
+        hit = ("circulant", _view(numpy.concatenate([m, m], axis=1), 0, (4, st.n, st.n), (2 * st.n, 1, 1)),
+               numpy.array([[ar.convert(t) for t in row] for row in _FIRST_ROWS], dtype=dtype))
+    elif ar.lapack:
+        N, jac = field.dim, {}
+        for i, terms in enumerate(field.terms()):
+            for (j, k), c in terms:  # d/dx_j (c x_j x_k) = c x_k, and symmetrically
+                jac[i * N + j, k] = jac.get((i * N + j, k), 0) + c
+                jac[i * N + k, j] = jac.get((i * N + k, j), 0) + c
+        jac = [(r, k, ar.convert(c)) for (r, k), c in sorted(jac.items()) if c != 0]
+        L = numpy.zeros(N * N)
+        for i, row in enumerate(field.linear):
+            for j, c in row:
+                L[i * N + j] += ar.convert(c)
+        hit = ("terms", numpy.array([t[0] for t in jac], dtype=numpy.intp),
+               numpy.array([t[1] for t in jac], dtype=numpy.intp), numpy.array([t[2] for t in jac]), L)
+    else:
+        hit = (None,)
+    field._cache[key] = hit
+    return hit
+
+
+#: with p[2b + c] = X(m_b) times u (c = 0) or v (c = 1), b = 11, 12, 21, 22, the first
+#: rows of f11, f12, f21, f22 are 2 p[4] + p[7], p[6], −2 p[0] − p[3], −p[2]
+_FIRST_ROWS = ((0, 0, 0, 0, 2, 0, 0, 1), (0, 0, 0, 0, 0, 0, 1, 0), (-2, 0, 0, -1, 0, 0, 0, 0), (0, 0, -1, 0, 0, 0, 0, 0))
+
+
+def _view(a, offset, shape, strides):
+    """A view of the contiguous array ``a`` from element ``offset`` with ``strides`` in
+    elements (no copy; numpy's constructor for binary64, ``as_strided`` for objects)."""
+    size = a.itemsize
+    strides = tuple(size * t for t in strides)
+    if a.dtype == object:
+        return as_strided(a.reshape(-1)[offset:], shape, strides, writeable=False)
+    return numpy.ndarray(shape, a.dtype, a, size * offset, strides)
+
+
+def has_system_matrix(field, ar) -> bool:
+    """Whether :func:`system_matrix` applies (binary64: every field; other
+    floating arithmetics: fields with circulant blocks)."""
+    return _data(field, ar)[0] is not None
+
+
+def system_matrix(field, ar, x, eps):
+    """I − ε f'(x) as an N×N numpy array (binary64 for ``float``, else an object
+    array of ``ar``'s elements); ``x`` a sequence of ``ar``'s elements."""
+    with numpy.errstate(all="ignore"):  # overflow gives inf, found by the caller's finiteness check
+        return _system_matrix(_data(field, ar), field.dim, ar, x, eps)
+
+
+def _system_matrix(data, N, ar, x, eps):
+    if data[0] == "circulant":
+        hankel, n = data[1], N // 2
+        # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1)
+        p = (numpy.array(x, dtype=hankel.dtype).reshape(2, n) @ hankel).reshape(8, n)
+        w = (data[2] * -eps) @ p  # −ε × the first rows of f11, f12, f21, f22 (array first: mpf · ndarray)
+        w[0, 0] += ar.one  # the diagonals of the circulants f11, f22: w[., 0]
+        w[3, 0] += ar.one
+        r = numpy.concatenate([w, w], axis=1)
+        # block (a, c), entry (i, k) = w_ac[(k − i) mod n] = r[2a + c, n − i + k]: a view, then one copy
+        M = _view(r, n, (2, n, 2, n), (4 * n, -1, 2 * n, 1)).reshape(N, N)
+    else:
+        _, rows, ks, coefs, L = data
+        xv = numpy.array(x, dtype=float)
+        M = numpy.bincount(rows, weights=coefs * xv[ks], minlength=N * N)
+        M += L
+        M *= -eps
+        M = M.reshape(N, N)
+        M.flat[::N + 1] += ar.one
+    return M
+
+
+def _values_data(field):
+    """f's terms as numpy data for :func:`float_step` (cached; ``()`` for homogeneous f)."""
+    data = field._cache.get("numpy values")
+    if data is None:
+        data = ()
+        if not field.homogeneous:
+            fl = [(i, j, k, float(c)) for i, terms in enumerate(field.terms()) for (j, k), c in terms]
+            lin = numpy.zeros((field.dim, field.dim))
+            for i, row in enumerate(field.linear):
+                for j, c in row:
+                    lin[i, j] += float(c)
+            data = (*(numpy.array([t[s] for t in fl], dtype=numpy.intp) for s in range(3)),
+                    numpy.array([t[3] for t in fl]), lin, numpy.array([float(c) for c in field.const]))
+        field._cache["numpy values"] = data
+    return data
+
+
+def float_step(field, ar, x, eps):
+    """``(z, κ)``: the dense Kahan step z = Φ_f(x, ε) in binary64 (a list of Python
+    floats) and κ from :func:`float_solve`; ``ar`` the ``float`` arithmetic.
+
+    Homogeneous f: (I − εf'(x)) z = x; otherwise z = x + 2ε (I − εf'(x))⁻¹ f(x)
+    (the same formulas as the generic dense step).  Raises
+    :class:`~exact_khk.linalg.dense.SingularMatrix` on an exactly zero pivot.
+    """
+    M, xv, data = system_matrix(field, ar, x, eps), numpy.array(x, dtype=float), _values_data(field)
+    if not data:
+        z, cond = float_solve(M, xv[:, None])
+        return z[:, 0].tolist(), cond
+    i, j, k, c, lin, const = data
+    with numpy.errstate(all="ignore"):  # overflow gives inf, found by the caller's finiteness check
+        fx = numpy.bincount(i, weights=c * xv[j] * xv[k], minlength=field.dim) + lin @ xv + const
+        X, cond = float_solve(M, fx[:, None])
+        return (xv + (eps + eps) * X[:, 0]).tolist(), cond
+
+
+def float_solve(M, B):
+    """``(X, κ)`` for M X = B in binary64: ``numpy.linalg.solve`` and κ₁ from
+    ``numpy.linalg.inv`` (see the module docstring); ``M`` N×N, ``B`` N×m (numpy).  Raises
+    :class:`~exact_khk.linalg.dense.SingularMatrix` on an exactly zero pivot;
+    non-finite data give non-finite X or κ."""
+    try:  # numpy.linalg silences floating-point warnings itself
+        X, Y = numpy.linalg.solve(M, B), numpy.linalg.inv(M)
+    except numpy.linalg.LinAlgError as exc:
+        raise SingularMatrix(str(exc)) from None
+    # 1-norms by ufunc reductions; Python floats: inf·0 is nan without a warning
+    return X, float(_max(_add(numpy.abs(M), 0))) * float(_max(_add(numpy.abs(Y), 0)))
+
+
+_add, _max = numpy.add.reduce, numpy.maximum.reduce
