@@ -73,9 +73,7 @@ import math
 import warnings
 from fractions import Fraction
 
-import numpy
-
-from exact_khk.linalg import circulant, floating
+from exact_khk.linalg import circulant
 from exact_khk.arith import _is_element as _arith_is_element, as_point, get_arith, point_height as _height, to_element  # noqa: F401
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
@@ -84,6 +82,13 @@ from exact_khk.linalg.split import split_system
 from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 
 METHODS = ("auto", "dense", "structured", "split")
+
+def _floating():
+    """:mod:`exact_khk.linalg.floating` (numpy), imported by the first floating step."""
+    from exact_khk.linalg import floating
+
+    return floating
+
 
 def _is_element(ar, t) -> bool:
     return _arith_is_element(ar, t)
@@ -160,8 +165,8 @@ class KahanMap:
         rows, built by numpy for floating arithmetics when the field's blocks are
         circulant (:func:`~exact_khk.linalg.floating.system_matrix`, O(n²))."""
         ar, e = self.arith, self.eps if sign == 1 else -self.eps
-        if not ar.exact and floating.has_system_matrix(self.field, ar):
-            M = floating.system_matrix(self.field, ar, x, e)
+        if not ar.exact and _floating().has_system_matrix(self.field, ar):
+            M = _floating().system_matrix(self.field, ar, x, e)
             return M if ar.lapack else M.tolist()
         Jf = self.field.jacobian(ar, x)
         return [[(ar.one if i == j else ar.zero) - e * Jf[i][j] for j in range(len(x))]
@@ -174,7 +179,7 @@ class KahanMap:
         ar = self.arith
         with ar.local():
             try:
-                X, cond = floating.float_solve(M, B) if ar.lapack else solve(ar, M, B)
+                X, cond = _floating().float_solve(M, B) if ar.lapack else solve(ar, M, B)
             except SingularMatrix:
                 raise self._singular(x, eps) from None
         if not ar.exact:
@@ -301,7 +306,7 @@ class KahanMap:
         binary64, i.e. p = 53 dense arithmetic — with the 1-norm κ); the point
         comes back as a tuple of Python floats, checked finite."""
         try:
-            z, cond = floating.float_step(self.field, self.arith, x, self.eps)
+            z, cond = _floating().float_step(self.field, self.arith, x, self.eps)
         except SingularMatrix:
             raise self._singular(x, self.eps) from None
         self._check_condition(z, cond, x, self.eps)
