@@ -17,6 +17,18 @@ from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
 from exact_khk.studies import scaling
+from exact_khk.studies.output import OutputError, write_atomic
+
+
+def _check_out_dir(path):
+    """An --out folder must be creatable or a writable folder (checked before the work)."""
+    p = pathlib.Path(path)
+    if p.exists() and not p.is_dir():
+        raise OutputError(f"--out: {path!r} exists and is not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"--out: cannot create the folder {path!r}: {exc.strerror or exc}") from None
 
 #: the default of ``hard --ariths`` (= exact_khk.studies.hard.DEFAULT_ARITHS, written here so that
 #: building the parser does not import SymPy; a test keeps them equal)
@@ -32,7 +44,8 @@ def register(sub):
                        "lost per step; work-precision plots.")
     add_system_options(p, steps_default=50)
     p.add_argument("--ariths", default=",".join(scaling.DEFAULT_ARITHS),
-                   help="comma-separated floating/ball arithmetics (default: %(default)s)")
+                   help="comma-separated floating/ball arithmetics, and lohner:P for the Lohner enclosure at P "
+                        "bits (see 'exact-khk enclose'; default: %(default)s)")
     p.add_argument("--digits", type=int, help="also find the smallest mp:P and ball:P keeping D correct "
                    "digits over K steps, and fit bits = D*log2(10) + c*K + const")
     p.add_argument("--out", help="directory for scaling.csv, scaling.json, work_precision.png, "
@@ -67,14 +80,24 @@ def register(sub):
     h.set_defaults(func=cmd_hard)
 
 
-def _ariths(text):
+def _ariths(text, lohner=False):
+    """The arithmetics of ``--ariths`` (``lohner``: also ``lohner:P``, the Lohner enclosure)."""
     names = [t.strip() for t in text.split(",") if t.strip()]
     if not names:
         raise InputError("--ariths: give at least one arithmetic")
+    if len(names) > 32:
+        raise InputError(f"--ariths: {len(names)} arithmetics; at most 32 in one study")
     from exact_khk.arith import get_arith
+    from exact_khk.studies.enclosure import parse_spec
 
     out = []
     for name in names:
+        spec = parse_spec(name)
+        if spec is not None:
+            if not lohner:
+                raise InputError(f"--ariths: {name!r}: the Lohner enclosure runs in 'scale' and 'enclose' only")
+            out.append(spec)
+            continue
         ar = get_arith(name)
         if ar.exact:
             raise InputError(f"--ariths: {name!r} is exact; the exact orbit is always the reference, "
@@ -107,7 +130,9 @@ def cmd_scale(args):
         raise InputError("--steps: scale needs at least one step")
     if args.digits is not None and args.digits < 1:
         raise InputError(f"--digits: expected a positive integer, got {args.digits}")
-    ariths = _ariths(args.ariths)
+    ariths = _ariths(args.ariths, lohner=True)
+    if args.out:
+        _check_out_dir(args.out)
     print(system.describe())
     study = scaling.scaling_study(system, x0, eps, args.steps, ariths,
                                   diagnostics=not args.no_diagnostics, progress=not args.quiet)
@@ -147,10 +172,10 @@ def cmd_scale(args):
     if args.out:
         paths = scaling.write_study(study, args.out, plots=not args.no_plots)
         out = pathlib.Path(args.out)
-        (out / "scaling.json").write_text(json.dumps(doc, indent=1) + "\n")
+        write_atomic(out / "scaling.json", json.dumps(doc, indent=1) + "\n", "--out")
         if args.digits is not None and doc["digits"].get("enclosure") is not None:
             p = out / "enclosure.json"
-            p.write_text(json.dumps(doc["digits"]["enclosure"], indent=1) + "\n")
+            write_atomic(p, json.dumps(doc["digits"]["enclosure"], indent=1) + "\n", "--out")
             paths.append(p)
         print("wrote " + ", ".join(str(p) for p in paths))
     return 0
@@ -236,7 +261,8 @@ def cmd_hard(args):
         out.mkdir(parents=True, exist_ok=True)
         doc = {"cases": [hard.result_json(r) for r in results], "legend": legend,
                "versions": library_versions()}
-        (out / "hard_cases.json").write_text(json.dumps(doc, indent=1) + "\n")
-        (out / "hard_cases.md").write_text((title + "\n\n" if title else "") + table + "\n\n" + legend + "\n")
+        write_atomic(out / "hard_cases.json", json.dumps(doc, indent=1) + "\n", "--out")
+        write_atomic(out / "hard_cases.md", (title + "\n\n" if title else "") + table + "\n\n" + legend + "\n",
+                     "--out")
         print(f"wrote {out / 'hard_cases.json'}, {out / 'hard_cases.md'}", file=sys.stderr)
     return 0

@@ -367,3 +367,65 @@ def compare(system, x0, eps, steps, prec=256, methods=METHODS, check_exact=False
         exact, _, _ = exact_prefix(fld, pts, parse_rational(str(eps), "eps"), steps)
     integrals = declared(system)[0] if diagnostics else None
     return [enclose(system, x0, eps, steps, prec, m, exact, integrals, progress=progress) for m in methods]
+
+
+# --- in the scaling study: ``lohner:P`` beside the arithmetics --------------------
+
+
+class LohnerSpec:
+    """The name ``lohner:P`` in a list of arithmetics of a scaling study: the Lohner
+    enclosure at P bits, compared step by step with the exact orbit like ``ball:P``."""
+
+    exact = False
+
+    def __init__(self, prec):
+        from exact_khk.arith import check_precision
+
+        self.prec = check_precision("lohner", prec)
+        self.name = f"lohner:{self.prec}"
+
+    def __repr__(self):
+        return f"<enclosure {self.name}>"
+
+
+def parse_spec(name):
+    """A :class:`LohnerSpec` for ``'lohner:P'`` (InputError for a bad P), None for any other name."""
+    if isinstance(name, LohnerSpec):
+        return name
+    if not isinstance(name, str) or not name.strip().startswith("lohner"):
+        return None
+    _, _, p = name.strip().partition(":")
+    if not p.strip().isdigit() or len(p.strip()) > 30:
+        raise InputError(f"arith: {name!r}: expected lohner:P with P an integer precision in bits")
+    return LohnerSpec(int(p))
+
+
+def scale_run(system, x0, eps, steps, spec, exact, diagnostics=True, progress=None):
+    """The Lohner enclosure as an :class:`~exact_khk.studies.scaling.ArithRun` of a scaling
+    study: midpoint error and radius against the exact orbit, containment decided
+    exactly, the integrals' drift enclosed (I(X_k) − I(X_0): |mid| + rad)."""
+    from exact_khk.arith.ball import ball_mid, ball_rad
+    from exact_khk.studies.scaling import LOG10_2, ArithRun, StepRow, _norm, _rel, _slope as slope, declared
+
+    integrals = declared(system)[0] if diagnostics else None
+    run = enclose(system, [str(t) for t in x0], str(eps), steps, spec.prec, "lohner", exact, integrals,
+                  keep_points=True, progress=progress)
+    rows = []
+    for r, X in zip(run.rows, run.points):
+        if r.step >= len(exact):
+            break
+        ex = exact[r.step]
+        exn = _norm(ex)
+        err = _rel(max(abs(ball_mid(t) - q) for t, q in zip(X, ex)), exn)
+        rad = _rel(max(ball_rad(t) for t in X), exn)
+        rows.append(StepRow(spec.name, r.step, err, rad, {k: v for k, (v, _) in r.drift.items()},
+                            encloses=r.encloses and all(z for _, z in r.drift.values()), seconds=r.seconds))
+    final = rows[-1].error_log10 if rows else None
+    bits_left = float(spec.prec) if final is None else min(float(spec.prec), -final / LOG10_2)
+    log2 = lambda v: None if v is None else v / LOG10_2  # noqa: E731
+    ks = [r.step for r in rows]
+    useless = next((r.step for r in rows if r.radius_log10 is not None and r.radius_log10 >= 0), None)
+    return ArithRun(spec.name, spec.prec, run.status, run.steps_done, run.failed_step, run.message,
+                    run.seconds_per_step, final, bits_left, slope(ks, [log2(r.error_log10) for r in rows]),
+                    slope(ks, [log2(r.radius_log10) for r in rows]), useless,
+                    all(r.encloses for r in rows) if rows else None, None, tuple(rows))

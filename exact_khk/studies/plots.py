@@ -30,6 +30,15 @@ def style(names):
     return {n: (_COLORS[i % len(_COLORS)], _MARKERS[i % len(_MARKERS)]) for i, n in enumerate(names)}
 
 
+def _pick(styles, names):
+    """The styles of ``names``: from ``styles`` (keyed by arithmetic; a label is looked
+    up by its first word) when given, so that one arithmetic looks the same in every figure."""
+    own = style(names)
+    if not styles:
+        return own
+    return {n: styles.get(n, styles.get(n.split(" ")[0].rstrip(","), own[n])) for n in names}
+
+
 def _plt():
     import matplotlib
 
@@ -57,11 +66,11 @@ def _save(fig, path):
         raise
 
 
-def work_precision(points, title, exact_seconds, path):
+def work_precision(points, title, exact_seconds, path, styles=None):
     """``points``: [(name, seconds per step, log10 error or radius at step K, kind)] with kind
     ``'error'``, ``'radius'`` or ``'stopped'`` (no point at step K: drawn at 10⁰ with ×)."""
     plt = _plt()
-    st = style([p[0] for p in points])
+    st = _pick(styles, [p[0] for p in points])
     fig, ax = plt.subplots(figsize=(7.6, 4.8), dpi=110)
     for name, sec, y, kind in points:
         if sec is None:
@@ -87,19 +96,20 @@ def work_precision(points, title, exact_seconds, path):
     plt.close(fig)
 
 
-def bits_lost(series, title, path):
+def bits_lost(series, title, path, styles=None):
     """``series``: [(name, precision P, [(k, log10 relative error)])]: plots P + log2(error),
     the bits lost of the P carried (clipped at 0 for an error below 2^-P)."""
     plt = _plt()
-    st = style([s[0] for s in series])
+    st = _pick(styles, [s[0] for s in series])
     fig, ax = plt.subplots(figsize=(7.6, 4.8), dpi=110)
-    for name, prec, pts in series:
+    for i, (name, prec, pts) in enumerate(series):
         pts = [(k, max(0.0, prec + e / math.log10(2))) for k, e in pts if e is not None and prec]
         if not pts:
             continue
         color, marker = st[name]
         ks, ys = zip(*pts)
-        ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=5, lw=1.2, label=name)
+        ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=9 if i == 0 else 5,
+                lw=3.0 if i == 0 else 1.2, ls=_LINES[i % 2], label=name)
     ax.set_xlabel("step k")
     ax.set_ylabel("bits lost = P + log2(relative error)")
     ax.set_title(title, fontsize=10)
@@ -110,36 +120,38 @@ def bits_lost(series, title, path):
     plt.close(fig)
 
 
-def drift(series, integrals, title, path):
+def drift(series, integrals, title, path, styles=None):
     """``series``: [(name, [(k, {integral: log10 relative drift})])]; one panel per integral."""
     plt = _plt()
-    st = style([s[0] for s in series])
+    st = _pick(styles, [s[0] for s in series])
     n = max(1, len(integrals))
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n + 2.4, 4.4), dpi=110, squeeze=False)
+    width = 4.2 * n + 1.7
+    fig, axes = plt.subplots(1, n, figsize=(width, 4.4), dpi=110, squeeze=False)
     for ax, integral in zip(axes[0], integrals or ["-"]):
-        for name, rows in series:
+        for i, (name, rows) in enumerate(series):
             pts = [(k, d[integral]) for k, d in rows if d.get(integral) is not None]
             if not pts:
                 continue
             color, marker = st[name]
             ks, ys = zip(*pts)
-            ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=4, lw=1.1, label=name)
+            ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=8 if i == 0 else 4,
+                    lw=3.0 if i == 0 else 1.1, ls=_LINES[i % 2], label=name)
         ax.set_xlabel("step k")
         ax.set_ylabel(f"log10 |{integral}(x_k) - {integral}(x_0)| / |{integral}(x_0)|")
         ax.grid(True, alpha=0.3)
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=8, loc="center right", frameon=False)
     fig.suptitle(title + " — integral drift (exactly 0 for the exact orbit)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1 - 2.2 / (4.2 * n + 2.4), 1))
+    fig.tight_layout(rect=(0, 0, 1 - 1.6 / width, 1))
     _save(fig, path)
     plt.close(fig)
 
 
-def enclosure_radius(series, title, path, target_bits=None):
+def enclosure_radius(series, title, path, target_bits=None, styles=None):
     """``series``: [(label, [(k, log2 relative radius)])]; step axis logarithmic (k ≥ 1);
     ``target_bits``: a dotted line at −target (e.g. 100 correct bits)."""
     plt = _plt()
-    st = style([s[0] for s in series])
+    st = _pick(styles, [s[0] for s in series])
     fig, ax = plt.subplots(figsize=(7.6, 4.8), dpi=110)
     for i, (label, pts) in enumerate(series):
         pts = [(k, y) for k, y in pts if k >= 1 and y is not None]
