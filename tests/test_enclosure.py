@@ -157,3 +157,22 @@ def test_enclose_refuses_absurd_requests():
     with pytest.raises(InputError):
         enclosure.enclose(s, DEFAULT_X0, "1/10", 3, method="taylor")
     assert declared(s)[0]
+
+
+def test_cli_enclose_and_scale_lohner(tmp_path, capsys):
+    from exact_khk.cli.main import main
+
+    assert main(["enclose", "--steps", "30", "--prec", "128", "--check-exact", "--quiet", "--out",
+                 str(tmp_path / "e")]) == 0
+    out = capsys.readouterr().out
+    assert "lohner   ok" in out and "NO" not in out.split("method", 1)[1].split("\n", 2)[1]
+    assert (tmp_path / "e" / "enclosure.json").exists() and (tmp_path / "e" / "enclosure_radius.png").exists()
+    assert main(["enclose", "--system", "euler-top", "--x0", "[0.999999,1.000001],sqrt(2),-1", "--eps",
+                 "1/5+-1e-9", "--steps", "10", "--quiet"]) == 0
+    assert main(["scale", "--steps", "12", "--ariths", "float,ball:128,lohner:128", "--quiet", "--out",
+                 str(tmp_path / "s")]) == 0
+    out = capsys.readouterr().out
+    assert "lohner:128 ok" in out and "MISSES" not in out
+    names = {p.name for p in (tmp_path / "s").iterdir()}
+    assert {"work_precision.png", "error_vs_step.png", "drift_vs_step.png", "enclosure_radius.png"} <= names
+    assert not [n for n in names if n.startswith(".tmp")]

@@ -4,8 +4,8 @@ Every arithmetic keeps one colour and one marker in every figure
 (:func:`style`), labels sit in legends outside the data (never annotations that
 may overlap), and every title names the system, ε and the number of steps.
 
-* :func:`work_precision` — error at the last step against time per step, both
-  axes logarithmic; ball and Lohner enclosures by their certified radius; the
+* :func:`work_precision` — log10 error at the last step against time per step (log
+  axis); ball and Lohner enclosures by their certified radius; the
   exact arithmetic's time as a vertical line;
 * :func:`bits_lost` — bits lost against the step, relative to each precision P:
   P + log2(relative error), so that float's and mp:53's drift of a few bits is
@@ -68,7 +68,8 @@ def _save(fig, path):
 
 def work_precision(points, title, exact_seconds, path, styles=None):
     """``points``: [(name, seconds per step, log10 error or radius at step K, kind)] with kind
-    ``'error'``, ``'radius'`` or ``'stopped'`` (no point at step K: drawn at 10⁰ with ×)."""
+    ``'error'``, ``'radius'`` or ``'stopped'`` (no point at step K: drawn at 0 with ×).  The
+    error axis is log10 itself (errors reach 10⁻¹²⁰⁰, below the range of a double)."""
     plt = _plt()
     st = _pick(styles, [p[0] for p in points])
     fig, ax = plt.subplots(figsize=(7.6, 4.8), dpi=110)
@@ -77,17 +78,19 @@ def work_precision(points, title, exact_seconds, path, styles=None):
             continue
         color, marker = st[name]
         if kind == "stopped":
-            ax.plot(sec, 1.0, marker="x", color=color, ms=9, mew=2, ls="none", label=f"{name} (stopped before K)")
+            ax.plot(sec, 0.0, marker="x", color=color, ms=9, mew=2, ls="none", label=f"{name} (stopped before K)")
         else:
-            ax.plot(sec, 10.0 ** max(y, -300) if y is not None else 1e-300, marker=marker, color=color, ms=8,
+            ax.plot(sec, y, marker=marker, color=color, ms=8,
                     ls="none", label=name + (" (certified radius)" if kind == "radius" else ""))
     if exact_seconds:
         ax.axvline(exact_seconds, color="gray", ls="--", lw=1.2, label=f"exact (flint), error 0: "
                                                                          f"{exact_seconds * 1e3:.3g} ms/step")
     ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("time per step [s]")
-    ax.set_ylabel("relative error at step K (balls/Lohner: radius)")
+    from matplotlib.ticker import NullFormatter
+
+    ax.xaxis.set_minor_formatter(NullFormatter())
+    ax.set_xlabel("time per step [s] (log scale)")
+    ax.set_ylabel("log10 relative error at step K (balls/Lohner: radius)")
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="major", alpha=0.3)
     ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
