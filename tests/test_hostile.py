@@ -9,9 +9,9 @@ call :func:`exact_khk.cli.main.main` in-process; subprocesses are used for an
 ASCII-only stdout, for SIGINT at a random moment of a long run and for a few
 end-to-end rows.
 
-Rows marked ``xfail(strict=False)`` touch ``scale``/``hard`` (exact_khk/studies,
-cli/study.py), which are being rewritten elsewhere; they are reported, not fixed
-here.
+Rows of ``scale``/``hard``/``enclose`` are ordinary rows: their limits
+(MAX_STUDY_DIM, MAX_DIGITS, MAX_LONG_STEPS, MAX_ENCLOSURE_STEPS in cli/study.py and
+exact_khk/studies/enclosure.py) are checked before the work.
 """
 
 from __future__ import annotations
@@ -56,14 +56,8 @@ TOMLS = {
 }
 GARBAGE = bytes(random.Random(0).randrange(256) for _ in range(3000))
 
-STUDY = pytest.mark.xfail(strict=False, reason="scale/hard (cli/study.py, exact_khk/studies) are being rewritten "
-                                               "elsewhere; hostile-input failures there are reported to the lead")
-
-
 def row(argv, code, *marks, id=None, nonan=False):
     marks = list(marks)
-    if argv and argv[0] in ("scale", "hard") and "--help" not in argv and STUDY not in marks:
-        marks.append(STUDY)
     return pytest.param(list(argv), code, nonan, marks=marks, id=id or " ".join(a[:24] for a in argv)[:80])
 
 
@@ -129,9 +123,24 @@ ROWS += [
     row(["liouville", "--arith", "gf:1000003", "--trials", "0"], 2),
     row(["scale", "--digits", "0"], 2), row(["hard", "--digits", "0"], 2), row(["hard", "--long-steps", "0"], 2),
     row(["hard", "--only", "no-such-case"], 2),
-    row(["scale", "--n", "20000", "--seed", "1", "--steps", "1"], 2, STUDY, pytest.mark.skip(
-        reason="hangs: scale has no size limit yet (reported); see test_study_limits")),
+    row(["scale", "--n", "20000", "--seed", "1", "--steps", "1"], 2),
+    row(["scale", "--digits", "100000", "--steps", "2", "--ariths", "float"], 2),
+    row(["hard", "--long-steps", str(10 ** 9), "--only", "long"], 2),
+    row(["hard", "--digits", "100000", "--only", "near-root"], 2),
+    row(["scale", "--ariths", "lohner:0"], 2), row(["scale", "--ariths", "lohner:abc"], 2),
+    row(["scale", "--ariths", "lohner:99999999"], 2), row(["hard", "--ariths", "lohner:64"], 2),
 ]
+# enclose: real input and its limits
+for x0 in ["[1,2", "[2,1],1,1,1,1,1", "1+-(-1),1,1,1,1,1", "1+-,1,1,1,1,1", "sqrt(,1,1,1,1,1", "log(0),1,1,1,1,1",
+           "__import__('os'),1,1,1,1,1", "[1;2],1,1,1,1,1", "1/0,1,1,1,1,1", "2^9999999,1,1,1,1,1", "x" * 20000]:
+    ROWS.append(row(["enclose", "--x0", x0], 2, id=f"enclose --x0 {x0[:16]!r}"))
+ROWS += [row(["enclose", "--eps", e], 2) for e in ("[-1,1]", "0", "0+-1/10", "[1/10,1/20]", "abc")]
+ROWS += [row(["enclose", "--prec", p], 2) for p in ("0", "1", "-5", "99999999", "abc")]
+ROWS += [row(["enclose", "--steps", s], 2) for s in ("0", "-1", str(10 ** 9), str(10 ** 7))]
+ROWS += [row(["enclose", "--methods", m], 2) for m in ("taylor", "", "naive,naive")]
+ROWS += [row(["enclose", "--arith", "float"], 2), row(["enclose", "--n", "20000", "--seed", "1"], 2),
+         row(["enclose", "--x0", "sqrt(2),1,1,1,1,1", "--check-exact"], 2),
+         row(["enclose", "--system", "euler-top", "--x0", "1,2"], 2)]
 # arithmetics beyond their bounds
 for cmd in ("orbit", "certify", "integrals"):
     for name in ("mp:999999999999999999999999999999", "cyclo:1000000007", "gf:4", "ball:0", "gf:2", "gf:3",
@@ -198,7 +207,7 @@ ROWS += [
 # help, version, unknown commands and options
 ROWS += [row(["--version"], 0), row(["--help"], 0), row([], 2, id="no command")] + [
     row([cmd, "--help"], 0) for cmd in ("orbit", "certify", "integrals", "systems", "liouville", "prove", "scale",
-                                        "hard")] + [
+                                        "hard", "enclose")] + [
     row(["bogus"], 2), row(["orbit", "--bogus"], 2), row(["orbit", "--steps"], 2),
     row(["orbit", "--eps", "--steps", "3"], 2), row(["systems", "extra"], 2), row(["systems"], 0),
     row(["systems", "--json"], 0), row(["certify", "--json"], 2, id="certify --json without FILE"),
@@ -358,7 +367,6 @@ def test_sigint_while_the_command_line_is_imported():
 
 
 @pytest.mark.slow
-@STUDY
 @pytest.mark.parametrize("args", [["scale", "--n", "20000", "--seed", "1", "--steps", "1"],
                                   ["scale", "--digits", "100000", "--steps", "2", "--ariths", "float"],
                                   ["hard", "--long-steps", str(10 ** 9), "--only", "long"],

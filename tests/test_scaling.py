@@ -131,7 +131,10 @@ def test_precision_rule_fit():
 def test_write_study(tmp_path, study):
     paths = write_study(study, tmp_path)
     names = sorted(p.name for p in paths)
-    assert names == ["error_vs_step.png", "scaling.csv", "scaling.json", "work_precision.png"]
+    expected = {"error_vs_step.png", "scaling.csv", "scaling.json", "work_precision.png", "drift_vs_step.png"}
+    if any(r.arith.startswith("ball") for r in study.runs):
+        expected.add("enclosure_radius.png")
+    assert set(names) == expected
     lines = (tmp_path / "scaling.csv").read_text().splitlines()
     assert len(lines) == 1 + sum(len(r.rows) for r in study.runs)
     head = lines[0].split(",")

@@ -17,10 +17,42 @@ from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
 from exact_khk.studies import scaling
+from exact_khk.studies.output import OutputError, write_atomic
+
+
+def _check_out_dir(path):
+    """An --out folder must be creatable or a writable folder (checked before the work)."""
+    p = pathlib.Path(path)
+    if p.exists() and not p.is_dir():
+        raise OutputError(f"--out: {path!r} exists and is not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"--out: cannot create the folder {path!r}: {exc.strerror or exc}") from None
 
 #: the default of ``hard --ariths`` (= exact_khk.studies.hard.DEFAULT_ARITHS, written here so that
 #: building the parser does not import SymPy; a test keeps them equal)
 HARD_ARITHS = "float,mp:113,mp:256,ball:128,ball:512"
+#: the largest phase-space dimension of scale/enclose: every arithmetic solves a dense
+#: N×N system per step (and the Jacobian N right-hand sides), O(N³) multiprecision operations
+MAX_STUDY_DIM = 200
+#: the most correct digits asked of --digits: the precision searches double from
+#: D·log2(10) bits and run the orbit at each; beyond, one search runs for hours
+MAX_DIGITS = 2000
+#: the longest orbit of the hard cases' long-orbit case (steps; every arithmetic runs it)
+MAX_LONG_STEPS = 100_000
+
+
+def _check_dim(system, what):
+    if system.dim > MAX_STUDY_DIM:
+        raise InputError(f"{what}: dimension {system.dim} is beyond the limit of {MAX_STUDY_DIM} for precision "
+                         f"studies (MAX_STUDY_DIM; every arithmetic solves a dense {system.dim}x{system.dim} system "
+                         f"per step)")
+
+
+def _check_digits(digits, option="--digits"):
+    if digits is not None and not 1 <= digits <= MAX_DIGITS:
+        raise InputError(f"{option}: expected 1 <= D <= {MAX_DIGITS} (MAX_DIGITS), got {digits}")
 
 
 def register(sub):
@@ -32,7 +64,8 @@ def register(sub):
                        "lost per step; work-precision plots.")
     add_system_options(p, steps_default=50)
     p.add_argument("--ariths", default=",".join(scaling.DEFAULT_ARITHS),
-                   help="comma-separated floating/ball arithmetics (default: %(default)s)")
+                   help="comma-separated floating/ball arithmetics, and lohner:P for the Lohner enclosure at P "
+                        "bits (see 'exact-khk enclose'; default: %(default)s)")
     p.add_argument("--digits", type=int, help="also find the smallest mp:P and ball:P keeping D correct "
                    "digits over K steps, and fit bits = D*log2(10) + c*K + const")
     p.add_argument("--out", help="directory for scaling.csv, scaling.json, work_precision.png, "
@@ -42,6 +75,23 @@ def register(sub):
                    help="only the orbit error (skip the integral drifts and the residuals)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_scale)
+
+    e = sub.add_parser("enclose", help="certified enclosure of an orbit (naive balls and Lohner), real inputs",
+                       description="Enclose K steps of the orbit in arb balls at P bits by the naive ball "
+                       "iteration and by the Lohner mean-value enclosure (no wrapping), side by side; print the "
+                       "radius growth in bits per step, the correct bits, and the enclosures of every declared "
+                       "integral's drift I(x_k) - I(x_0). --x0 and --eps take reals: rationals and decimals "
+                       "(read as the exact rational they denote), exact reals such as sqrt(2) or pi/4, intervals "
+                       "[lo,hi] and balls m+-r (see docs/precision.md).")
+    add_system_options(e, steps_default=1000)
+    e.add_argument("--prec", type=int, default=256, help="working precision P in bits (default 256)")
+    e.add_argument("--methods", default="naive,lohner", help="naive, lohner or both (default: %(default)s)")
+    e.add_argument("--check-exact", action="store_true",
+                   help="also check every enclosure against the exact orbit (rational x0 and eps only; "
+                        "the exact orbit's height grows along it)")
+    e.add_argument("--no-diagnostics", action="store_true", help="skip the integrals' drift")
+    e.add_argument("--out", help="folder for enclosure.json and enclosure_radius.png")
+    e.set_defaults(func=cmd_enclose)
 
     h = sub.add_parser("hard", help="run the catalogue of hard cases (near-singular steps, ...)",
                        description="Run each hard case in exact arithmetic and in floating and ball "
@@ -67,14 +117,24 @@ def register(sub):
     h.set_defaults(func=cmd_hard)
 
 
-def _ariths(text):
+def _ariths(text, lohner=False):
+    """The arithmetics of ``--ariths`` (``lohner``: also ``lohner:P``, the Lohner enclosure)."""
     names = [t.strip() for t in text.split(",") if t.strip()]
     if not names:
         raise InputError("--ariths: give at least one arithmetic")
+    if len(names) > 32:
+        raise InputError(f"--ariths: {len(names)} arithmetics; at most 32 in one study")
     from exact_khk.arith import get_arith
+    from exact_khk.studies.enclosure import parse_spec
 
     out = []
     for name in names:
+        spec = parse_spec(name)
+        if spec is not None:
+            if not lohner:
+                raise InputError(f"--ariths: {name!r}: the Lohner enclosure runs in 'scale' and 'enclose' only")
+            out.append(spec)
+            continue
         ar = get_arith(name)
         if ar.exact:
             raise InputError(f"--ariths: {name!r} is exact; the exact orbit is always the reference, "
@@ -105,9 +165,11 @@ def cmd_scale(args):
         raise InputError("--arith: scale compares several arithmetics; use --ariths")
     if args.steps < 1:
         raise InputError("--steps: scale needs at least one step")
-    if args.digits is not None and args.digits < 1:
-        raise InputError(f"--digits: expected a positive integer, got {args.digits}")
-    ariths = _ariths(args.ariths)
+    _check_digits(args.digits)
+    _check_dim(system, "scale")
+    ariths = _ariths(args.ariths, lohner=True)
+    if args.out:
+        _check_out_dir(args.out)
     print(system.describe())
     study = scaling.scaling_study(system, x0, eps, args.steps, ariths,
                                   diagnostics=not args.no_diagnostics, progress=not args.quiet)
@@ -147,10 +209,10 @@ def cmd_scale(args):
     if args.out:
         paths = scaling.write_study(study, args.out, plots=not args.no_plots)
         out = pathlib.Path(args.out)
-        (out / "scaling.json").write_text(json.dumps(doc, indent=1) + "\n")
+        write_atomic(out / "scaling.json", json.dumps(doc, indent=1) + "\n", "--out")
         if args.digits is not None and doc["digits"].get("enclosure") is not None:
             p = out / "enclosure.json"
-            p.write_text(json.dumps(doc["digits"]["enclosure"], indent=1) + "\n")
+            write_atomic(p, json.dumps(doc["digits"]["enclosure"], indent=1) + "\n", "--out")
             paths.append(p)
         print("wrote " + ", ".join(str(p) for p in paths))
     return 0
@@ -185,10 +247,9 @@ def cmd_hard(args):
     from exact_khk.studies import hard  # SymPy (the certified roots): only when the command runs
 
     ariths = _ariths(args.ariths)
-    if args.digits < 1:
-        raise InputError(f"--digits: expected a positive integer, got {args.digits}")
-    if args.long_steps < 1:
-        raise InputError(f"--long-steps: expected a positive integer, got {args.long_steps}")
+    _check_digits(args.digits)
+    if not 1 <= args.long_steps <= MAX_LONG_STEPS:
+        raise InputError(f"--long-steps: expected 1 <= K <= {MAX_LONG_STEPS:,} (MAX_LONG_STEPS), got {args.long_steps}")
     title = ""
     if args.system is None:
         for opt, value in (("--x0", args.x0), ("--eps", args.eps)):
@@ -236,7 +297,104 @@ def cmd_hard(args):
         out.mkdir(parents=True, exist_ok=True)
         doc = {"cases": [hard.result_json(r) for r in results], "legend": legend,
                "versions": library_versions()}
-        (out / "hard_cases.json").write_text(json.dumps(doc, indent=1) + "\n")
-        (out / "hard_cases.md").write_text((title + "\n\n" if title else "") + table + "\n\n" + legend + "\n")
+        write_atomic(out / "hard_cases.json", json.dumps(doc, indent=1) + "\n", "--out")
+        write_atomic(out / "hard_cases.md", (title + "\n\n" if title else "") + table + "\n\n" + legend + "\n",
+                     "--out")
         print(f"wrote {out / 'hard_cases.json'}, {out / 'hard_cases.md'}", file=sys.stderr)
     return 0
+
+
+def cmd_enclose(args):
+    from exact_khk.arith.reals import is_rational_text, parse_real, parse_real_vector
+    from exact_khk.studies import enclosure
+
+    if args.arith is not None:
+        raise InputError("--arith: enclose works in arb balls; choose the precision with --prec")
+    from exact_khk.arith import check_precision
+
+    try:
+        check_precision("ball", args.prec)
+    except InputError as exc:
+        raise InputError(f"--prec: {exc}") from None
+    if args.steps < 1 or args.steps > enclosure.MAX_ENCLOSURE_STEPS:
+        raise InputError(f"--steps: expected 1 <= K <= {enclosure.MAX_ENCLOSURE_STEPS:,} (MAX_ENCLOSURE_STEPS), "
+                         f"got {args.steps}")
+    methods = [m.strip() for m in args.methods.split(",") if m.strip()]
+    bad = [m for m in methods if m not in enclosure.METHODS]
+    if not methods or bad or len(set(methods)) != len(methods):
+        raise InputError(f"--methods: expected naive, lohner or both, got {args.methods!r}")
+    x0_text, eps_text = args.x0, args.eps
+    args.x0 = args.eps = None  # the system and its defaults; the reals are read below
+    system, x0_default, eps_default = system_from_args(args)
+    _check_dim(system, "enclose")
+    x0 = parse_real_vector(x0_text, args.prec, "--x0", system.dim) if x0_text is not None else \
+        tuple(parse_real(str(t), args.prec, "--x0") for t in x0_default)
+    eps = parse_real(eps_text, args.prec, "--eps") if eps_text is not None else parse_real(str(eps_default), args.prec)
+    if eps.contains(0):
+        raise InputError("--eps: the step size must be nonzero (the interval must not contain 0)")
+    if args.out:
+        _check_out_dir(args.out)
+    exact = None
+    if args.check_exact:
+        rational = (x0_text is None or all(is_rational_text(t.strip()) for t in x0_text.split(","))) and \
+            (eps_text is None or is_rational_text(eps_text))
+        if not rational:
+            raise InputError("--check-exact needs a rational --x0 and --eps (the exact orbit is the reference)")
+        xq = x0_default if x0_text is None else parse_vector(x0_text, "--x0", system.dim)
+        eq = eps_default if eps_text is None else parse_rational(eps_text, "--eps")
+        exact, _, _ = scaling.exact_prefix(system.field("f"), xq, eq, args.steps)
+    integrals = None if args.no_diagnostics else scaling.declared(system)[0]
+    print(system.describe())
+    with _flint_prec(args.prec):
+        print(f"x0 = ({', '.join(t.str(12, radius=True) for t in x0)}), eps = {eps.str(12, radius=True)}, "
+              f"K = {args.steps} steps, {args.prec} bits")
+    bar = scaling._tqdm(args.steps * len(methods), not args.quiet, "enclose")
+    runs = []
+    try:
+        for m in methods:
+            runs.append(enclosure.enclose(system, x0, eps, args.steps, args.prec, m, exact, integrals,
+                                          keep_points=False, progress=bar.update if bar is not None else None))
+    finally:
+        if bar is not None:
+            bar.close()
+    print("radius = max_i rad(x_k,i) / max_i |x_k,i| (log2); correct bits = -log2(radius); rate = least-squares "
+          "slope of log2(radius) against k")
+    print(f"{'method':<8} {'status':<10} {'steps':>6} {'bits/step':>10} {'min bits':>9} {'bits@K':>8} "
+          f"{'ms/step':>8} {'exact':>6} {'drift 0':>8}")
+    for r in runs:
+        last = r.rows[-1]
+        ms = None if r.seconds_per_step is None else r.seconds_per_step * 1e3
+        ex = "-" if r.encloses is None else ("yes" if r.encloses else "NO")
+        dz = "-" if r.drift_contains_zero is None else ("yes" if r.drift_contains_zero else "no")
+        print(f"{r.method:<8} {r.status:<10} {r.steps_done:>6} {_fmt(r.radius_rate, '.5f'):>10} "
+              f"{r.min_correct_bits:>9.1f} {last.correct_bits:>8.1f} {_fmt(ms, '.3f'):>8} {ex:>6} {dz:>8}")
+        if r.message:
+            print(f"  {r.method}: {r.message}")
+        if r.encloses is False:
+            print(f"  {r.method}: ENCLOSURE MISSES THE EXACT VALUE (a bug; please report)")
+        if last.drift:
+            print(f"  {r.method}: drift at step {last.step}: " + ", ".join(
+                f"{name} {_fmt(v)} (contains 0: {'yes' if z else 'no'})" for name, (v, z) in last.drift.items()))
+    doc = {"system": system.to_json(), "system_name": system.name, "prec": args.prec, "steps": args.steps,
+           "x0": [t.str(30, radius=True) for t in x0], "eps": eps.str(30, radius=True),
+           "exact_checked_steps": None if exact is None else len(exact) - 1,
+           "runs": [dict(r.summary(), rows=[{"step": w.step, "rad_log2": w.rad_log2, "correct_bits": w.correct_bits,
+                                              "encloses": w.encloses, "drift": w.drift} for w in r.rows])
+                    for r in runs], "versions": library_versions()}
+    if args.out:
+        from exact_khk.studies import plots
+
+        out = pathlib.Path(args.out)
+        write_atomic(out / "enclosure.json", json.dumps(scaling.jsonable(doc), indent=1) + "\n", "--out")
+        series = [(f"{r.method}, {_fmt(r.radius_rate, '.3g')} bits/step", [(w.step, w.rad_log2) for w in r.rows])
+                  for r in runs]
+        plots.enclosure_radius(series, f"{system.name}, {args.prec} bits, K={args.steps}: certified enclosure "
+                               f"radius", out / "enclosure_radius.png", target_bits=100)
+        print(f"wrote {out / 'enclosure.json'}, {out / 'enclosure_radius.png'}")
+    return 0
+
+
+def _flint_prec(prec):
+    import flint
+
+    return flint.ctx.workprec(prec)

@@ -429,7 +429,9 @@ def scaling_study(system, x0, eps, steps, ariths=DEFAULT_ARITHS, diagnostics=Tru
     """
     if not isinstance(steps, int) or steps < 1:
         raise InputError(f"steps: expected a positive integer, got {steps!r}")
-    ariths = [get_arith(a) for a in ariths]
+    from exact_khk.studies import enclosure
+
+    ariths = [enclosure.parse_spec(a) or get_arith(a) for a in ariths]
     if not ariths:
         raise InputError("ariths: give at least one arithmetic")
     eps = parse_rational(eps, "eps")
@@ -442,8 +444,11 @@ def scaling_study(system, x0, eps, steps, ariths=DEFAULT_ARITHS, diagnostics=Tru
         for ar in ariths:
             if bar is not None:
                 bar.set_postfix_str(ar.name)
-            runs.append(run_orbit(system, x0, eps, steps, ar, exact, diagnostics,
-                                  progress=bar.update if bar is not None else None))
+            update = bar.update if bar is not None else None
+            if isinstance(ar, enclosure.LohnerSpec):
+                runs.append(enclosure.scale_run(system, x0, eps, steps, ar, exact, diagnostics, progress=update))
+            else:
+                runs.append(run_orbit(system, x0, eps, steps, ar, exact, diagnostics, progress=update))
     finally:
         if bar is not None:
             bar.close()
@@ -594,8 +599,8 @@ def study_json(study: ScalingStudy) -> dict:
 
 
 def write_study(study: ScalingStudy, out_dir, plots=True) -> list:
-    """Write ``scaling.csv``, ``scaling.json`` and (``plots``) ``work_precision.png`` and
-    ``error_vs_step.png`` into ``out_dir``; returns the paths written.  The CSV has a
+    """Write ``scaling.csv``, ``scaling.json`` and (``plots``) the figures of
+    :func:`plot_study` into ``out_dir``; returns the paths written.  The CSV has a
     column ``drift_log10[NAME]`` per declared integral, and ``commutation_log10``
     only when the system declares commuting fields."""
     import csv
@@ -612,78 +617,66 @@ def write_study(study: ScalingStudy, out_dir, plots=True) -> list:
                         for name in study.integrals]
         elif k != "commutation_log10" or study.commuting:
             columns.append((k, lambda r, k=k: getattr(r, k)))
-    with open(paths[0], "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow([head for head, _ in columns])
-        for r in study.rows():
-            w.writerow(["" if value(r) is None else value(r) for _, value in columns])
-    paths[1].write_text(json.dumps(study_json(study), indent=1) + "\n")
+    import io
+
+    from exact_khk.studies.output import write_atomic
+
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow([head for head, _ in columns])
+    for r in study.rows():
+        w.writerow(["" if value(r) is None else value(r) for _, value in columns])
+    write_atomic(paths[0], buf.getvalue(), "--out")
+    write_atomic(paths[1], json.dumps(study_json(study), indent=1) + "\n", "--out")
     if plots:
         paths += plot_study(study, out)
     return paths
 
 
 def plot_study(study: ScalingStudy, out_dir) -> list:
-    """The work-precision diagram and the error-against-step plot (matplotlib, Agg)."""
+    """The figures of a study (:mod:`exact_khk.studies.plots`): ``work_precision.png``,
+    ``error_vs_step.png`` (bits lost relative to each precision), ``drift_vs_step.png``
+    (when integrals were checked) and ``enclosure_radius.png`` (when ball:P or
+    lohner:P ran)."""
     import pathlib
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from exact_khk.studies import plots
 
     out = pathlib.Path(out_dir)
     title = f"{study.system.name}, eps={study.eps}, K={study.steps} steps"
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
-    stopped = 0
+    certified = lambda run: run.radius_rate is not None or run.arith.startswith(("ball", "lohner"))  # noqa: E731
+    points = []
     for run in study.runs:
-        ball = run.arith.startswith("ball")
         last = run.rows[-1] if run.rows else None
-        y = (last.radius_log10 if ball else run.final_error_log10) if last else None
-        if run.seconds_per_step is None:  # not a single step was taken
-            continue
-        color = "tab:orange" if ball else "tab:blue"
-        if run.steps_done < study.steps or y is None:  # no point at step K: no correct digit left
-            ax.plot(run.seconds_per_step, 0, "x", color=color)
-            ax.annotate(f"{run.arith} {run.status} @{run.failed_step}", (run.seconds_per_step, 0),
-                        textcoords="offset points", xytext=(4, -10 - 9 * stopped), fontsize=6)
-            stopped += 1
-            continue
-        ax.plot(run.seconds_per_step, y, "s" if ball else "o", color=color)
-        ax.annotate(run.arith, (run.seconds_per_step, y), textcoords="offset points",
-                    xytext=(5, 3), fontsize=7)
-    ax.axvline(study.exact_seconds_per_step, color="gray", ls="--", lw=1)
-    ax.annotate("exact (flint), error 0", (study.exact_seconds_per_step, 0.5),
-                xycoords=("data", "axes fraction"), rotation=90, fontsize=7, color="gray",
-                xytext=(-9, 0), textcoords="offset points", va="center")
-    ax.set_xscale("log")
-    ax.set_xlabel("time per step [s]")
-    ax.set_ylabel("log10 relative error at the last step")
-    ax.set_title("work-precision: ● floating error (vs exact), ■ ball radius (certified),\n"
-                 "× stopped before step K (no correct digit)", fontsize=8)
-    fig.suptitle(title, fontsize=8, y=0.995)
-    fig.tight_layout()
-    wp = out / "work_precision.png"
-    fig.savefig(wp)
-    plt.close(fig)
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=100)
+        cert = certified(run)
+        y = (last.radius_log10 if cert else last.error_log10) if last else None
+        if run.steps_done < study.steps or last is None or last.step < study.steps:
+            points.append((run.arith, run.seconds_per_step, None, "stopped"))
+        else:
+            points.append((run.arith, run.seconds_per_step,
+                           y if y is not None else -(run.prec or 53) * LOG10_2, "radius" if cert else "error"))
+    styles = plots.style([run.arith for run in study.runs])
+    paths = [out / "work_precision.png", out / "error_vs_step.png"]
+    plots.work_precision(points, "work-precision: " + title, study.exact_seconds_per_step, paths[0], styles)
+    series = []
     for run in study.runs:
-        pts = [(r.step, r.error_log10) for r in run.rows if r.error_log10 is not None]
-        if pts:
-            line, = ax.plot(*zip(*pts), lw=1, label=run.arith + (" midpoint" if run.radius_rate is not None else ""))
-        rad = [(r.step, r.radius_log10) for r in run.rows if r.radius_log10 is not None]
-        if rad:
-            ax.plot(*zip(*rad), lw=1, ls="--", color=line.get_color() if pts else None,
-                    label=run.arith + " radius")
-    ax.set_xlabel("step k")
-    ax.set_ylabel("log10 relative error vs exact orbit (balls: dashed = radius)")
-    ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=6, ncol=2)
-    fig.tight_layout()
-    es = out / "error_vs_step.png"
-    fig.savefig(es)
-    plt.close(fig)
-    return [wp, es]
+        key = "radius_log10" if certified(run) else "error_log10"
+        series.append((run.arith + (" (radius)" if certified(run) else ""), run.prec,
+                       [(r.step, getattr(r, key)) for r in run.rows]))
+    plots.bits_lost(series, "bits lost against the exact orbit: " + title, paths[1], styles)
+    if study.integrals:
+        paths.append(out / "drift_vs_step.png")
+        plots.drift([(run.arith, [(r.step, r.drift_log10) for r in run.rows]) for run in study.runs],
+                    list(study.integrals), title, paths[-1], styles)
+    encl = [run for run in study.runs if certified(run)]
+    if encl:
+        paths.append(out / "enclosure_radius.png")
+        plots.enclosure_radius(
+            [(f"{run.arith}" + (f", {run.radius_rate:.3g} bits/step" if run.radius_rate is not None else "")
+              + (f", {run.status} at step {run.failed_step}" if run.failed_step else ""),
+              [(r.step, r.radius_log10 / LOG10_2) for r in run.rows if r.radius_log10 is not None])
+             for run in encl], "certified enclosure radius: " + title, paths[-1], styles=styles)
+    return paths
 
 
 def orbit_enclosure(system, x0, eps, steps, prec):

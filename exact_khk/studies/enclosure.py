@@ -1,0 +1,431 @@
+"""Certified orbit enclosures without the wrapping effect.
+
+Two ways to enclose the orbit x_k = Φ^k(x_0) of the Kahan map in arb balls at P
+bits, each certified to contain the exact orbit at every step:
+
+``naive`` (what ``ball:P`` does)
+    X_{k+1} = Φ(X_k) evaluated in ball arithmetic.  Every step wraps the image of
+    the box X_k, a parallelepiped, into a new box; the radius then grows like
+    the product of the norms of the interval Jacobians — on the default n = 3
+    orbit by about 7.8 bits per step, although the true error grows by a small
+    fraction of a bit.
+
+``lohner`` (mean-value form with Lohner's QR coordinate change)
+    The state is s = (x, ε) (ε is carried as a coordinate, so an interval ε
+    is propagated by its own derivative ∂Φ/∂ε, not re-added at every step), and
+    the enclosure is the set c_k + A_k r_k: a point centre c_k (exact dyadic),
+    a point matrix A_k and a box r_k centred at 0.  One step:
+
+    1. y ∋ Φ(c_k): one ball step at the point c_k; c_{k+1} = mid(y) and
+       z = y − c_{k+1} (a tiny box: the centre's rounding);
+    2. J ∋ dΦ(s) for all s in the box X_k ⊇ c_k + A_k r_k, from
+       dΦ(x) = (I − ε f'(x))^{-1} (I + ε f'(Φ(x))) with Φ(X_k) enclosed by a
+       naive step, and ∂Φ/∂ε = (I − ε f'(x))^{-1} (f'(x)(Φ(x) − x) + 2 f(x))
+       (differentiate (I − ε f'(x))(Φ(x) − x) = 2ε f(x) in ε);
+    3. by the mean-value theorem, Φ(s) − Φ(c_k) = J̃ (s − c_k) with J̃ ∈ J,
+       so Φ(c_k + A_k r_k) ⊆ c_{k+1} + z + (J A_k) r_k;
+    4. B = J A_k; A_{k+1} = Q of a floating QR factorisation of mid(B) whose
+       columns are first sorted by their length times the radius of r_k
+       (Lohner's choice: the first axis follows the largest error direction);
+       r_{k+1} = (A_{k+1}^{-1} B) r_k + A_{k+1}^{-1} z with A_{k+1}^{-1}
+       enclosed by arb (``arb_mat.inv``), re-centred at 0;
+    5. the point enclosure X_{k+1} = c_{k+1} + A_{k+1} r_{k+1}, intersected
+       with the naive box Φ(X_k) (both contain x_{k+1}).
+
+    Every inclusion is rigorous (A_{k+1} is any invertible matrix: its rounding
+    affects the width, never the truth).  The wrapping of step 4 acts only on
+    r_k in a basis adapted to the flow; for an integrable map the tangent map
+    grows polynomially, so the radius grows like a power of k: the log-radius
+    like log k, not like k.
+
+Where a pivot of I − ε f'(X) cannot be certified nonzero (X too wide, or the
+step truly singular), a method stops with status ``'undecided'`` at that step
+(:class:`~exact_khk.errors.UndecidedError`): never a wrong enclosure.
+
+>>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
+>>> runs = compare(default_system(), DEFAULT_X0, "1/10", 90, 128, check_exact=True)
+>>> [(r.method, r.status, r.encloses) for r in runs]
+[('naive', 'undecided', True), ('lohner', 'ok', True)]
+>>> runs[1].min_correct_bits > 100 > runs[0].rows[-1].correct_bits
+True
+
+Real input (:mod:`exact_khk.arith.reals`): x_0 and ε may be intervals, balls or
+exact reals such as ``sqrt(2)``; the system's coefficients stay exact rationals.
+The drift of every integral the system declares is enclosed as
+I(X_k) − I(X_0); for a point input it contains 0 at every step (the integral is
+exact for the Kahan map), and its width bounds what rounding may do.  For a wide
+input box, I(X_k) − I(X_0) is the difference of two enclosures over the box (it
+bounds |I(x_k) − I(x'_0)| over all x_0, x'_0 in the box, not only x'_0 = x_0).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import flint
+
+from exact_khk.arith import get_arith
+from exact_khk.arith.ball import contains_exact
+from exact_khk.arith.reals import parse_real, parse_real_vector
+from exact_khk.errors import InputError, UndecidedError
+
+METHODS = ("naive", "lohner")
+#: the longest enclosure orbit a run may ask for (steps): every step keeps a row, and
+#: a lohner step at 256 bits takes a few milliseconds (10⁶ steps: about an hour)
+MAX_ENCLOSURE_STEPS = 1_000_000
+
+
+def _log2(a) -> float | None:
+    """log2 of a nonnegative arb's midpoint (any exponent; None for 0)."""
+    m = a.mid()
+    if m.is_zero():
+        return None
+    man, exp = m.man_exp()
+    man = abs(int(man))
+    shift = max(man.bit_length() - 60, 0)
+    return math.log2(man >> shift) + shift + int(exp)
+
+
+def _abs_upper(a):
+    """|a| ≤ this exact arb (an upper bound of |a|)."""
+    return flint.arb(abs(a).upper())
+
+
+class BallKahan:
+    """Kahan steps and Jacobians of a quadratic field in arb balls at ``prec`` bits,
+    with ε itself a ball; every result encloses the exact one for every point of
+    the input balls.  Call inside ``flint.ctx.workprec(prec)``."""
+
+    def __init__(self, fld, prec):
+        self.fld, self.ar, self.dim = fld, get_arith(f"ball:{prec}"), fld.dim
+
+    def _matrix(self, Jf, eps, sign):
+        d = self.dim
+        return flint.arb_mat([[(1 if i == j else 0) - sign * eps * Jf[i][j] for j in range(d)] for i in range(d)])
+
+    def _solve(self, M, B):
+        try:
+            return M.solve(B)
+        except ZeroDivisionError:
+            raise UndecidedError(f"{self.ar.name}: I - eps f'(x) is not certainly invertible on the enclosure "
+                                 f"(a pivot contains 0: the box is too wide or the step is singular)") from None
+
+    def step(self, x, eps):
+        """(Φ(x), I − ε f'(x) as an arb_mat, f(x)) for balls x, ε."""
+        fld, ar = self.fld, self.ar
+        M = self._matrix(fld.jacobian(ar, x), eps, 1)
+        if fld.homogeneous:
+            sol = self._solve(M, flint.arb_mat([[t] for t in x]))
+            return [sol[i, 0] for i in range(self.dim)], M, None
+        fx = fld.evaluate(ar, x)
+        sol = self._solve(M, flint.arb_mat([[t] for t in fx]))
+        return [x[i] + 2 * eps * sol[i, 0] for i in range(self.dim)], M, fx
+
+    def jacobian(self, x, eps, y, M, fx):
+        """The (d+1)×(d+1) Jacobian of s = (x, ε) ↦ (Φ(x, ε), ε) over the boxes, given
+        y ∋ Φ(x, ε) and M = I − ε f'(x)."""
+        fld, ar, d = self.fld, self.ar, self.dim
+        Jx = fld.jacobian(ar, x)
+        rhs = self._matrix(fld.jacobian(ar, y), eps, -1)
+        fx = fld.evaluate(ar, x) if fx is None else fx
+        de = [sum((Jx[i][j] * (y[j] - x[j]) for j in range(d)), flint.arb(0)) + 2 * fx[i] for i in range(d)]
+        full = flint.arb_mat(d, d + 1)
+        for i in range(d):
+            for j in range(d):
+                full[i, j] = rhs[i, j]
+            full[i, d] = de[i]
+        X = self._solve(M, full)
+        J = flint.arb_mat(d + 1, d + 1)
+        for i in range(d):
+            for j in range(d + 1):
+                J[i, j] = X[i, j]
+        J[d, d] = 1
+        return J
+
+
+# --- records -------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class EnclosureRow:
+    """One step of an enclosure: ``rad_log2`` = log2(max_i rad X_i / max_i |mid X_i|)
+    (None for radius 0), ``correct_bits`` = −rad_log2 (capped at the precision),
+    ``encloses`` whether every X_i contains the exact x_i (None: not checked),
+    ``drift``: {integral: (log10 of max |I(X_k) − I(X_0)| / |I(X_0)|, whether the
+    enclosure contains 0)}."""
+
+    step: int
+    rad_log2: float | None
+    correct_bits: float
+    encloses: bool | None = None
+    drift: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+
+@dataclass(frozen=True)
+class EnclosureRun:
+    """An enclosure of K steps by one method at ``prec`` bits.  ``status``: ``'ok'``
+    or ``'undecided'`` (``failed_step`` could not be certified; the rows stop
+    before it); ``radius_rate``: least-squares slope of rad_log2 against k (bits
+    per step); ``min_correct_bits`` over the rows; ``encloses``: every checked
+    point contained (None: no exact reference); ``points``: the enclosures
+    (tuples of arb, x only) when kept."""
+
+    method: str
+    prec: int
+    status: str
+    steps_done: int
+    failed_step: int | None
+    message: str
+    seconds_per_step: float | None
+    radius_rate: float | None
+    min_correct_bits: float
+    encloses: bool | None
+    drift_contains_zero: bool | None
+    rows: tuple = field(repr=False, default=())
+    points: tuple = field(repr=False, default=())
+
+    def summary(self) -> dict:
+        return {k: getattr(self, k) for k in ("method", "prec", "status", "steps_done", "failed_step", "message",
+                                              "seconds_per_step", "radius_rate", "min_correct_bits", "encloses",
+                                              "drift_contains_zero")}
+
+
+def _slope(ks, ys):
+    pts = [(k, y) for k, y in zip(ks, ys) if y is not None]
+    if len(pts) < 2:
+        return None
+    mk = sum(k for k, _ in pts) / len(pts)
+    my = sum(y for _, y in pts) / len(pts)
+    den = sum((k - mk) ** 2 for k, _ in pts)
+    return sum((k - mk) * (y - my) for k, y in pts) / den if den else None
+
+
+# --- the two methods ---------------------------------------------------------------
+
+
+def _naive_steps(K, x, eps):
+    while True:
+        x, _, _ = K.step(x, eps)
+        yield x
+
+
+def _lohner_steps(K, x, eps, prec):
+    """The enclosures X_1, X_2, … (x part) of the module docstring's Lohner method."""
+    import numpy as np
+
+    d, N = K.dim, K.dim + 1
+    s = list(x) + [eps]
+    c = [flint.arb(t.mid()) for t in s]
+    r = [flint.arb(0, t.rad()) for t in s]
+    A = flint.arb_mat(N, N)
+    for i in range(N):
+        A[i, i] = 1
+    box = list(x)
+    while True:
+        y, _, _ = K.step(c[:d], c[d])
+        cn = [flint.arb(t.mid()) for t in y] + [c[d]]
+        z = flint.arb_mat([[y[i] - cn[i]] for i in range(d)] + [[0]])
+        Y, M, fx = K.step(box, eps)
+        J = K.jacobian(box, eps, Y, M, fx)
+        B = J * A
+        # Lohner's basis: QR of mid(B) with columns sorted by |column| * rad(r_j)
+        Bm = np.array([[float(B[i, j].mid()) for j in range(N)] for i in range(N)])
+        rads = [t.rad() for t in r]
+        top = max(rads, key=lambda t: float(t)) if any(not t.is_zero() for t in rads) else None
+        w = np.array([float(t / top) for t in rads]) if top is not None and not top.is_zero() else np.ones(N)
+        order = np.argsort(-np.linalg.norm(Bm, axis=0) * w, kind="stable")
+        Q, _ = np.linalg.qr(Bm[:, order])
+        if not np.all(np.isfinite(Q)) or abs(np.linalg.det(Q)) < 0.5:
+            Q = np.eye(N)  # cannot happen for an orthogonal Q; any invertible basis stays rigorous
+        An = flint.arb_mat([[float(Q[i, j]) for j in range(N)] for i in range(N)])
+        try:
+            Ainv = An.inv()
+        except ZeroDivisionError:  # pragma: no cover - Q is orthogonal
+            raise UndecidedError(f"ball:{prec}: the Lohner basis could not be inverted") from None
+        rcol = flint.arb_mat([[t] for t in r])
+        rn = (Ainv * B) * rcol + Ainv * z
+        r = [flint.arb(0, _abs_upper(rn[i, 0])) for i in range(N)]
+        r[d] = flint.arb(0, s[d].rad())  # ε is constant: its coordinate keeps its own radius
+        A, c = An, cn
+        Ar = A * flint.arb_mat([[t] for t in r])
+        box = []
+        for i in range(d):
+            b = c[i] + Ar[i, 0]
+            try:
+                b = b.intersection(Y[i])
+            except (ValueError, ZeroDivisionError):  # pragma: no cover - both contain x_{k+1}
+                raise UndecidedError(f"ball:{prec}: disjoint enclosures at coordinate {i} (a bug; please "
+                                     f"report)") from None
+            box.append(b)
+        yield box
+
+
+def enclose(system, x0, eps, steps, prec=256, method="lohner", exact=None, integrals=None, keep_points=False,
+            progress=None) -> EnclosureRun:
+    """Enclose ``steps`` Kahan steps of ``system.field('f')`` from ``x0`` at ``prec`` bits.
+
+    ``x0``: a sequence of reals (texts read by :func:`~exact_khk.arith.reals.parse_real`:
+    rationals, ``'sqrt(2)'``, ``'[1.2,1.3]'``, ``'1.25+-0.05'``; arb balls) or one
+    comma-separated text; ``eps`` likewise one real.  ``method``: ``'naive'`` or
+    ``'lohner'``.  ``exact``: the exact orbit (fmpq points) to check containment
+    against, exactly, at every step it covers; ``integrals``: {name: I(ar, x, eps)}
+    whose drift is enclosed (see :func:`exact_khk.studies.scaling.declared`);
+    ``progress(1)`` after each step.  Never raises for an undecided step: the run
+    stops there with ``status='undecided'``.
+    """
+    if method not in METHODS:
+        raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
+    if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
+        raise InputError(f"steps: expected a non-negative integer, got {steps!r}")
+    if steps > MAX_ENCLOSURE_STEPS:
+        raise InputError(f"steps: {steps} is beyond the limit of {MAX_ENCLOSURE_STEPS:,} enclosure steps "
+                         f"(MAX_ENCLOSURE_STEPS)")
+    fld = system.field("f")
+    x = parse_real_vector(x0, prec, "x0", fld.dim)
+    e = parse_real(eps, prec, "eps")
+    if e.contains(0):
+        raise InputError("eps: the step size (interval) must not contain 0")
+    K = BallKahan(fld, prec)
+    ar = K.ar
+    rows, points, times = [], [], []
+    status, failed, message = "ok", None, ""
+    with flint.ctx.workprec(prec):
+        start = {}
+        for name, I in (integrals or {}).items():
+            try:
+                start[name] = I(ar, x, e)
+            except ArithmeticError:  # a pole or undecided at x0: no drift for this integral
+                pass
+        it = _naive_steps(K, x, e) if method == "naive" else _lohner_steps(K, x, e, prec)
+        X = x
+        for k in range(steps + 1):
+            if k > 0:
+                t = time.perf_counter()
+                try:
+                    X = next(it)
+                except UndecidedError as exc:
+                    status, failed, message = "undecided", k, f"step {k}: {exc}"
+                    break
+                dt = time.perf_counter() - t
+                times.append(dt)
+            else:
+                dt = 0.0
+            rows.append(_row(ar, k, X, e, prec, exact, integrals or {}, start, dt))
+            if keep_points:
+                points.append(tuple(X))
+            if progress is not None and k > 0:
+                progress(1)
+    rate = _slope([r.step for r in rows], [r.rad_log2 for r in rows])
+    checked = [r.encloses for r in rows if r.encloses is not None]
+    drifts = [z for r in rows for _, z in r.drift.values()]
+    return EnclosureRun(method, prec, status, len(times), failed, message,
+                        sum(times) / len(times) if times else None, rate,
+                        min((r.correct_bits for r in rows), default=float(prec)),
+                        all(checked) if checked else None, all(drifts) if drifts else None,
+                        tuple(rows), tuple(points))
+
+
+def _row(ar, k, X, eps, prec, exact, integrals, start, dt):
+    rad = max((t.rad() for t in X), key=lambda a: (not a.is_zero(), _log2(a) or 0.0))
+    norm = max((abs(t.mid()) for t in X), key=lambda a: _log2(a) if not a.is_zero() else -math.inf)
+    lr, ln = _log2(rad), _log2(norm)
+    rel = None if lr is None else lr - (ln if ln is not None else 0.0)
+    bits = float(prec) if rel is None else max(0.0, min(float(prec), -rel))
+    enc = None
+    if exact is not None and k < len(exact):
+        enc = all(contains_exact(t, q) for t, q in zip(X, exact[k]))
+    drift = {}
+    for name, I in integrals.items():
+        if name not in start:
+            continue
+        try:
+            D = I(ar, X, eps) - start[name]
+        except ArithmeticError:
+            continue
+        size = _log2(_abs_upper(D) if not D.is_zero() else D)
+        ref = _log2(abs(start[name]))
+        drift[name] = (None if size is None else (size - (ref or 0.0)) * math.log10(2), bool(D.contains(0)))
+    return EnclosureRow(k, rel, bits, enc, drift, dt)
+
+
+def compare(system, x0, eps, steps, prec=256, methods=METHODS, check_exact=False, diagnostics=False,
+            progress=None) -> list:
+    """:func:`enclose` by every method of ``methods`` on the same input (side by side).
+    ``check_exact``: compute the exact orbit (x0 and ε must be rational) and check
+    every enclosure against it; ``diagnostics``: enclose the declared integrals' drift."""
+    from exact_khk.studies.scaling import declared, exact_prefix
+
+    exact = None
+    if check_exact:
+        from exact_khk.parsing import parse_rational, parse_vector
+
+        fld = system.field("f")
+        pts = parse_vector(x0 if isinstance(x0, str) else [str(t) for t in x0], "x0", fld.dim)
+        exact, _, _ = exact_prefix(fld, pts, parse_rational(str(eps), "eps"), steps)
+    integrals = declared(system)[0] if diagnostics else None
+    return [enclose(system, x0, eps, steps, prec, m, exact, integrals, progress=progress) for m in methods]
+
+
+# --- in the scaling study: ``lohner:P`` beside the arithmetics --------------------
+
+
+class LohnerSpec:
+    """The name ``lohner:P`` in a list of arithmetics of a scaling study: the Lohner
+    enclosure at P bits, compared step by step with the exact orbit like ``ball:P``."""
+
+    exact = False
+
+    def __init__(self, prec):
+        from exact_khk.arith import check_precision
+
+        self.prec = check_precision("lohner", prec)
+        self.name = f"lohner:{self.prec}"
+
+    def __repr__(self):
+        return f"<enclosure {self.name}>"
+
+
+def parse_spec(name):
+    """A :class:`LohnerSpec` for ``'lohner:P'`` (InputError for a bad P), None for any other name."""
+    if isinstance(name, LohnerSpec):
+        return name
+    if not isinstance(name, str) or not name.strip().startswith("lohner"):
+        return None
+    _, _, p = name.strip().partition(":")
+    if not p.strip().isdigit() or len(p.strip()) > 30:
+        raise InputError(f"arith: {name!r}: expected lohner:P with P an integer precision in bits")
+    return LohnerSpec(int(p))
+
+
+def scale_run(system, x0, eps, steps, spec, exact, diagnostics=True, progress=None):
+    """The Lohner enclosure as an :class:`~exact_khk.studies.scaling.ArithRun` of a scaling
+    study: midpoint error and radius against the exact orbit, containment decided
+    exactly, the integrals' drift enclosed (I(X_k) − I(X_0): |mid| + rad)."""
+    from exact_khk.arith.ball import ball_mid, ball_rad
+    from exact_khk.studies.scaling import LOG10_2, ArithRun, StepRow, _norm, _rel, _slope as slope, declared
+
+    integrals = declared(system)[0] if diagnostics else None
+    run = enclose(system, [str(t) for t in x0], str(eps), steps, spec.prec, "lohner", exact, integrals,
+                  keep_points=True, progress=progress)
+    rows = []
+    for r, X in zip(run.rows, run.points):
+        if r.step >= len(exact):
+            break
+        ex = exact[r.step]
+        exn = _norm(ex)
+        err = _rel(max(abs(ball_mid(t) - q) for t, q in zip(X, ex)), exn)
+        rad = _rel(max(ball_rad(t) for t in X), exn)
+        rows.append(StepRow(spec.name, r.step, err, rad, {k: v for k, (v, _) in r.drift.items()},
+                            encloses=r.encloses and all(z for _, z in r.drift.values()), seconds=r.seconds))
+    final = rows[-1].error_log10 if rows else None
+    bits_left = float(spec.prec) if final is None else min(float(spec.prec), -final / LOG10_2)
+    log2 = lambda v: None if v is None else v / LOG10_2  # noqa: E731
+    ks = [r.step for r in rows]
+    useless = next((r.step for r in rows if r.radius_log10 is not None and r.radius_log10 >= 0), None)
+    return ArithRun(spec.name, spec.prec, run.status, run.steps_done, run.failed_step, run.message,
+                    run.seconds_per_step, final, bits_left, slope(ks, [log2(r.error_log10) for r in rows]),
+                    slope(ks, [log2(r.radius_log10) for r in rows]), useless,
+                    all(r.encloses for r in rows) if rows else None, None, tuple(rows))
