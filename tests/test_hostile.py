@@ -510,3 +510,21 @@ def test_to_fraction_one_call():
         to_fraction(get_arith("gf:7"), get_arith("gf:7")(3))
     with pytest.raises(InputError):
         to_fraction(get_arith("flint"), 0.5)
+
+
+def test_progress_only_on_a_terminal(monkeypatch):
+    """Progress bars (studies, sweeps, orbits) only when stderr is a terminal and --quiet is absent."""
+    import argparse
+    import io
+
+    from exact_khk.cli.options import shows_progress
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
+    assert shows_progress(argparse.Namespace(quiet=False)) is False
+    monkeypatch.setattr(sys, "stderr", Tty())
+    assert shows_progress(argparse.Namespace(quiet=False)) is True
+    assert shows_progress(argparse.Namespace(quiet=True)) is False

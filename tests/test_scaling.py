@@ -54,8 +54,8 @@ def test_errors_decrease_with_precision(study):
     for a in ("float", "mp:53", "mp:113", "mp:256"):
         assert runs[a].status == "ok" and runs[a].steps_done == K
         assert runs[a].final_error_log10 <= first_order_bound_log10(runs[a].prec)
-    # float and mp:53 are both IEEE double rounding on the same algorithm
-    assert runs["float"].final_error_log10 == runs["mp:53"].final_error_log10
+    # float (LAPACK's LU) and mp:53 (the library's elimination) both round to 53 bits, in a
+    # different order of operations: each within the first-order bound above, not equal
 
 
 def test_ball_runs_enclose_and_rates_are_positive(study):

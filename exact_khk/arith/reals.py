@@ -47,13 +47,12 @@ Malformed text, a negative radius, an empty interval, a non-finite value
 from __future__ import annotations
 
 import ast
-from fractions import Fraction
 
 import flint
 
 from exact_khk.arith import check_precision
 from exact_khk.errors import InputError
-from exact_khk.parsing import _short
+from exact_khk.parsing import _short, parse_rational
 
 #: the longest text of one real (characters)
 MAX_REAL_CHARS = 2000
@@ -83,7 +82,7 @@ def _eval(node, text, name, literal):
     if isinstance(node, ast.Constant) and not isinstance(node.value, bool) and isinstance(node.value, (int, float)):
         # the literal's own text, read exactly (0.1 is 1/10, not the nearest double)
         seg = ast.get_source_segment(literal, node) or repr(node.value)
-        q = Fraction(seg)
+        q = parse_rational(seg, name)  # with the parser's limits (an exponent of 10^11 is refused, not computed)
         return flint.arb(flint.fmpq(q.numerator, q.denominator))
     if isinstance(node, ast.Name) and node.id in ("pi", "e"):
         return _const(node.id)

@@ -42,6 +42,7 @@ COMMANDS = {
     "find-integrals": ("exact_khk.cli.diagnostics", "discover conserved rational functions from orbits (HK bases)"),
     "sweep": ("exact_khk.cli.sweep", "run one task over many systems, points and step sizes (locally or on Dask)"),
     "scale": ("exact_khk.cli.study", "compare floating and ball orbits with the exact orbit, step by step"),
+    "enclose": ("exact_khk.cli.study", "certified enclosure of an orbit (naive balls and Lohner), real inputs"),
     "hard": ("exact_khk.cli.study", "run the catalogue of hard cases (near-singular steps, ...)"),
     "liouville": ("exact_khk.cli.liouville", "certify complete integrability (all involutions)"),
     "prove": ("exact_khk.cli.liouville", "symbolic proofs for small n (n = 2 in seconds)"),

@@ -340,6 +340,12 @@ def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_poi
 # --- progress on stderr ---------------------------------------------------------
 
 
+def shows_progress(args) -> bool:
+    """Whether a long run shows a progress bar: stderr is a terminal and ``--quiet``
+    was not given (the rule of :class:`Progress`, for the studies' own bars)."""
+    return not getattr(args, "quiet", False) and _is_terminal(sys.stderr)
+
+
 class Progress:
     """A progress display on stderr for long runs: a tqdm bar shown after 2 s, only
     when stderr is a terminal and ``--quiet`` is not given.  Call it with a step
@@ -347,7 +353,7 @@ class Progress:
 
     def __init__(self, args, total=None, desc="", unit="step"):
         self.bar = None
-        if not getattr(args, "quiet", False) and _is_terminal(sys.stderr):
+        if shows_progress(args):
             from tqdm import tqdm
 
             self.bar = tqdm(total=total, desc=desc, unit=unit, delay=2.0, file=sys.stderr, leave=False,

@@ -12,7 +12,7 @@ import math
 import pathlib
 import sys
 
-from exact_khk.cli.options import add_system_options, system_from_args
+from exact_khk.cli.options import add_system_options, shows_progress, system_from_args
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
@@ -172,7 +172,7 @@ def cmd_scale(args):
         _check_out_dir(args.out)
     print(system.describe())
     study = scaling.scaling_study(system, x0, eps, args.steps, ariths,
-                                  diagnostics=not args.no_diagnostics, progress=not args.quiet)
+                                  diagnostics=not args.no_diagnostics, progress=shows_progress(args))
     print(f"x0 = ({', '.join(str(t) for t in x0)}), eps = {eps}, K = {args.steps} steps; reference: exact orbit "
           f"(flint, {study.exact_seconds_per_step * 1e3:.3g} ms/step, last point {study.exact_final_height_bits} bits)")
     print("errors are relative, computed exactly against the exact orbit (balls: midpoint error; "
@@ -274,7 +274,7 @@ def cmd_hard(args):
         if not cases:
             raise InputError(f"--only: no case name contains {args.only!r}")
     results = hard.run_catalogue(cases, ariths, args.digits, precision=not args.no_precision,
-                                 progress=not args.quiet)
+                                 progress=shows_progress(args))
     table = hard.markdown_table(results)
     legend = ("cells: ok / WARN (NearSingularWarning, κ = condition estimate, @step) / SINGULAR "
               "(SingularStepError) / UNDECIDED (ball pivot not certain); err = relative error of the "
@@ -348,7 +348,7 @@ def cmd_enclose(args):
     with _flint_prec(args.prec):
         print(f"x0 = ({', '.join(t.str(12, radius=True) for t in x0)}), eps = {eps.str(12, radius=True)}, "
               f"K = {args.steps} steps, {args.prec} bits")
-    bar = scaling._tqdm(args.steps * len(methods), not args.quiet, "enclose")
+    bar = scaling._tqdm(args.steps * len(methods), shows_progress(args), "enclose")
     runs = []
     try:
         for m in methods:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import sys
 
+from exact_khk.cli.options import shows_progress
 from exact_khk.errors import InputError
 
 
@@ -75,7 +76,7 @@ def cmd_sweep(args):
         result = run_sweep(spec, args.out, workers=args.workers, dask=args.dask,
                            only=frozenset() if args.summary else only,
                            timeout="spec" if args.timeout is None else args.timeout,
-                           progress=not args.quiet and sys.stderr.isatty(), plots=not args.no_plots,
+                           progress=shows_progress(args), plots=not args.no_plots,
                            echo=None if args.summary else print)
     except KeyboardInterrupt:
         print(f"exact-khk sweep: interrupted; finished tasks are kept in {args.out}/results.jsonl and the same "

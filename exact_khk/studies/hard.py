@@ -303,7 +303,7 @@ def run_catalogue(cases=None, ariths=DEFAULT_ARITHS, digits=10, precision=True, 
 
         from tqdm import tqdm
 
-        cases = tqdm(cases, desc="hard", file=sys.stderr, leave=False)
+        cases = tqdm(cases, desc="hard", file=sys.stderr, leave=False, delay=2.0)  # shown after 2 s
     return [run_case(c, ariths, digits, precision) for c in cases]
 
 

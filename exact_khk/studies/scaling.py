@@ -417,7 +417,7 @@ def _tqdm(total, progress, desc):
     from tqdm import tqdm
     import sys
 
-    return tqdm(total=total, desc=desc, file=sys.stderr, leave=False)
+    return tqdm(total=total, desc=desc, file=sys.stderr, leave=False, delay=2.0)  # shown after 2 s
 
 
 def scaling_study(system, x0, eps, steps, ariths=DEFAULT_ARITHS, diagnostics=True,
