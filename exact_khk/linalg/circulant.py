@@ -19,8 +19,11 @@ Dictionary (0-based, as in docs/conventions.md):
   with m_kl(t) the polynomial of the first row of the Hankel block M_kl.
 
 Exact step: with denominators cleared the 2×2 system lives in Z[t]/(tⁿ − 1)
-and is solved by Cramer's rule; the one division, by the determinant D, is a
-p-adic lift with polynomial arithmetic (:meth:`CirculantRing.solve`).  D is a
+and is solved by Cramer's rule in closed form (:func:`kahan_cramer`: four
+products of point-sized polynomials); the one division, by the determinant D,
+approximates the quotients in fixed point by Newton's iteration, recovers the
+common denominator by rational reconstruction and checks the candidate
+exactly (:meth:`CirculantRing.solve`).  D is a
 unit of R ⟺ D(ω) ≠ 0 at every n-th root of unity ω ⟺ s^2n·det(I − εf'(x))
 = Π_ω D(ω) ≠ 0 (s the cleared denominator) ⟺ the step is defined.
 Floating step: the DFT splits R ⊗ C into n copies of C, so the step is n
@@ -129,6 +132,29 @@ def kahan_system(m, uh, vh, eps, mul, one=1):
     return (one - eps * f11, -eps * f12, -eps * f21, one - eps * f22), (uh, vh)
 
 
+def kahan_cramer(m, uh, vh, p, S, mul):
+    """Cramer's rule for :func:`kahan_system` with ``eps`` = p, ``one`` = S and
+    right-hand side (uh, vh), in closed form: ``(det, (adj·x̂)_u, (adj·x̂)_v)``
+    from four products of point-sized polynomials (the generic rule takes six,
+    plus eight by the m_kl).  With f11 = 2m21û + m22v̂, f12 = m22û,
+    f21 = −(2m11û + m12v̂), f22 = −m12û (:func:`kahan_system`),
+    f11f22 − f12f21 = 2μû² with μ = m11m22 − m12m21, so
+
+        det = S² − pS(f11 + f22) + 2p²û·μû,
+        (adj·x̂)_u = Sû + pû(m12û + m22v̂),
+        (adj·x̂)_v = Sv̂ − p(v̂ f11 + û(2m11û + m12v̂)).
+    """
+    (m11, m12), (m21, m22) = m
+    a, b = mul(m11, uh), mul(m12, uh)
+    f11 = 2 * mul(m21, uh) + mul(m22, vh)
+    g = a * 2 + mul(m12, vh)
+    mu_u = mul(mul(m11, m22) - mul(m12, m21), uh)
+    det = mul(uh, mu_u) * (2 * p * p) - (f11 - b) * (p * S) + S * S
+    ru = uh * S + mul(uh, b + mul(m22, vh)) * p
+    rv = vh * S - (mul(vh, f11) + mul(uh, g)) * p
+    return det, (ru, rv)
+
+
 def htilde_system(m, u, v, eps, mul, one=1):
     """The 2×2 matrix one·I − ε²(M J(x))² and right-hand side (M x)^ over a ring.
 
@@ -157,10 +183,30 @@ def cramer(a, r, mul, divide):
     return divide(det, (mul(a22, r[0]) - mul(a12, r[1]), mul(a11, r[1]) - mul(a21, r[0])))
 
 
-# --- exact: R = Q[t]/(tⁿ − 1), solved over Z[t]/(tⁿ − 1) by p-adic lifting ---
+# --- exact: R = Q[t]/(tⁿ − 1), solved over Z[t]/(tⁿ − 1) ---
 
-#: primes p < 2^62 for the p-adic lift; D must be a unit mod p (else the next is tried)
-LIFT_PRIMES = (4611686018427387847, 4611686018427387817, 4611686018427387787)
+#: the prime of the exact unit test of a determinant d (a unit mod p is a unit over Q;
+#: otherwise gcd(d, tⁿ − 1) over Z decides)
+UNIT_PRIME = 4611686018427387847
+#: bits of the floating approximation of d⁻¹ (an acb DFT) that Newton's iteration refines
+START_BITS = 128
+#: the approximate quotients are trusted to within 2^TOLERANCE_BITS units (a heuristic:
+#: every answer is checked exactly)
+TOLERANCE_BITS = 12
+
+
+def _shift(p, s):
+    """⌊p·2^s⌋ coefficientwise for an fmpz_poly p (s < 0: a floor shift right)."""
+    if s >= 0:
+        return p * (flint.fmpz(1) << s) if s else p
+    return flint.fmpz_poly([c >> -s for c in p.coeffs()])
+
+
+def _arb_int(x, s):
+    """⌊mid(x)·2^s⌋ for an arb x, as an int."""
+    man, e = x.mid().man_exp()
+    e = int(e) + s
+    return int(man) << e if e >= 0 else int(man) >> -e
 
 
 class CirculantRing:
@@ -168,31 +214,37 @@ class CirculantRing:
     (denominators cleared) inside the exact step.
 
     :meth:`solve` divides by a unit d without forming d⁻¹ over Q (whose
-    coefficients are far larger than the quotient's along Kahan orbits):
-    d⁻¹ mod (p, tⁿ − 1) by an extended gcd over F_p, Newton lifting to
-    d⁻¹ mod p^k, the quotients mod p^k, rational reconstruction with one common
-    denominator (2×2 lattice reduction), and an exact check d·W = δ·r that
-    turns the reconstruction into a proof.  Precision is searched from a hint
-    (the last answer's height relative to d); if two attempts fail, one more at
-    the Hadamard bound uses δ = |Res(d, tⁿ − 1)| = |det C(d)| and needs no
-    reconstruction.  Every step is a product of n-coefficient polynomials, so
-    a division costs a few polynomial multiplications at the size of the
-    answer, against O(n²) work per lifting step in a dense p-adic solve.
+    coefficients are far larger than the quotient's along Kahan orbits): the
+    quotients r/d are approximated in fixed point — d⁻¹ from an acb DFT at
+    :data:`START_BITS` bits, refined by Newton's iteration V ← V(2 − dV), every
+    step two ``fmpz_poly`` products and shifts — to 2^−Q; the common
+    denominator δ comes from rational reconstruction of one approximate
+    coefficient (2×2 lattice reduction), and the candidate W = round(δ·r/d) is
+    accepted only if d·W = δ·r holds exactly.  So the numerics decide the
+    speed, never the answer.  Q starts from a hint (the last answer's height
+    relative to d) and doubles until the check passes; past twice the Cramer
+    bound the dense solve answers.  A division costs a few polynomial
+    products at the size of the answer, all in FLINT (no p-adic reductions:
+    a reduction modulo a big p^k costs about two products, a shift nearly
+    nothing).
     """
 
     def __init__(self, n):
         if flint is None:  # pragma: no cover
             raise ImportError("the structured exact step needs python-flint")
-        self.n, self._hankel, self._cyclotomic = n, {}, []
+        self.n, self._hankel = n, {}
         self.modulus = flint.fmpq_poly([-1] + [0] * (n - 1) + [1])
         self._zmodulus = flint.fmpz_poly([-1] + [0] * (n - 1) + [1])
-        #: answer height / height of D at the last division: where the next
-        #: division starts its precision search (a hint only; results are checked)
-        self.height_ratio = 1.0
+        #: answer height / height of d at the last division: where the next division
+        #: starts its precision search (a hint only; results are checked); None: no hint
+        self.height_ratio = None
 
     def mul(self, a, b):
         """a·b mod tⁿ − 1 (fmpq_poly or fmpz_poly)."""
-        c = a * b
+        return self.fold(a * b)
+
+    def fold(self, c):
+        """c mod tⁿ − 1 for c of degree < 2n."""
         return c.truncate(self.n) + c.right_shift(self.n) if c.degree() >= self.n else c
 
     def poly(self, coeffs):
@@ -229,109 +281,70 @@ class CirculantRing:
         Raises :class:`SingularMatrix` exactly when d is not a unit of
         Q[t]/(tⁿ − 1) (gcd(d, tⁿ − 1) ≠ 1, i.e. d(ω) = 0 at an n-th root of unity).
         """
-        inverse = self._inverse_mod_prime(d)
-        if inverse is None:  # d is a unit but not modulo any prime we tried
-            return self._solve_dense(d, rhs)
-        u, p = inverse
+        self._check_unit(d)
         n, hd = self.n, max(d.height_bits(), 1)
-        # Hadamard: |det C(d)| ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d) the n×n
-        # circulant of d); Kahan orbits need far smaller answers than these bounds
+        hr = max(max(r.height_bits() for r in rhs), 1)
+        # Cramer/Hadamard: δ ≤ |det C(d)| ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d) the
+        # n×n circulant of d); Kahan orbits need far smaller answers than these bounds
         norm_bits = n.bit_length() / 2 + 1  # ≥ log2 √n
-        hr = max(r.height_bits() for r in rhs)
-        adj_bits = int((n - 1) * (hd + norm_bits) + hr + norm_bits) + 1
-        # two attempts with reconstruction, starting near the last answer's height
-        # relative to d, then the Cramer bound, which needs no reconstruction.  The
-        # hint is capped at 2 (one from an unrelated division must not cost much)
-        # unless the bound is itself within 8·hd (small n): then an answer near the
-        # bound, as at random points, sends the next division straight to it
-        cap = max(2.0, adj_bits / hd) if adj_bits <= 8 * hd else 2.0
-        bits = int(min(max(self.height_ratio, 0.5), cap) * hd * 1.05) + 64
-        k = 1
-        for attempt in (bits, bits * 3 // 2):
-            if 2 * attempt >= adj_bits:
-                break
-            # m = p^j ≥ 2^(2·bits + 8): numerators and δ up to 2^bits are recovered
-            j = -(-(2 * attempt + 8) // p.bit_length())
-            u, k = self._lift(d, u, k, p, j)
-            found = self._reconstruct(d, rhs, u % p ** j, p ** j)
+        adj_bits = int(n * (hd + norm_bits) + hr) + 1
+        if self.height_ratio is None:  # no hint: the Cramer bound, if near (a first step)
+            Q = min(2 * adj_bits, 8 * hd)
+        else:
+            Q = int(2 * min(max(self.height_ratio, 0.25), 4.0) * hd * 1.05)
+        Q += 64 + 2 * TOLERANCE_BITS
+        inverse = _Reciprocal(self, d, hd)
+        while Q <= 2 * adj_bits + 256:
+            found = self._attempt(d, rhs, inverse, hr, Q)
             if found is not None:
                 return self._remember(found, hd)
-        j = -(-(adj_bits + 2) // p.bit_length())  # m > 2·|adj(C(d))·r|
-        u, k = self._lift(d, u, k, p, j)
-        m = p ** j
-        delta = self.resultant(d)  # = |det C(d)|: δ·r/d is integral
-        W = [self.symmetric_mod(self.mul(r, u % m) * delta, m) for r in rhs]
-        if any(self.mul(d, w) != r * delta for w, r in zip(W, rhs)):  # pragma: no cover
-            raise ArithmeticError("circulant solve: the Cramer-bound solution failed its check")
-        g = delta
-        for w in W:
-            g = g.gcd(w.content())
-        return self._remember(([w // g for w in W], delta // g), hd)
+            Q *= 2
+        return self._solve_dense(d, rhs)  # pragma: no cover  (numerics beyond reach)
 
-    def _lift(self, d, u, k, p, j):
-        """(u', k') with u' = d⁻¹ mod (p^k', tⁿ − 1), k' = max(k, j), from u = d⁻¹ mod p^k,
-        by Newton: d·u ≡ 1 + p^k·e  ⇒  d·u(1 − p^k·e) ≡ 1 (mod p^2k)."""
-        while k < j:
-            k2 = min(2 * k, j)
-            pk, low = p ** k, p ** (k2 - k)
-            e = (self.mul(d % p ** k2, u) - 1) // pk % low
-            u, k = u - pk * (self.mul(u, e) % low), k2
-        return u, k
+    def _attempt(self, d, rhs, inverse, hr, Q):
+        """(W, δ) from quotients approximated to 2^−Q, checked exactly, or None."""
+        hd = inverse.hd
+        V, b = inverse.refine(Q + max(0, hr - hd) + 2 * self.n.bit_length() + 2 * TOLERANCE_BITS)
+        if V is None:
+            return None
+        Z = [_shift(self.mul(r, V), Q - hd - b) for r in rhs]  # ≈ 2^Q·r/d
+        m, mask = 1 << Q, (1 << Q) - 1
+        half = m >> 1
+        delta, scaled = flint.fmpz(1), Z
+        for _ in range(2 * self.n + 2):  # each round finds one more factor of δ
+            tol = int(delta) << TOLERANCE_BITS
+            big = next((c for z in scaled for c in map(int, z.coeffs())
+                        if abs(((c + half) & mask) - half) > tol), None)
+            if big is None:
+                break
+            den = _small_denominator(big & mask, m, tol) or rational_reconstruction(
+                flint.fmpz(big & mask), flint.fmpz(m))[1]
+            delta *= den
+            if den <= 1 or delta.bit_length() > Q // 2:
+                return None
+            scaled = [z * delta for z in Z]
+        else:
+            return None
+        halves = flint.fmpz_poly([half] * self.n)  # round to nearest
+        W = [_shift(z + halves, -Q) for z in scaled]
+        if any(self.mul(d, w) != r * delta for w, r in zip(W, rhs)):
+            return None
+        return W, delta
 
-    def resultant(self, d):
-        """|Res(d, tⁿ − 1)| = |det C(d)| as the product of |Res(d mod Φ_k, Φ_k)| over the
-        cyclotomic factors Φ_k of tⁿ − 1 (k | n): for tall d far faster than one
-        resultant with tⁿ − 1 (measured 1.2 s against 14 ms at n = 4 and 200 000 bits)."""
-        if not self._cyclotomic:
-            self._cyclotomic = [flint.fmpz_poly.cyclotomic(k) for k in range(1, self.n + 1) if self.n % k == 0]
-        out = flint.fmpz(1)
-        for phi in self._cyclotomic:
-            out *= (d % phi).resultant(phi)
-        return abs(out)
+    def _check_unit(self, d):
+        """Raise :class:`SingularMatrix` unless d is a unit of Q[t]/(tⁿ − 1): a unit mod
+        :data:`UNIT_PRIME` is one over Q (its resultant with tⁿ − 1 is nonzero mod p);
+        otherwise gcd(d, tⁿ − 1) over Z decides."""
+        p = UNIT_PRIME
+        if flint.nmod_poly(d.coeffs(), p).gcd(flint.nmod_poly(self._zmodulus.coeffs(), p)).degree() == 0:
+            return
+        if d.gcd(self._zmodulus).degree() != 0:
+            raise SingularMatrix("the 2x2 determinant vanishes at a root of t^n - 1")
 
     def _remember(self, found, hd):
         W, delta = found
         self.height_ratio = max(delta.bit_length(), *(w.height_bits() for w in W)) / hd
         return found
-
-    def _inverse_mod_prime(self, d):
-        """(d⁻¹ mod (p, tⁿ − 1) as fmpz_poly, p) for the first p in :data:`LIFT_PRIMES`
-        with d a unit mod p; None if there is none; :class:`SingularMatrix` if d is
-        not a unit over Q."""
-        coeffs = d.coeffs()
-        for p in LIFT_PRIMES:
-            g, s, _ = flint.nmod_poly(coeffs, p).xgcd(flint.nmod_poly(self._zmodulus.coeffs(), p))
-            if g.degree() == 0:  # xgcd returns the monic gcd: g == 1
-                return flint.fmpz_poly([int(c) for c in s.coeffs()]), flint.fmpz(p)
-            if d.gcd(self._zmodulus).degree() != 0:
-                raise SingularMatrix("the 2x2 determinant vanishes at a root of t^n - 1")
-        return None  # needs p | resultant(d, t^n - 1) for every listed p
-
-    def _reconstruct(self, d, rhs, u, m):
-        """W, δ from the quotients r_i·d⁻¹ mod m (one common denominator δ), or None
-        if m is too small for them; a returned pair is checked exactly."""
-        bound = (m // 2).isqrt()  # |numerator|, δ ≤ bound make the reconstruction unique
-        images = [self.mul(r, u) for r in rhs]
-        delta = flint.fmpz(1)
-        while True:
-            W = [self.symmetric_mod(image * delta, m) for image in images]
-            big = next((c for w in W for c in w.coeffs() if abs(c) > bound), None)
-            if big is None:
-                break
-            num, den = rational_reconstruction(big, m)  # big ≡ num/den: δ·den next
-            delta *= den
-            if den <= 1 or delta > bound or abs(num) > bound:  # den = 1: no progress
-                return None
-        if any(self.mul(d, w) != r * delta for w, r in zip(W, rhs)):
-            return None
-        return W, delta
-
-    def symmetric_mod(self, p, m):
-        """The coefficients of ``p`` reduced into [−⌊m/2⌋, m − ⌊m/2⌋) (``fmpz_poly % m``
-        alone leaves them anywhere in (−m, m))."""
-        half = m // 2
-        shift = flint.fmpz_poly([m + half] * self.n)  # makes every coefficient positive
-        return (p % m + shift) % m - flint.fmpz_poly([half] * self.n)
 
     def _solve_dense(self, d, rhs):
         """Fallback: the n×n circulant system C(d) W = δ r by ``fmpz_mat.solve``."""
@@ -341,6 +354,74 @@ class CirculantRing:
         num, delta = X.numer_denom()
         cols = num.transpose().entries()
         return [flint.fmpz_poly(cols[k * n:(k + 1) * n]) for k in range(len(rhs))], delta
+
+
+class _Reciprocal:
+    """Fixed-point approximations V ≈ 2^b·d̂⁻¹ of the inverse of d̂ = 2^−hd·d (a unit of
+    R ⊗ R), refined on demand.  ``refine(bits)`` returns (V, b) with b ≥ bits and
+    V accurate to about 2^(b − bits) units, or (None, b) when the iteration does
+    not converge (d far too ill-conditioned for the floating start: a wider start
+    is tried first)."""
+
+    def __init__(self, ring, d, hd):
+        self.ring, self.d, self.hd = ring, d, hd
+        self.V, self.b, self.start = None, 0, START_BITS
+
+    def _begin(self):
+        """V at b = start bits from the DFT: d̂(ω) at every n-th root of unity, inverted."""
+        n, b0 = self.ring.n, self.start
+        top = [int(c) for c in _shift(self.d, b0 - self.hd).coeffs()] + [0] * n
+        with flint.ctx.workprec(b0 + 64):
+            vals = flint.acb.dft([flint.acb(c) for c in top[:n]])
+            if any(0 in v for v in vals):
+                return False
+            inv = flint.acb.dft([1 / v for v in vals], inverse=True)
+            self.V = flint.fmpz_poly([_arb_int(c.real, 2 * b0) for c in inv])
+        self.b = b0
+        return True
+
+    def refine(self, bits):
+        R, d, hd = self.ring, self.d, self.hd
+        while True:
+            if self.V is None and not self._begin():
+                self.start *= 4
+                if self.start > 4 * bits:
+                    return None, self.b
+                continue
+            excess = max(self.V.height_bits() - self.b, 0) + R.n.bit_length() + 8  # log ‖V‖ + guard
+            if self.b >= bits + excess:
+                return self.V, self.b
+            b, V = self.b, self.V
+            b2 = min(2 * b - excess, bits + excess)
+            if b2 <= b:  # ‖V‖ too large for the start's precision
+                self.V, self.start = None, self.start * 4
+                if self.start > 4 * bits:
+                    return None, self.b
+                continue
+            P = R.fold(_shift(d, b2 - hd) * V)  # ≈ 2^(b + b2)·(1 − E)
+            E = _shift(flint.fmpz_poly([flint.fmpz(1) << (b + b2)]) - P, -b)  # ≈ 2^b2·E
+            if E.height_bits() > b2 - b // 2:  # |E| > 2^−b/2: no convergence, start wider
+                self.V, self.start = None, self.start * 4
+                if self.start > 4 * bits:
+                    return None, self.b
+                continue
+            self.V, self.b = _shift(V, b2 - b) + _shift(R.fold(V * E), -b), b2
+
+
+def _small_denominator(a, m, tol, steps=48):
+    """A small q ≥ 1 with |q·a mod± m| ≤ q·tol from the first ``steps`` steps of
+    Euclid's algorithm on (m, a) (the remainders are ±(q·a mod m) for the
+    cofactors q), or None: the cheap case of :func:`rational_reconstruction`
+    (after the first factor of δ, the others are usually tiny)."""
+    r0, r1, t0, t1 = m, a, 0, 1
+    for _ in range(steps):
+        if abs(r1) <= abs(t1) * tol:
+            return flint.fmpz(abs(t1))
+        if not r1:
+            return None
+        q = r0 // r1
+        r0, r1, t0, t1 = r1, r0 - q * r1, t1, t0 - q * t1
+    return None
 
 
 def rational_reconstruction(a, m):
@@ -404,9 +485,9 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
     m, dm = R.integer_hankel(st)
     X, dx = _cleared([_fmpq(ar, t) for t in x])
     e = _fmpq(ar, eps)
-    a, (xu, xv) = kahan_system(m, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])),
-                               e.p, R.mul, one=e.q * dm * dx)
-    (wu, wv), delta = cramer(a, (xu * (e.q * dm), xv * (e.q * dm)), R.mul, R.solve)
+    det, rhs = kahan_cramer(m, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])),
+                            e.p, e.q * dm * dx, R.mul)
+    (wu, wv), delta = R.solve(det, [r * (e.q * dm) for r in rhs])
     return _from_fmpq(ar, [flint.fmpq(c, delta) for c in reflect(R.coeffs(wu)) + reflect(R.coeffs(wv))])
 
 
