@@ -6,6 +6,7 @@ random rational points, and certificates are the same check for check."""
 import random
 from fractions import Fraction as F
 
+import flint
 import pytest
 
 from exact_khk import KahanMap, LiePoissonSystem, certify, get_arith
@@ -13,6 +14,7 @@ from exact_khk.arith.dual import jacobian
 from exact_khk.certification.checks import jacobiator
 from exact_khk.certification.lie_poisson_flint import FlintForms
 from exact_khk.linalg.dense import matmul, transpose
+from exact_khk.linalg.dihedral import BlockMatrix, Mixed
 from exact_khk.linalg.flintmat import rows, uses_flint
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, grad_Htilde, grad_Htilde_dual,
                                                       q_coefficients)
@@ -131,3 +133,43 @@ def test_flint_and_fraction_certificates_agree_check_for_check(n):
     key = lambda c: [(k.name, k.holds, k.residual, k.applicable, k.detail) for k in c.checks]  # noqa: E731
     assert key(fast) == key(plain)
     assert fast.values == plain.values and fast.orbit == plain.orbit
+
+
+@pytest.mark.parametrize("n,seed", [(2, 16), (3, 17), (4, 18), (6, 19)])
+def test_circulant_hankel_blocks_equal_the_dense_integer_forms(n, seed):
+    s, x, e = _case(n, seed)
+    fm = FlintForms(s, e)
+    Pb, c = fm.Pi_blocks(x)
+    Pz, c2 = fm.Pi_int(x)
+    assert c == c2 and Pb.dense() == Pz
+    assert fm._jacobi_tensor_blocks(x) == fm._jacobi_tensor_dense(x)
+    for kind in ("f", "g", "control"):
+        field = s.field(kind)
+        Mb = fm._hessian_blocks(field)
+        assert Mb is not None and Mb.dense() == fm._hessian_int(field)[0]
+        Fb, den = fm._field_jacobian_blocks(field, Mb, x)
+        Fz, den2 = fm._field_jacobian_int(field, x)
+        assert den == den2 and Fb.dense() == Fz
+        phi = KahanMap(field, e, FL)
+        y = phi.step(x)
+        assert fm.poisson_map_blocks(phi, x, y, fm.Pi_blocks(x), fm.Pi_blocks(y)) is (kind != "control")
+        assert fm.poisson_map_blocks(phi, x, y, fm.Pi_blocks(x), fm.Pi_blocks(x)) is False
+
+
+def test_block_algebra_rules():
+    """Products, sums and transposes of circulant/Hankel block matrices equal the dense ones."""
+    rng = random.Random(7)
+    for n in (2, 3, 5):
+        def block(kind):
+            return None if rng.random() < 0.2 else (kind, flint.fmpz_poly([rng.randint(-5, 5) for _ in range(n)]))
+        for kinds in (("C", "X", "X", "C"), ("X", "C", "C", "X")):
+            bs = [block(k) for k in kinds]
+            M = BlockMatrix(n, [bs[:2], bs[2:]])
+            for other in (M, M.T()):
+                try:
+                    prod = M * other
+                except Mixed:  # a circulant plus a Hankel block has no such form
+                    continue
+                assert prod.dense() == M.dense() * other.dense()
+            assert M.T().dense() == M.dense().transpose()
+            assert (M + M).dense() == M.dense() * 2 and (M - M).dense() == M.dense() * 0

@@ -400,7 +400,7 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     def shared_values(orb, k):
         try:
             if orb is F:
-                return fast.integral_values(orb.pts[k], F.memo(("z", k), lambda: fast.htilde_solution(F.pts[k])))
+                return fast.integral_values(orb.pts[k], F.memo(("z", k), lambda: shared_solutions(k))["f"])
             return fast.integral_values(orb.pts[k])
         except SingularMatrix:
             raise htilde_pole(ar, list(orb.pts[k]), fast.eps) from None
@@ -415,11 +415,14 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
             return F.memo(("grad", key, k), lambda: shared_gradient(key, k))
         return F.memo(("grad", key, k), lambda: grad_Htilde(fields[key], F.pts[k], eps, ar))
 
-    def shared_gradient(key, k):  # flint: z_key on its own, w shared (lie_poisson_flint)
+    def shared_solutions(k):  # flint: z_key = R^-1 M_key x for every shared key at point k of the f-orbit
+        keys = list(shared)
+        return dict(zip(keys, fast.htilde_solutions(F.pts[k], [fields[key] for key in keys])))
+
+    def shared_gradient(key, k):  # flint: each z_key solved from M_key, w shared (lie_poisson_flint)
         x = F.pts[k]
         try:
-            z = F.memo(("z", k), lambda: fast.htilde_solution(x)) if key == "f" \
-                else fast.htilde_solution(x, fields[key])
+            z = F.memo(("z", k), lambda: shared_solutions(k))[key]
             w = F.memo(("w", k), lambda: fast.htilde_adjoint(x))
         except SingularMatrix:
             raise htilde_pole(ar, list(x), fast.eps) from None
@@ -450,13 +453,17 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
             return poisson_map_items(orb.phi, Pi_at(orb), orb.pts, ks)
         P = Pi_at(orb)
         Pz = lambda k: orb.memo(("Pi_int", k), lambda: fast.Pi_int(orb.pts[k]))  # noqa: E731
+        Pb = lambda k: orb.memo(("Pi_blocks", k), lambda: fast.Pi_blocks(orb.pts[k]))  # noqa: E731
 
         def sides(k):
             # decided as (I + eps f'(y)) Pi(x) (I + eps f'(y))^T = (I - eps f'(x)) Pi(y) (I - eps f'(x))^T
             # (y = Phi(x)), equivalent because I - eps f'(x) is invertible where the step is defined;
             # if it fails, the residual reported is that of dPhi Pi dPhi^T = Pi(y) itself
             x, y = orb.pts[k], orb.pts[k + 1]
-            if fast.poisson_map_cleared(orb.phi, x, y, Pz(k), Pz(k + 1)):
+            holds = fast.poisson_map_blocks(orb.phi, x, y, Pb(k), Pb(k + 1))  # None: no block structure
+            if holds is None:
+                holds = fast.poisson_map_cleared(orb.phi, x, y, Pz(k), Pz(k + 1))
+            if holds:
                 return (), ()
             D = fast.dPhi(orb.phi, x, y)
             return (D * P(k) * D.transpose()).entries(), P(k + 1).entries()

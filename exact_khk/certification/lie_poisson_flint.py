@@ -51,6 +51,7 @@ import flint
 from exact_khk.errors import SingularStepError
 from exact_khk.linalg import circulant
 from exact_khk.linalg.dense import SingularMatrix
+from exact_khk.linalg.dihedral import BlockMatrix, Mixed
 from exact_khk.linalg.flintmat import column, fmpq_mat, fmpz_mat, mat, row_vector, signed_columns, signed_rows
 from exact_khk.systems.lie_poisson.invariants import shift_index
 
@@ -200,15 +201,54 @@ class FlintForms:
 
     def jacobiator(self, x):
         """All cyclic sums Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k
-        (order as in :func:`~exact_khk.certification.checks.jacobiator`), from one integer
-        product T = Πz[:, :n] · [∂_0Πz; …; ∂_{n−1}Πz] (each flattened to a row)."""
+        (order as in :func:`~exact_khk.certification.checks.jacobiator`), from the integer
+        tensor T[i] = Σ_m Πz_im ∂_mΠz: by circulant/Hankel blocks (:meth:`_jacobi_tensor_blocks`)
+        where the system has them, else by one dense product (:meth:`_jacobi_tensor_dense`)."""
+        try:
+            got = self._jacobi_tensor_blocks(x)
+        except Mixed:
+            got = None
+        return self._cyclic_sums(*(got or self._jacobi_tensor_dense(x)))
+
+    def _jacobi_tensor_dense(self, x):
+        """(T flattened, den): T = Πz[:, :n] · [∂_0Πz; …; ∂_{n−1}Πz] (each flattened to a row)."""
         n, N = self.n, self.N
         Pz, c = self.Pi_int(x)
         D, c2 = self._dPi_int(x)
         P = Pz.entries()
         Pu = fmpz_mat(N, n, [P[i * N + m] for i in range(N) for m in range(n)])
-        T = (Pu * fmpz_mat(n, N * N, [t for Dm in D for t in Dm.entries()])).entries()
-        NN, den = N * N, c * c2
+        return (Pu * fmpz_mat(n, N * N, [t for Dm in D for t in Dm.entries()])).entries(), c * c2
+
+    def _jacobi_tensor_blocks(self, x):
+        """(T flattened, den) as :meth:`_jacobi_tensor_dense`, with T[i] the directional
+        derivative of Π along (Π_i0, …, Π_i,n−1, 0, …, 0): J is linear, so
+        Σ_m c_m ∂_mΠz = (qhd)² J(c) − p² (J(c) L² + K J(c) L + K² J(c)) (K = J(ξ) Hn,
+        L = Hn J(ξ)), a few products of circulant and Hankel blocks per row i.  None
+        if the Hessian's blocks are not cyclic Hankel."""
+        Hb = self._hessian_blocks(self.system.field("f"))
+        if Hb is None:
+            return None
+        n, N = self.n, self.N
+        xi, d = fmpq_mat(N, 1, list(x)).numer_denom()
+        _, h = self._hessian_int(self.system.field("f"))
+        p, q = self.p, self.q_
+        Jb = self._J_blocks(xi)
+        K, L = Jb * Hb, Hb * Jb
+        K2, L2 = K * K, L * L
+        c2 = (q * h * d) ** 2
+        Pb, c = self.Pi_blocks(x)
+        P = Pb.entries()
+        T = []
+        for i in range(N):
+            u = P[i * N:i * N + n]
+            Jc = BlockMatrix.hankel_blocks(n, [[None, u], [[-t for t in u], None]])
+            Di = Jc.scale(c2) - (Jc * L2 + K * Jc * L + K2 * Jc).scale(p ** 2)
+            T.extend(Di.entries())
+        return T, c * c2
+
+    def _cyclic_sums(self, T, den):
+        N = self.N
+        NN = N * N
         out = []
         for i in range(N):
             for j in range(i + 1, N):
@@ -268,6 +308,68 @@ class FlintForms:
         (Px, cx), (Py, cy) = Pi_x, Pi_y
         return (B * Px * B.transpose()) * ((q * ax) ** 2 * cy) == (A * Py * A.transpose()) * ((q * ay) ** 2 * cx)
 
+    # --- the same in circulant/Hankel blocks (polynomial products) ----------------------
+
+    def _hessian_blocks(self, field):
+        """The integer Hessian Mn (M = Mn/m) as a :class:`BlockMatrix` of Hankel blocks, or
+        None if its blocks are not cyclic Hankel (checked against the dense Mn, once)."""
+        cache = self.__dict__.setdefault("_hblocks", {})
+        key = id(field)
+        if key not in cache or cache[key][0] is not field:
+            Mn, m = self._hessian_int(field)
+            st = circulant.circulant_structure(field)
+            out = None
+            if st is not None:
+                rows = [[[t * int(m) for t in w] for w in r] for r in st.m]
+                if all(t.denominator == 1 for r in rows for w in r for t in w):
+                    Mb = BlockMatrix.hankel_blocks(self.n, [[[int(t) for t in w] for w in r] for r in rows])
+                    out = Mb if Mb.dense() == Mn else None
+            cache[key] = (field, out)
+        return cache[key][1]
+
+    def _J_blocks(self, xi):
+        u = xi.entries()[:self.n]
+        return BlockMatrix.hankel_blocks(self.n, [[None, u], [[-t for t in u], None]])
+
+    def Pi_blocks(self, x):
+        """(Πb, c): Π(x) = Πb/c as a :class:`BlockMatrix` (the same as :meth:`Pi_int`), or None."""
+        Hb = self._hessian_blocks(self.system.field("f"))
+        if Hb is None:
+            return None
+        xi, d = fmpq_mat(self.N, 1, list(x)).numer_denom()
+        _, h = self._hessian_int(self.system.field("f"))
+        p, q = self.p, self.q_
+        Jb = self._J_blocks(xi)
+        K = Jb * Hb
+        return Jb.scale((q * h * d) ** 2) - (K * (K * Jb)).scale(p ** 2), q ** 2 * h ** 2 * d ** 3
+
+    def _field_jacobian_blocks(self, field, Mb, x):
+        """(Fb, m d) with f'(x) = Fb/(m d) (circulant blocks): J(ξ) Mn + [E_k Mn ξ]_k."""
+        n = self.n
+        xi, d = fmpq_mat(self.N, 1, list(x)).numer_denom()
+        Mn, m = self._hessian_int(field)
+        y = (Mn * xi).entries()
+        Ey = BlockMatrix.circulant_blocks(n, [[y[n:], None], [[-t for t in y[:n]], None]])
+        return self._J_blocks(xi) * Mb + Ey, m * d
+
+    def poisson_map_blocks(self, phi, x, y, Pi_x, Pi_y):
+        """:meth:`poisson_map_cleared` with :meth:`Pi_blocks` and products of circulant and
+        Hankel blocks; None where the field has no such structure."""
+        Mb = self._hessian_blocks(phi.field)
+        if Mb is None or Pi_x is None or Pi_y is None:
+            return None
+        p, q = self.p, self.q_
+        try:
+            Fx, ax = self._field_jacobian_blocks(phi.field, Mb, x)
+            Fy, ay = self._field_jacobian_blocks(phi.field, Mb, y)
+            I = BlockMatrix.identity(self.n)
+            A = I.scale(q * ax) - Fx.scale(p)
+            B = I.scale(q * ay) + Fy.scale(p)
+            (Px, cx), (Py, cy) = Pi_x, Pi_y
+            return (B * Px * B.T()).scale((q * ax) ** 2 * cy) == (A * Py * A.T()).scale((q * ay) ** 2 * cx)
+        except Mixed:
+            return None
+
     def dPhi(self, phi, x, y):
         """dΦ(x) = (I − εf'(x))^{-1} (I + εf'(y)) for the map ``phi`` (step ε of this
         object), y = Φ(x) (the next orbit point, already known)."""
@@ -301,17 +403,36 @@ class FlintForms:
         :class:`SingularMatrix` at a pole.  The steps of
         :func:`exact_khk.linalg.circulant.exact_htilde`, keeping the vector."""
         st = self._structure if field is None else circulant.circulant_structure(field)
+        return self._solutions(x, st, [st])[0]
+
+    def htilde_solutions(self, x, fields):
+        """[R^{-1} M x for the Hessian M of each field] with H̃'s matrix R (one division
+        over Q[t]/(tⁿ − 1) for all): for the shared integrals, whose R_M is R."""
+        return self._solutions(x, self._structure, [circulant.circulant_structure(f) for f in fields])
+
+    def _solutions(self, x, st, rhs_structures):
+        """z_i = R_st^{-1} M_i x (M_i the Hessian of ``rhs_structures[i]``) by Cramer's rule over
+        Z[t]/(tⁿ − 1).  With x = X/dx, M = m̂/dm (reflected Hankel polynomials m̂): the
+        matrix a = (q·dm·dx)² R, so a z_i = q²·dm²·dx·(m̂_i X)/dm_i."""
         n = self.n
         R = circulant.circulant_ring(n)
         mh, dm = R.integer_hankel(st, reflected=True)
         X, dx = circulant._cleared(list(x))
         e = self.eps
         u, v = flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:])
-        a, (ru, rv) = circulant.htilde_system(mh, u, v, e.p, R.mul, one=(e.q * dm * dx) ** 2)
-        scale = e.q ** 2 * dm * dx
-        (wu, wv), delta = circulant.cramer(a, (ru * scale, rv * scale), R.mul, R.solve)
+        (a11, a12, a21, a22), _ = circulant.htilde_system(mh, u, v, e.p, R.mul, one=(e.q * dm * dx) ** 2)
+        det = R.mul(a11, a22) - R.mul(a12, a21)
+        scale = e.q ** 2 * dm ** 2 * dx
+        adj, dens = [], []
+        for sti in rhs_structures:
+            ((m11, m12), (m21, m22)), dmi = R.integer_hankel(sti, reflected=True)
+            r0, r1 = (R.mul(m11, u) + R.mul(m12, v)) * scale, (R.mul(m21, u) + R.mul(m22, v)) * scale
+            adj += [R.mul(a22, r0) - R.mul(a12, r1), R.mul(a11, r1) - R.mul(a21, r0)]
+            dens.append(dmi)
+        W, delta = R.solve(det, adj)
         coeffs = lambda p: (list(R.coeffs(p)) + [0] * n)[:n]  # noqa: E731
-        return [flint.fmpq(c, delta) for c in circulant.reflect(coeffs(wu)) + circulant.reflect(coeffs(wv))]
+        return [[flint.fmpq(c, delta * dmi) for c in circulant.reflect(coeffs(W[2 * i]))
+                 + circulant.reflect(coeffs(W[2 * i + 1]))] for i, dmi in enumerate(dens)]
 
     def htilde_adjoint(self, x):
         """w = R^{-T} x for H̃'s matrix R = I − ε²(Hs J(x))² (dense, in integers:
