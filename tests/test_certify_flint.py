@@ -15,7 +15,8 @@ from exact_khk.certification.checks import jacobiator
 from exact_khk.certification.lie_poisson_flint import FlintForms
 from exact_khk.linalg.dense import matmul, transpose
 from exact_khk.linalg.dihedral import BlockMatrix, Mixed
-from exact_khk.linalg.flintmat import rows, uses_flint
+from exact_khk.certification.lie_poisson import htilde_definition
+from exact_khk.linalg.flintmat import rank, rows, uses_flint
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, grad_Htilde, grad_Htilde_dual,
                                                       q_coefficients)
 from exact_khk.systems.lie_poisson.system import random_point, rational_sign_patterns
@@ -104,6 +105,8 @@ def test_shared_integrals_and_gradients(n, seed):
     xq = [F(int(t.p), int(t.q)) for t in x]
     for key, (field, _) in inv.items():
         assert values[key] == Htilde(field, x, e, FL, method="dense")
+        y = KahanMap(field, e, FL).step(x)
+        assert fm.htilde_definition(x, y) == htilde_definition(field, x, e, FL, y)
         grad = fm.gradient(field, x, fm.htilde_solution(x, field), w)
         assert grad == grad_Htilde_dual(field, x, e, FL)  # dual numbers
         assert [F(int(t.p), int(t.q)) for t in grad] == grad_Htilde(field, xq, F(int(e.p), int(e.q)), FR)
@@ -173,3 +176,17 @@ def test_block_algebra_rules():
                 assert prod.dense() == M.dense() * other.dense()
             assert M.T().dense() == M.dense().transpose()
             assert (M + M).dense() == M.dense() * 2 and (M - M).dense() == M.dense() * 0
+
+
+def test_certified_rank_equals_the_exact_rank():
+    rng = random.Random(2)
+    for _ in range(200):
+        m, N = rng.randint(1, 7), rng.randint(1, 7)
+        r = rng.randint(0, min(m, N))
+        A = [[F(rng.randint(-5, 5), rng.randint(1, 4)) for _ in range(N)] for _ in range(r)]
+        C = [[F(rng.randint(-3, 3), rng.randint(1, 3)) for _ in range(r)] for _ in range(m)]
+        M = [[FL(sum((C[i][k] * A[k][j] for k in range(r)), F(0))) for j in range(N)] for i in range(m)]
+        assert rank(M) == flint.fmpq_mat(m, N, [t for row in M for t in row]).rank()
+    # a row independent over Q but dependent modulo the prime: the exact fallback
+    from exact_khk.linalg.flintmat import RANK_PRIME
+    assert rank([[1, 0], [2, 2 * RANK_PRIME]]) == 2 and rank([[1, 1], [RANK_PRIME + 1, 1]]) == 2

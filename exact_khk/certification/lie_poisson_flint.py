@@ -52,7 +52,7 @@ from exact_khk.errors import SingularStepError
 from exact_khk.linalg import circulant
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.dihedral import BlockMatrix, Mixed
-from exact_khk.linalg.flintmat import column, fmpq_mat, fmpz_mat, mat, row_vector, signed_columns, signed_rows
+from exact_khk.linalg.flintmat import column, fmpq_mat, fmpz_mat, mat, signed_columns, signed_rows
 from exact_khk.systems.lie_poisson.invariants import shift_index
 
 
@@ -452,28 +452,70 @@ class FlintForms:
         """∇H̃_M at x (M the Hessian of ``field``) by the closed form of
         :func:`~exact_khk.systems.lie_poisson.invariants.grad_Htilde` from z = R_M^{-1} M x
         and w = R_M^{-T} x, with matrix–vector products only (S = M J(x)):
-        ∂_k H̃ = z_k + (Mᵀw)_k + ε² [ (Mᵀw)ᵀ E_k S z + (Mᵀ Sᵀ w)ᵀ E_k z ] (k < n), z_k + (Mᵀw)_k (k ≥ n)."""
+        ∂_k H̃ = z_k + (Mᵀw)_k + ε² [ (Mᵀw)ᵀ E_k S z + (Mᵀ Sᵀ w)ᵀ E_k z ] (k < n), z_k + (Mᵀw)_k (k ≥ n).
+        In integers (M = Mn/m, x = ξ/d, z = Z/dz, w = W/dw): a = Mnᵀ W/(m dw),
+        S z = Mn J(ξ) Z/(m d dz), Mᵀ Sᵀ w = Mnᵀ J(ξ)ᵀ Mnᵀ W/(m² d dw), so both brackets
+        have the denominator m² d dw dz; the forms uᵀ E_k v for all k are one product in
+        Z[t]/(tⁿ − 1): Σ_k (uᵀ E_k v) t^k = u_u(t) v_v(t) − u_v(t) v_u(t)."""
         n, N = self.n, self.N
-        M = self.hessian(field)
-        Mt = M.transpose()
-        J = self.J(x)
-        zc, wc = column(z), column(w)
-        a = (Mt * wc).entries()
-        b = (M * (J * zc)).entries()
-        c = (Mt * (J.transpose() * (Mt * wc))).entries()
-        poly = flint.fmpq_poly
-        forms = poly(a[:n]) * poly(b[n:]) - poly(a[n:]) * poly(b[:n]) + poly(c[:n]) * poly(z[n:]) - poly(c[n:]) * poly(z[:n])
-        zero = flint.fmpq(0)
-        folded = [zero] * n
-        for k, t in enumerate(forms.coeffs()):
-            folded[k % n] += t
-        return [z[k] + a[k] + (self.e2 * folded[k] if k < n else zero) for k in range(N)]
+        _, d, Jz = self._cleared(x)
+        Mn, m = self._hessian_int(field)
+        Mt = Mn.transpose()
+        Z, dz = column(z).numer_denom()
+        W, dw = column(w).numer_denom()
+        MtW = Mt * W
+        a, b, c, Ze = MtW.entries(), (Mn * (Jz * Z)).entries(), (Mt * (Jz.transpose() * MtW)).entries(), Z.entries()
+        poly = flint.fmpz_poly
+        forms = poly(a[:n]) * poly(b[n:]) - poly(a[n:]) * poly(b[:n]) + poly(c[:n]) * poly(Ze[n:]) \
+            - poly(c[n:]) * poly(Ze[:n])
+        folded = [flint.fmpz(0)] * n
+        for k in range(forms.degree() + 1):
+            folded[k % n] += forms[k]
+        p, q = self.p, self.q_
+        den_a, den_f = m * dw, (q * m) ** 2 * d * dw * dz
+        return [flint.fmpq(Ze[k], dz) + flint.fmpq(a[k], den_a) + (flint.fmpq(p * p * folded[k], den_f) if k < n else 0)
+                for k in range(N)]
+
+    @staticmethod
+    def bracket(g1, P, g2):
+        """g1ᵀ P g2 for a matrix given as (Pn, dp), P = Pn/dp, in integers."""
+        Pn, dp = P
+        G1, d1 = column(g1).numer_denom()
+        G2, d2 = column(g2).numer_denom()
+        return flint.fmpq((G1.transpose() * (Pn * G2)).entries()[0], d1 * d2 * dp)
 
     def integral_values(self, x, z=None):
         """{key: xᵀ B_key z} for the shared integrals (one solve, or ``z`` if given); raises
-        SingularMatrix at a pole."""
-        z = column(self.htilde_solution(x) if z is None else z)
-        xr = row_vector(x)
+        SingularMatrix at a pole.  In integers: the rows xᵀ B_key for all keys are one
+        product (Σ_key B_keyᵀ stacked) · ξ, their products with z one more."""
         keys = list(self._shared)
-        Y = fmpq_mat(len(keys), self.N, [t for key in keys for t in (xr * self._shared[key]).entries()])
-        return dict(zip(keys, (Y * z).entries()))
+        if getattr(self, "_stack", None) is None or self._stack[0] != keys:
+            Bt = fmpq_mat(len(keys) * self.N, self.N,
+                          [t for key in keys for t in self._shared[key].transpose().entries()])
+            self._stack = (keys,) + Bt.numer_denom()
+        _, Bn, db = self._stack
+        xi, dx = fmpq_mat(self.N, 1, list(x)).numer_denom()
+        Zc, dz = column(self.htilde_solution(x) if z is None else z).numer_denom()
+        Y = fmpz_mat(len(keys), self.N, (Bn * xi).entries())
+        den = db * dx * dz
+        return {key: flint.fmpq(t, den) for key, t in zip(keys, (Y * Zc).entries())}
+
+    def htilde_definition(self, x, y):
+        """h(x, y) = (2ε)^{-1} xᵀ J(m)^{-1} y, m = (x + y)/2, with J(m) solved over the
+        circulant ring: J(m) z = y is X(m_u) z_v = y_u, X(m_u) z_u = −y_v, and a Hankel
+        system X(w) s = r is w(t)·s̄(t) = r(t) in Q[t]/(tⁿ − 1) (s̄ the reflection).
+        Raises :class:`SingularMatrix` where J(m) is singular."""
+        n = self.n
+        Rg = circulant.circulant_ring(n)
+        half = flint.fmpq(1, 2)
+        mu, dm = fmpq_mat(n, 1, [(a + b) * half for a, b in zip(x[:n], y[:n])]).numer_denom()
+        Y, dy = fmpq_mat(self.N, 1, list(y)).numer_denom()
+        Ye = Y.entries()
+        # X(m_u) = X(mu)/dm, so X(mu) s = Y_part gives z_part = ± s · dm / dy
+        W, delta = Rg.solve(flint.fmpz_poly(mu.entries()), [flint.fmpz_poly(Ye[:n]), flint.fmpz_poly(Ye[n:])])
+        coeffs = lambda p: circulant.reflect((list(Rg.coeffs(p)) + [0] * n)[:n])  # noqa: E731
+        s_v, s_u = coeffs(W[0]), coeffs(W[1])  # z_v = s_v·dm/(dy δ), z_u = −s_u·dm/(dy δ)
+        X, dx = fmpq_mat(self.N, 1, list(x)).numer_denom()
+        Xe = X.entries()
+        dot = sum((Xe[n + i] * s_v[i] - Xe[i] * s_u[i] for i in range(n)), flint.fmpz(0))
+        return flint.fmpq(dot * dm, dx * dy * delta) / (2 * self.eps)
