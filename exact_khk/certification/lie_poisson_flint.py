@@ -382,6 +382,16 @@ class FlintForms:
 
     # --- the integrals: one solve per point -------------------------------------------
 
+    def _ring(self, purpose):
+        """A :class:`~exact_khk.linalg.circulant.CirculantRing` of its own for each kind of
+        solve: the ring adapts the first precision of its p-adic division to the last
+        answer's height, and the H̃ solves, the J((x+x~)/2) solves and the Kahan steps
+        (which use the shared ring) have answers of different heights."""
+        rings = self.__dict__.setdefault("_rings", {})
+        if purpose not in rings:
+            rings[purpose] = circulant.CirculantRing(self.n)
+        return rings[purpose]
+
     def share_integrals(self, involutions):
         """``involutions``: {key: (field, B as rows or None for H~ itself)}.  Returns the
         keys whose integral is xᵀ B z (see the module docstring), after checking exactly
@@ -415,7 +425,7 @@ class FlintForms:
         Z[t]/(tⁿ − 1).  With x = X/dx, M = m̂/dm (reflected Hankel polynomials m̂): the
         matrix a = (q·dm·dx)² R, so a z_i = q²·dm²·dx·(m̂_i X)/dm_i."""
         n = self.n
-        R = circulant.circulant_ring(n)
+        R = self._ring("htilde")
         mh, dm = R.integer_hankel(st, reflected=True)
         X, dx = circulant._cleared(list(x))
         e = self.eps
@@ -506,7 +516,7 @@ class FlintForms:
         system X(w) s = r is w(t)·s̄(t) = r(t) in Q[t]/(tⁿ − 1) (s̄ the reflection).
         Raises :class:`SingularMatrix` where J(m) is singular."""
         n = self.n
-        Rg = circulant.circulant_ring(n)
+        Rg = self._ring("definition")
         half = flint.fmpq(1, 2)
         mu, dm = fmpq_mat(n, 1, [(a + b) * half for a, b in zip(x[:n], y[:n])]).numer_denom()
         Y, dy = fmpq_mat(self.N, 1, list(y)).numer_denom()
