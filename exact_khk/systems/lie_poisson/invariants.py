@@ -20,11 +20,10 @@ from __future__ import annotations
 import math
 import warnings
 
-from exact_khk.linalg import circulant, flintmat
+from exact_khk.linalg import circulant
 from exact_khk.arith import get_arith, as_point, to_element
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
-from exact_khk.linalg.flintmat import uses_flint
 from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
 
 
@@ -275,7 +274,7 @@ def grad_Htilde(field, x, eps, arith=None):
     ar = get_arith(arith)
     e = _eps(ar, eps)
     x = _point(ar, x, field.dim)
-    if uses_flint(ar):
+    if ar.rational and type(ar.zero).__module__.startswith("flint"):  # python-flint fmpq elements
         return _grad_htilde_flint(field, x, e)
     M = hessian_in(ar, field)
     n, N = field.system.n, len(M)
@@ -302,6 +301,8 @@ def grad_Htilde(field, x, eps, arith=None):
 
 def _hessian_flint(field):
     """The field's constant matrix M as an ``fmpq_mat`` (cached on the field)."""
+    from exact_khk.linalg import flintmat
+
     hit = field._cache.get("hessian:fmpq_mat")
     if hit is None:
         hit = field._cache["hessian:fmpq_mat"] = flintmat.mat(field.hessian)
@@ -313,6 +314,8 @@ def _grad_htilde_flint(field, x, e):
     ``fmpq_mat`` products and solves (the same rationals), and the forms
     uᵀ J(e_k) v for all k at once as one product in Q[t]/(tⁿ − 1):
     Σ_k (uᵀ J(e_k) v) t^k = u_u(t) v_v(t) − u_v(t) v_u(t) mod tⁿ − 1."""
+    from exact_khk.linalg import flintmat
+
     fmpq, fmpq_mat = flintmat.flint.fmpq, flintmat.fmpq_mat
     n = field.system.n
     N = 2 * n
