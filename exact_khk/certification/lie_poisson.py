@@ -472,7 +472,7 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
 
     def J_at(k):  # J at point k of the f-orbit (flint: J(ξ) and d with x = ξ/d)
         if fast is not None:
-            return (lambda xi, d, Jz: (Jz, d))(*fast._cleared(F.pts[k]))
+            return fast.J_int(F.pts[k])
         return system.J(list(F.pts[k]))
 
     def Pi_for_bracket(k):

@@ -112,6 +112,11 @@ class FlintForms:
         bottom = [t for i in range(n) for t in [-u[(i + j) % n] for j in range(n)] + [zero] * n]
         return kind(N, N, top + bottom)
 
+    def J_int(self, x):
+        """(J(ξ), d) with J(x) = J(ξ)/d (x = ξ/d, ξ integer)."""
+        _, d, Jz = self._cleared(x)
+        return Jz, d
+
     def _cleared(self, x):
         """(ξ as an N×1 fmpz_mat, d) with x = ξ/d, and J(ξ)."""
         xi, d = fmpq_mat(self.N, 1, list(x)).numer_denom()
