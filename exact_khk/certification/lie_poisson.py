@@ -9,12 +9,19 @@ in one arithmetic, at every orbit point (docs/conventions.md for the formulas):
 * **Poisson** — Π = J − ε² J Hs J Hs J equals (1 − ε²q_0)J − ε²Σ_{l≥1} q_l A^l J,
   satisfies the Jacobi identity, and dΦ Π dΦᵀ = Π∘Φ for Φ_f and every Φ_g[s];
   ∇K̃ = B∇H̃ and ∇q_l = A^l ∇q_0;
-* **involution** {H̃, K̃[s]} = 0 for J and for Π (gradients exact, by dual numbers);
+* **involution** {H̃, K̃[s]} = 0 for J and for Π (gradients exact: by closed forms);
 * **rank** of the gradients of the integrals the arithmetic can express, and of
   A^i ∇H̃ (i < n);
 * **negative controls**, which must come out False: commutation with the
   non-associated control field, H̃ under the control map, H̃ for a
   non-admissible Hessian, and H̃ at a point perturbed by 2^-60 (relative).
+
+In the ``flint`` arithmetic the matrices are python-flint ``fmpq_mat``/``fmpz_mat``
+and the derivatives closed forms (:mod:`exact_khk.certification.lie_poisson_flint`:
+the same rationals, tested with ``==``); the Poisson-map identity is decided
+multiplied out by I − εf'(x) (no solve; a failure still reports the residual of
+dΦ Π dΦᵀ − Π∘Φ), and all the integrals at a point share one solve.  Other
+arithmetics use lists of rows and dual numbers.
 
 Each check is a :class:`Check`; the whole is a :class:`Certificate`, valid iff
 every claim holds and every control fails.  Exact arithmetics decide with
@@ -50,7 +57,11 @@ from exact_khk.certification.records import Certificate, Check, library_versions
 from exact_khk.errors import InputError, PoleError
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, _eps, grad_Htilde,
                          q_coefficients, shift_index)
+from exact_khk.systems.lie_poisson.invariants import _pole as htilde_pole
 from exact_khk.kahan.map import KahanMap
+from exact_khk.certification.lie_poisson_flint import FlintForms
+from exact_khk.linalg.flintmat import column, fmpq_mat, uses_flint
+from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dense import SingularMatrix, matvec, solve
 from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
 from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
@@ -370,6 +381,9 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     F = orbits["f"]
     npts = steps + 1
     checks = []
+    # flint: the matrices as fmpq_mat and the derivatives by closed forms (lie_poisson_flint);
+    # every other arithmetic: lists of rows and dual numbers
+    fast = FlintForms(system, _eps(ar, eps)) if uses_flint(ar) else None
 
     def add(name, claim, fn, expected=True, degenerate=None):
         if progress is not None:
@@ -379,25 +393,123 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     def add_eq(name, claim, ks, sides, expected=True):  # sides(k) -> (lhs, rhs) at point k
         add(name, claim, lambda: compare(ar, ((k, lambda k=k: sides(k)) for k in ks)), expected)
 
+    # flint: the integrals that are x^T B z with one z = R^-1 Hs x per point (lie_poisson_flint)
+    shared = fast.share_integrals({key: (fld, None if key == "f" else system.involution(key))
+                                   for key, fld in fields.items()
+                                   if key == "f" or is_rational_pattern(n, key)}) if fast is not None else set()
+
+    def shared_values(orb, k):
+        try:
+            if orb is F:
+                return fast.integral_values(orb.pts[k], F.memo(("z", k), lambda: shared_solutions(k))["f"])
+            return fast.integral_values(orb.pts[k])
+        except SingularMatrix:
+            raise htilde_pole(ar, list(orb.pts[k]), fast.eps) from None
+
     def value(key, orb, k):  # integral `key` at point k of orbit `orb`
+        if key in shared:
+            return orb.memo(("I*", k), lambda: shared_values(orb, k))[key]
         return orb.memo(("I", key, k), lambda: Htilde(fields[key], orb.pts[k], eps, ar))
 
     def grad(key, k):  # gradient of integral `key` at point k of the f-orbit
+        if key in shared:
+            return F.memo(("grad", key, k), lambda: shared_gradient(key, k))
         return F.memo(("grad", key, k), lambda: grad_Htilde(fields[key], F.pts[k], eps, ar))
 
-    def Pi_at(orb):
+    def shared_solutions(k):  # flint: z_key = R^-1 M_key x for every shared key at point k of the f-orbit
+        keys = list(shared)
+        return dict(zip(keys, fast.htilde_solutions(F.pts[k], [fields[key] for key in keys])))
+
+    def shared_gradient(key, k):  # flint: each z_key solved from M_key, w shared (lie_poisson_flint)
+        x = F.pts[k]
+        try:
+            z = F.memo(("z", k), lambda: shared_solutions(k))[key]
+            w = F.memo(("w", k), lambda: fast.htilde_adjoint(x))
+        except SingularMatrix:
+            raise htilde_pole(ar, list(x), fast.eps) from None
+        return fast.gradient(fields[key], x, z, w)
+
+    def Pi_at(orb):  # Π at point k of the orbit: an fmpq_mat with flint, else a list of rows
+        if fast is not None:
+            return lambda k: orb.memo(("Pi", k), lambda: fast.Pi(orb.pts[k]))
         return lambda k: orb.memo(("Pi", k), lambda: Pi(system, orb.pts[k], eps, ar))
 
     def q_grads(k):  # ∇q_l at point k of the f-orbit, l = 0..n-1
+        if fast is not None:
+            return fast.q_gradients(F.pts[k])
         return jacobian(ar, lambda d, xd: q_coefficients(system, xd, d), F.pts[k])[1]
 
+    def Pi_sides(k):  # Π by its definition and by the q_l formula at point k of the f-orbit
+        if fast is not None:
+            return fast.Pi_sides(F.pts[k])
+        return Pi_at(F)(k), Pi_from_q(system, F.pts[k], eps, ar)
+
+    def jacobi_at(k):
+        if fast is not None:
+            return fast.jacobiator(F.pts[k])
+        return jacobiator(ar, lambda d, xd: Pi(system, xd, eps, d), F.pts[k])
+
+    def poisson_map(orb):
+        if fast is None:
+            return poisson_map_items(orb.phi, Pi_at(orb), orb.pts, ks)
+        P = Pi_at(orb)
+        Pz = lambda k: orb.memo(("Pi_int", k), lambda: fast.Pi_int(orb.pts[k]))  # noqa: E731
+        Pb = lambda k: orb.memo(("Pi_blocks", k), lambda: fast.Pi_blocks(orb.pts[k]))  # noqa: E731
+
+        def sides(k):
+            # decided as (I + eps f'(y)) Pi(x) (I + eps f'(y))^T = (I - eps f'(x)) Pi(y) (I - eps f'(x))^T
+            # (y = Phi(x)), equivalent because I - eps f'(x) is invertible where the step is defined;
+            # if it fails, the residual reported is that of dPhi Pi dPhi^T = Pi(y) itself
+            x, y = orb.pts[k], orb.pts[k + 1]
+            holds = fast.poisson_map_blocks(orb.phi, x, y, Pb(k), Pb(k + 1))  # None: no block structure
+            if holds is None:
+                holds = fast.poisson_map_cleared(orb.phi, x, y, Pz(k), Pz(k + 1))
+            if holds:
+                return (), ()
+            D = fast.dPhi(orb.phi, x, y)
+            return (D * P(k) * D.transpose()).entries(), P(k + 1).entries()
+        return ((k, lambda k=k: sides(k)) for k in ks)
+
+    def J_at(k):  # J at point k of the f-orbit (flint: J(ξ) and d with x = ξ/d)
+        if fast is not None:
+            return fast.J_int(F.pts[k])
+        return system.J(list(F.pts[k]))
+
+    def Pi_for_bracket(k):
+        if fast is not None:
+            return F.memo(("Pi_int", k), lambda: fast.Pi_int(F.pts[k]))
+        return Pi_at(F)(k)
+
+    def brk(g1, P, g2):  # {F, G}_P = ∇Fᵀ P ∇G
+        if fast is not None:
+            return fast.bracket(g1, P, g2)
+        return bracket(g1, P, g2)
+
+    def involution_times(B, g):  # B ∇H~
+        if fast is not None:
+            return (B * column(g)).entries()
+        return matvec(B, g)
+
+    def rank_of(rows_):
+        if fast is not None:
+            return flint_rank(rows_)
+        return rank(ar, rows_)
+
     # 1. integrals: closed form = definition; conservation by every map
+    def definition(key, orb, k):  # h(x_k, x_k+1) of the integral `key` along its orbit
+        if fast is not None:
+            try:
+                return fast.htilde_definition(orb.pts[k], orb.pts[k + 1])
+            except SingularMatrix:
+                pass  # J((x+x~)/2) singular: the generic route raises the PoleError
+        return htilde_definition(fields[key], orb.pts[k], eps, ar, orb.pts[k + 1])
+
     for key, orb in orbits.items():
         add_eq(f"integral {integral[key]} (closed form = definition)",
                f"{integral[key]}(x) by (tH 4) equals h(x, {mapname[key]}(x)) = (2 eps)^-1 x^T J((x+x~)/2)^-1 x~ "
                f"at the {steps} points of the {mapname[key]} orbit",
                range(steps), lambda k, key=key, orb=orb: (
-                   value(key, orb, k), htilde_definition(fields[key], orb.pts[k], eps, ar, orb.pts[k + 1])))
+                   value(key, orb, k), definition(key, orb, k)))
     for ikey in orbits:
         for mkey, orb in orbits.items():
             add_eq(f"integral {integral[ikey]} conserved by {mapname[mkey]}",
@@ -418,31 +530,33 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     add_eq("Poisson tensor Pi formula",
            f"Pi = J - eps^2 J Hs J Hs J equals (1 - eps^2 q_0) J - eps^2 sum_(l>=1) q_l A^l J at the {npts} "
            f"points of the Phi_f orbit",
-           range(npts), lambda k: (Pi_at(F)(k), Pi_from_q(system, F.pts[k], eps, ar)))
+           range(npts), Pi_sides)
     add_eq("Poisson tensor Pi Jacobi identity",
            f"the cyclic sums of Pi_im d_m Pi_jk vanish at {subset} of the Phi_f orbit",
-           ks, lambda k: (jacobiator(ar, lambda d, xd: Pi(system, xd, eps, d), F.pts[k]), None))
+           ks, lambda k: (jacobi_at(k), None))
     for key, orb in orbits.items():
         add(f"Poisson map {mapname[key]}",
             f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) for {mapname[key]} at {subset} of its orbit",
-            lambda orb=orb: compare(ar, poisson_map_items(orb.phi, Pi_at(orb), orb.pts, ks)))
+            lambda orb=orb: compare(ar, poisson_map(orb)))
     # 5. gradients and involution
     add_eq("gradients of q_l: grad q_l = A^l grad q_0",
-           f"the exact gradients (dual numbers) of q_l = tr((A^T)^l (J Hs)^2)/(2n) satisfy grad q_l = "
+           f"the exact gradients ({'closed form' if fast is not None else 'dual numbers'}) of "
+           f"q_l = tr((A^T)^l (J Hs)^2)/(2n) satisfy grad q_l = "
            f"A^l grad q_0 at the {npts} points of the Phi_f orbit",
            range(npts), lambda k: (lambda g: (g[1:], [[g[0][i] for i in shift_index(n, l)]
                                                       for l in range(1, n)]))(q_grads(k)))
     for s in signs:
         B = [[ar.convert(t) for t in row] for row in system.involution(s, cyclotomic=True)]
+        B = B if fast is None else fmpq_mat(B)
         add_eq(f"integral gradients grad K~[{s}] = B grad H~",
                f"grad K~[{s}] = B grad H~ (exact gradients) at the {npts} points of the Phi_f orbit",
-               range(npts), lambda k, s=s, B=B: (grad(s, k), matvec(B, grad("f", k))))
+               range(npts), lambda k, s=s, B=B: (grad(s, k), involution_times(B, grad("f", k))))
         add_eq(f"involution {{H~,K~[{s}]}}_J",
                f"grad H~^T J grad K~[{s}] = 0 at the {npts} points of the Phi_f orbit",
-               range(npts), lambda k, s=s: (bracket(grad("f", k), system.J(list(F.pts[k])), grad(s, k)), None))
+               range(npts), lambda k, s=s: (brk(grad("f", k), J_at(k), grad(s, k)), None))
         add_eq(f"involution {{H~,K~[{s}]}}_Pi",
                f"grad H~^T Pi grad K~[{s}] = 0 at the {npts} points of the Phi_f orbit",
-               range(npts), lambda k, s=s: (bracket(grad("f", k), Pi_at(F)(k), grad(s, k)), None))
+               range(npts), lambda k, s=s: (brk(grad("f", k), Pi_for_bracket(k), grad(s, k)), None))
     # 6. independence
     r_expr = expressible_rank(n, signs)
     n_rational = len(divisor_classes(n))
@@ -460,7 +574,7 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
             ranks, poles = {}, []
             for k in range(npts):
                 try:
-                    r = rank(ar, rows_at(k))
+                    r = rank_of(rows_at(k))
                 except PoleError:
                     poles.append(k)
                     continue

@@ -263,7 +263,8 @@ def grad_Htilde(field, x, eps, arith=None):
     With R = I − ε²S², S = M J(x), z = R^{-1} M x and w = R^{-T} x:
     ∂_k H̃ = z_k + (Mᵀw)_k + ε² [ (Mᵀw)ᵀ J(e_k) S z + (Mᵀ Sᵀ w)ᵀ J(e_k) z ] for k < n
     (J is linear in u = x[:n]), and without the bracket for k ≥ n.  Tests compare
-    it with :func:`grad_Htilde_dual` and with SymPy's derivative.
+    it with :func:`grad_Htilde_dual` and with SymPy's derivative.  In the ``flint``
+    arithmetic the products and solves are python-flint matrices (the same rationals).
 
     >>> from exact_khk import LiePoissonSystem, get_arith
     >>> s = LiePoissonSystem.from_vectors("1,0", "0,1", "2,1"); ar = get_arith("fraction")
@@ -272,9 +273,11 @@ def grad_Htilde(field, x, eps, arith=None):
     """
     ar = get_arith(arith)
     e = _eps(ar, eps)
+    x = _point(ar, x, field.dim)
+    if ar.rational and type(ar.zero).__module__.startswith("flint"):  # python-flint fmpq elements
+        return _grad_htilde_flint(field, x, e)
     M = hessian_in(ar, field)
     n, N = field.system.n, len(M)
-    x = _point(ar, x, field.dim)
     S = matmul(M, field.system.J(x))
     S2 = matmul(S, S)
     e2 = e * e
@@ -294,6 +297,52 @@ def grad_Htilde(field, x, eps, arith=None):
     c = matvec(Mt, matvec(transpose(S), w))
     return [z[k] + a[k] + (e2 * (_J_form(n, a, b, k) + _J_form(n, c, z, k)) if k < n else ar.zero)
             for k in range(N)]
+
+
+def _hessian_flint(field):
+    """The field's constant matrix M as an ``fmpq_mat`` (cached on the field)."""
+    from exact_khk.linalg import flintmat
+
+    hit = field._cache.get("hessian:fmpq_mat")
+    if hit is None:
+        hit = field._cache["hessian:fmpq_mat"] = flintmat.mat(field.hessian)
+    return hit
+
+
+def _grad_htilde_flint(field, x, e):
+    """:func:`grad_Htilde` in the ``flint`` arithmetic: the same closed form with
+    ``fmpq_mat`` products and solves (the same rationals), and the forms
+    uᵀ J(e_k) v for all k at once as one product in Q[t]/(tⁿ − 1):
+    Σ_k (uᵀ J(e_k) v) t^k = u_u(t) v_v(t) − u_v(t) v_u(t) mod tⁿ − 1."""
+    from exact_khk.linalg import flintmat
+
+    fmpq, fmpq_mat = flintmat.flint.fmpq, flintmat.fmpq_mat
+    n = field.system.n
+    N = 2 * n
+    M = _hessian_flint(field)
+    u = list(x[:n])
+    zero = fmpq(0)
+    J = fmpq_mat(N, N, [t for i in range(n) for t in [zero] * n + [u[(i + j) % n] for j in range(n)]]
+                 + [t for i in range(n) for t in [-u[(i + j) % n] for j in range(n)] + [zero] * n])
+    S = M * J
+    e2 = e * e
+    R = fmpq_mat(N, N, [int(i == j) for i in range(N) for j in range(N)]) - e2 * (S * S)
+    xc = flintmat.column(x)
+    try:
+        zc = R.solve(M * xc)
+        wc = R.transpose().solve(xc)
+    except ZeroDivisionError:
+        raise _pole(get_arith("flint"), x, e) from None
+    Mt = M.transpose()
+    a = Mt * wc
+    z, a_, b, c = zc.entries(), a.entries(), (S * zc).entries(), (Mt * (S.transpose() * wc)).entries()
+    poly = flintmat.flint.fmpq_poly
+    forms = poly(a_[:n]) * poly(b[n:]) - poly(a_[n:]) * poly(b[:n]) \
+        + poly(c[:n]) * poly(z[n:]) - poly(c[n:]) * poly(z[:n])
+    folded = [zero] * n
+    for k, t in enumerate(forms.coeffs()):
+        folded[k % n] += t
+    return [z[k] + a_[k] + (e2 * folded[k] if k < n else zero) for k in range(N)]
 
 
 def grad_Htilde_dual(field, x, eps, arith=None):
