@@ -21,7 +21,7 @@ from exact_khk.systems.lie_poisson.system import structure_from_system
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.linalg import circulant
 from exact_khk.arith import point_height as _height
-from exact_khk.linalg.paths import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N
+from exact_khk.linalg.paths import STRUCTURED_BITS_PER_N, STRUCTURED_MIN_N
 from exact_khk.linalg import split as split_mod
 from exact_khk.linalg.paths import AUTO_SPLIT_BELOW
 from exact_khk.systems.lie_poisson.system import random_point
@@ -201,7 +201,9 @@ def test_auto_choice_and_fallbacks():
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
 
 
-@pytest.mark.parametrize("n, low, switch", [(11, "dense", STRUCTURED_MIN_BITS), (15, "split", AUTO_SPLIT_BELOW[15])])
+@pytest.mark.parametrize("n, low, switch", [(11, "dense", STRUCTURED_BITS_PER_N * (STRUCTURED_MIN_N - 11)),
+                                            (24, "dense", STRUCTURED_BITS_PER_N * (STRUCTURED_MIN_N - 24)),
+                                            (15, "split", AUTO_SPLIT_BELOW[15])])
 def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch):
     """Where ``auto`` does not split at every height (flint, n = 7, 11, 13, 14, 15), it
     steps dense (n = 11, 13) or split (n = 7, 14, 15) from low points and structured from
@@ -261,11 +263,11 @@ def test_large_n_structured_step_never_builds_the_dense_tensor():
     structured step (auto for flint at n >= STRUCTURED_MIN_N) never needs them."""
     from exact_khk.systems.lie_poisson.system import random_point
 
-    s = LiePoissonSystem.random(32, 3)
+    s = LiePoissonSystem.random(STRUCTURED_MIN_N, 3)
     fld = s.field("f")
     phi = KahanMap(fld, "1/10", "flint")
-    assert phi.structure is not None
-    x = random_point(32, 3)
+    assert phi.structure is not None and phi.switch_bits == 0
+    x = random_point(STRUCTURED_MIN_N, 3)
     y = phi.step(x)
     assert "terms" not in fld._cache
     # the result satisfies the equivalent form Φ = (I + ε f'(Φ)) x, which does build them
@@ -273,7 +275,8 @@ def test_large_n_structured_step_never_builds_the_dense_tensor():
     Jy = fld.jacobian(ar, y)
     xs = [ar(t) for t in x]
     assert "terms" in fld._cache
-    assert list(y) == [xs[i] + phi.eps * sum(Jy[i][j] * xs[j] for j in range(64)) for i in range(64)]
+    N = 2 * STRUCTURED_MIN_N
+    assert list(y) == [xs[i] + phi.eps * sum(Jy[i][j] * xs[j] for j in range(N)) for i in range(N)]
 
 
 def test_exact_orbit_at_n_256_is_reversible():

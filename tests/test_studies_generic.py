@@ -145,8 +145,8 @@ def test_float_drifts_are_measured_and_bounded(study):
         for r in run.rows:                                              # Phi_f commutes bitwise with itself
             assert r.commutation_log10 is None
             assert r.reversibility_log10 is None or r.reversibility_log10 < half
-    # float and mp:53 are the same IEEE rounding of the same operations
-    assert [r.drift_log10 for r in runs["float"].rows] == [r.drift_log10 for r in runs["mp:53"].rows]
+    # float (LAPACK's LU) and mp:53 (the library's elimination) round to 53 bits in a different
+    # order of operations: both within the bound above, not bitwise equal
     # more precision, smaller drift
     worst = {n: max(d for r in runs[n].rows if (d := r.drift_log10["S"]) is not None) for n in ("float", "mp:113")}
     assert worst["mp:113"] < worst["float"] - 15
