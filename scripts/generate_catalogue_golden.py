@@ -357,7 +357,7 @@ def prove_integral(Rg: Ring, expr) -> bool:
 def prove_jacobian(Rg: Ring) -> bool:
     """A(x) Jac(X/d) = I + eps f'(X/d), multiplied by d^2:
     A (d dX - X dd^T) = d^2 I + eps d (J0 d + J1(X))   (f' is affine in x)."""
-    S, n = Rg.S, Rg.S.N
+    n = Rg.S.N
     dd = [Rg.d.diff(Rg.x[j]) for j in range(n)]
     lhs_core = [[Rg.d * Rg.X[i].diff(Rg.x[j]) - Rg.X[i] * dd[j] for j in range(n)] for i in range(n)]
     for i in range(n):
@@ -389,7 +389,7 @@ def prove_reversibility(Rg: Ring) -> bool:
 
 def prove_poisson(Rg: Ring, Pi: sp.Matrix) -> bool:
     """B Pi(x) B^T = A Pi(x~) A^T with B = I + eps f'(x~), all multiplied out."""
-    S, n = Rg.S, Rg.S.N
+    n = Rg.S.N
     P = [[Rg.fraction(Pi[i, j]) for j in range(n)] for i in range(n)]
     if any(not den.is_ground for row in P for (_, den) in row):
         raise NotImplementedError("symbolic Poisson check implemented for polynomial tensors")

@@ -11,7 +11,7 @@ import pathlib
 
 import pytest
 
-from exact_khk import KahanMap, certify, get_arith
+from exact_khk import KahanMap, certify
 from exact_khk.cli.main import main
 from exact_khk.systems.catalogue import load, names, resolve
 

@@ -3,7 +3,6 @@
 ``fmpz_mat.solve`` of the n×n circulant system (an independent algorithm)."""
 
 import random
-from math import prod
 
 import pytest
 

@@ -71,7 +71,7 @@ def toml_path(tmp_path):
 
 
 def test_sympy_proves_the_linear_integral_and_the_library_step():
-    x, y, e = sympy.symbols("x0:3"), sympy.symbols("y0:3"), sympy.Symbol("eps")
+    x, y = sympy.symbols("x0:3"), sympy.symbols("y0:3")
     env = lambda v: dict(zip(sympy.symbols(VARS), v))  # noqa: E731
     f = lambda v: [sympy.sympify(c).subs(env(v), simultaneous=True) for c in FIELD]  # noqa: E731
     # the symmetric bilinear form B(x, y) = (f(x + y) - f(x) - f(y)) / 2 of the Kahan scheme

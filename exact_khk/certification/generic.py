@@ -243,7 +243,7 @@ class _Run:
 
     def _map_jacobian(self, x, y, late=True):
         """(I − εf'(x))^{-1}(I + εf'(y)) with y = Φ(x) (``late``) or y = x."""
-        ar, e, N = self.ar, self.e, self.system.dim
+        ar, e = self.ar, self.e
         A = [[(ar.one if i == j else ar.zero) - e * t for j, t in enumerate(row)]
              for i, row in enumerate(self.f.jacobian(ar, x))]
         B = [[(ar.one if i == j else ar.zero) + e * t for j, t in enumerate(row)]

@@ -116,7 +116,6 @@ def pencil_integrals(K, exps, notes):
         return []
     T, T2 = graphs
     S = T2 * T.inv()
-    d = S.nrows()
     B1, TB2 = _qmat(K[0]), T * _qmat(K[1])
     _, factors = S.charpoly().factor()
     out = []

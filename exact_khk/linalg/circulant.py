@@ -49,7 +49,6 @@ from fractions import Fraction
 from functools import lru_cache
 
 from exact_khk.arith import _as_fraction
-from exact_khk.errors import InputError
 from exact_khk.linalg.dense import SingularMatrix
 
 try:  # python-flint is optional: without it the dense path is used

@@ -193,7 +193,7 @@ def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DI
         cases += [HardCase(f"near-root 1e-{d}", f"eps = eps* + 1e-{d}, eps* ~ {float(root.mid):.6g} the real root of "
                            f"det(I - eps f'(x0)) nearest 0 ({how})", system, x0, root.mid + Fraction(1, 10 ** d), 2)
                   for d in distances]
-    cases += [HardCase(f"singular (eps={r.lo})", f"det(I - eps f'(x0)) = 0 exactly at step 1 (a rational root)",
+    cases += [HardCase(f"singular (eps={r.lo})", "det(I - eps f'(x0)) = 0 exactly at step 1 (a rational root)",
                        system, x0, r.lo, 1) for r in roots if r.exact]
     pts, _, err = exact_prefix(system.field("f"), x0, eps, long_steps)
     steps = long_steps if err is not None else len(pts) - 1
