@@ -101,23 +101,32 @@ def work_precision(points, title, exact_seconds, path, styles=None):
 
 def bits_lost(series, title, path, styles=None):
     """``series``: [(name, precision P, [(k, log10 relative error)])]: plots P + log2(error),
-    the bits lost of the P carried (clipped at 0 for an error below 2^-P)."""
+    the bits lost of the P carried (clipped at 0 for an error below 2^-P).  Floating
+    arithmetics (a few bits over hundreds of steps) and certified radii (names ending in
+    '(radius)': often bits per step) go in separate panels, each on its own scale, so
+    that float's and mp:53's drift is visible."""
     plt = _plt()
     st = _pick(styles, [s[0] for s in series])
-    fig, ax = plt.subplots(figsize=(7.6, 4.8), dpi=110)
-    for i, (name, prec, pts) in enumerate(series):
-        pts = [(k, max(0.0, prec + e / math.log10(2))) for k, e in pts if e is not None and prec]
-        if not pts:
-            continue
-        color, marker = st[name]
-        ks, ys = zip(*pts)
-        ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=9 if i == 0 else 5,
-                lw=3.0 if i == 0 else 1.2, ls=_LINES[i % 2], label=name)
-    ax.set_xlabel("step k")
-    ax.set_ylabel("bits lost = P + log2(relative error)")
-    ax.set_title(title, fontsize=10)
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+    groups = [("computed points (error against the exact orbit)",
+               [s for s in series if not s[0].endswith("(radius)")]),
+              ("enclosures (certified radius)", [s for s in series if s[0].endswith("(radius)")])]
+    groups = [(head, g) for head, g in groups if g]
+    fig, axes = plt.subplots(1, len(groups), figsize=(6.4 * len(groups) + 1.6, 4.8), dpi=110, squeeze=False)
+    for ax, (head, group) in zip(axes[0], groups):
+        for i, (name, prec, pts) in enumerate(group):
+            pts = [(k, max(0.0, prec + e / math.log10(2))) for k, e in pts if e is not None and prec]
+            if not pts:
+                continue
+            color, marker = st[name]
+            ks, ys = zip(*pts)
+            ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=9 if i == 0 else 5,
+                    lw=3.0 if i == 0 else 1.2, ls=_LINES[i % 2], label=name)
+        ax.set_xlabel("step k")
+        ax.set_ylabel("bits lost = P + log2(relative error)")
+        ax.set_title(head, fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     _save(fig, path)
     plt.close(fig)

@@ -59,7 +59,7 @@ from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.systems.lie_poisson.system import b0_signs
 
 DEFAULT_ARITHS = ("float", "mp:53", "mp:64", "mp:113", "mp:256", "mp:1024", "mp:4096",
-                  "ball:64", "ball:256", "ball:1024", "ball:4096")
+                  "ball:64", "ball:256", "ball:1024", "ball:4096", "lohner:256")
 LOG10_2 = math.log10(2)
 #: the exact reference orbit stops past this height (bits of its largest numerator or
 #: denominator).  Heights that double each step (a non-integrable map) pass it within
