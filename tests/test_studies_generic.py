@@ -174,8 +174,8 @@ def test_no_integrals_no_drift_columns(tmp_path):
 
 def test_write_study_generic(tmp_path, study):
     paths = write_study(study, tmp_path)
-    assert sorted(p.name for p in paths) == ["error_vs_step.png", "scaling.csv", "scaling.json",
-                                              "work_precision.png"]
+    assert sorted(p.name for p in paths) == ["drift_vs_step.png", "enclosure_radius.png", "error_vs_step.png",
+                                              "scaling.csv", "scaling.json", "work_precision.png"]
     head = (tmp_path / "scaling.csv").read_text().splitlines()[0].split(",")
     assert head[4:6] == ["drift_log10[S]", "commutation_log10"]
     doc = json.loads((tmp_path / "scaling.json").read_text())
@@ -255,8 +255,9 @@ def test_cli_scale_system_file(toml_path, tmp_path, capsys):
     assert rc == 0
     assert text.startswith("cyclic-linear: x' = yz - zx")                  # which system ran
     assert "S drift" in text and "comm" not in text.split("\n")[4]       # no commuting field declared
-    assert sorted(p.name for p in out.iterdir()) == ["enclosure.json", "error_vs_step.png", "scaling.csv",
-                                                      "scaling.json", "work_precision.png"]
+    assert sorted(p.name for p in out.iterdir()) == ["drift_vs_step.png", "enclosure.json", "enclosure_radius.png",
+                                                      "error_vs_step.png", "scaling.csv", "scaling.json",
+                                                      "work_precision.png"]
     doc = json.loads((out / "scaling.json").read_text())
     assert doc["system_name"] == "cyclic-linear" and doc["integrals"] == ["S"] and doc["steps"] == 6
     assert doc["digits"]["ball"]["bits"] >= 20 and len(doc["digits"]["enclosure"]["orbit"]) == 7

@@ -193,16 +193,6 @@ class EnclosureRun:
                                               "drift_contains_zero")}
 
 
-def _slope(ks, ys):
-    pts = [(k, y) for k, y in zip(ks, ys) if y is not None]
-    if len(pts) < 2:
-        return None
-    mk = sum(k for k, _ in pts) / len(pts)
-    my = sum(y for _, y in pts) / len(pts)
-    den = sum((k - mk) ** 2 for k, _ in pts)
-    return sum((k - mk) * (y - my) for k, y in pts) / den if den else None
-
-
 # --- the two methods ---------------------------------------------------------------
 
 
@@ -318,6 +308,8 @@ def enclose(system, x0, eps, steps, prec=256, method="lohner", exact=None, integ
                 points.append(tuple(X))
             if progress is not None and k > 0:
                 progress(1)
+    from exact_khk.studies.scaling import _slope  # one least-squares slope for every study
+
     rate = _slope([r.step for r in rows], [r.rad_log2 for r in rows])
     checked = [r.encloses for r in rows if r.encloses is not None]
     drifts = [z for r in rows for _, z in r.drift.values()]

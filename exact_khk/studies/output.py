@@ -30,23 +30,32 @@ def check_writable(path, what: str = "output") -> str:
     return path
 
 
-def write_atomic(path, text: str, what: str = "output") -> None:
-    """Write ``text`` to ``path`` through a temporary file renamed into place (a
-    path that exists and is not a regular file — a device such as /dev/stdout, a
-    pipe — is written directly: renaming over it would replace it)."""
+def write_atomic(path, data, what: str = "output") -> None:
+    """Write ``data`` — a str (UTF-8 text), bytes, or a function that writes to a
+    binary file object (e.g. ``lambda fh: fig.savefig(fh, format="png")``) — to
+    ``path`` through a temporary file renamed into place (a path that exists and is
+    not a regular file — a device such as /dev/stdout, a pipe — is written directly:
+    renaming over it would replace it)."""
     path = check_writable(path, what)
+
+    def fill(fh):
+        if callable(data):
+            data(fh)
+        else:
+            fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+
     if os.path.exists(path) and not os.path.isfile(path):
         try:
-            with open(path, "w", encoding="utf-8") as fh:
-                fh.write(text)
+            with open(path, "wb") as fh:
+                fill(fh)
         except OSError as exc:
             raise OutputError(f"{what}: cannot write {path!r}: {exc.strerror or exc}") from None
         return
     folder = os.path.dirname(os.path.abspath(path))
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
+        with os.fdopen(fd, "wb") as fh:
+            fill(fh)
             fh.flush()
             os.fsync(fh.fileno())
         umask = os.umask(0)

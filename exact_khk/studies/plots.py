@@ -49,21 +49,9 @@ def _plt():
 
 
 def _save(fig, path):
-    import os
-    import tempfile
+    from exact_khk.studies.output import write_atomic
 
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".png", dir=folder)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, format="png")
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png"), "--out")
 
 
 def work_precision(points, title, exact_seconds, path, styles=None):

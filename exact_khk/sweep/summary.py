@@ -24,16 +24,13 @@ import csv
 import io
 import json
 import math
-import os
 import statistics
-import tempfile
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
-from exact_khk.errors import OutputError
-from exact_khk.studies.output import check_writable, write_atomic
+from exact_khk.studies.output import write_atomic
 from exact_khk.sweep.tasks import FAILED, TASKS
 
 #: order in which axes are chosen for tables and plots
@@ -280,19 +277,7 @@ def _cell(v):
 
 def _save(fig, path: Path) -> Path:
     """Save a figure atomically (a temporary file renamed into place)."""
-    check_writable(path, "--out")
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=path.name, dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fig.savefig(fh, format="png", dpi=110)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise OutputError(f"--out: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+    write_atomic(path, lambda fh: fig.savefig(fh, format="png", dpi=110), "--out")
     return path
 
 
