@@ -175,3 +175,20 @@ def test_default_study_long():
     mp = [r for r in st.runs if r.arith.startswith("mp")]
     assert all(a.final_error_log10 > b.final_error_log10 for a, b in zip(mp, mp[1:]))
     assert all(r.encloses for r in st.runs if r.arith.startswith("ball"))
+
+
+def test_a_rerun_leaves_no_file_of_an_earlier_study(tmp_path, capsys):
+    """A study's files are one set: files of an earlier run in the folder that this run
+    does not write are removed, and the command says so."""
+    from exact_khk.cli.main import main
+
+    out = tmp_path / "out"
+    assert main(["scale", "--steps", "3", "--ariths", "float,ball:64", "--digits", "3", "--quiet",
+                 "--out", str(out)]) == 0
+    assert {"enclosure.json", "enclosure_radius.png"} <= {p.name for p in out.iterdir()}
+    capsys.readouterr()
+    assert main(["scale", "--steps", "3", "--ariths", "float", "--quiet", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "removed from an earlier run" in text and "enclosure.json" in text
+    assert sorted(p.name for p in out.iterdir()) == ["drift_vs_step.png", "error_vs_step.png", "scaling.csv",
+                                                     "scaling.json", "work_precision.png"]

@@ -48,7 +48,7 @@ import time
 from dataclasses import replace
 from fractions import Fraction
 
-from exact_khk.arith import get_arith, point_height
+from exact_khk.arith import as_point, get_arith, point_height
 from exact_khk.arith.dual import jacobian
 from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, jacobiator,
                                             conserved_items, lazy_orbit, poisson_map_items, rank,
@@ -93,8 +93,8 @@ def htilde_definition(field, x, eps, arith=None, x_next=None):
     """
     ar = get_arith(arith)
     e = _eps(ar, eps)
-    x = list(x)
-    y = list(KahanMap(field, e, ar).step(x) if x_next is None else x_next)
+    x = list(as_point(ar, x, field.dim))
+    y = list(KahanMap(field, e, ar).step(x) if x_next is None else as_point(ar, x_next, field.dim, "x_next"))
     half = ar.one / ar.convert(2)
     m = [(a + b) * half for a, b in zip(x, y)]
     with ar.local():

@@ -215,6 +215,9 @@ def cmd_scale(args):
             write_atomic(p, json.dumps(doc["digits"]["enclosure"], indent=1) + "\n", "--out")
             paths.append(p)
         print("wrote " + ", ".join(str(p) for p in paths))
+        stale = scaling.remove_stale(out, paths)
+        if stale:
+            print("removed from an earlier run in the same folder: " + ", ".join(str(p) for p in stale))
     return 0
 
 

@@ -129,6 +129,8 @@ class KahanMap:
                                  f"(use mp:P or an exact arithmetic)")
             raise InputError("eps: the step size must be nonzero")
         self.split, self.structure, self.switch_bits = _choose_path(field, ar, method, self.eps)
+        if not ar.exact:
+            _floating()  # numpy's import belongs to the set-up, not to the first step's time
 
     def __repr__(self):
         return f"KahanMap({self.field.label}, eps={self.arith.format(self.eps)}, arith={self.arith.name})"

@@ -633,6 +633,27 @@ def write_study(study: ScalingStudy, out_dir, plots=True) -> list:
     return paths
 
 
+#: every file a scaling study may write into its folder (one set per run)
+STUDY_FILES = ("scaling.csv", "scaling.json", "enclosure.json", "work_precision.png", "error_vs_step.png",
+               "drift_vs_step.png", "enclosure_radius.png")
+
+
+def remove_stale(out_dir, written) -> list:
+    """Remove the files of :data:`STUDY_FILES` in ``out_dir`` that this run did not write
+    (left by an earlier study in the same folder, they would describe another run);
+    returns their paths, for the caller to say so."""
+    import pathlib
+
+    keep = {pathlib.Path(p).name for p in written}
+    gone = []
+    for name in STUDY_FILES:
+        path = pathlib.Path(out_dir) / name
+        if name not in keep and path.is_file():
+            path.unlink()
+            gone.append(path)
+    return gone
+
+
 def plot_study(study: ScalingStudy, out_dir) -> list:
     """The figures of a study (:mod:`exact_khk.studies.plots`): ``work_precision.png``,
     ``error_vs_step.png`` (bits lost relative to each precision), ``drift_vs_step.png``
