@@ -85,7 +85,7 @@ from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 METHODS = ("auto", "dense", "structured", "split")
 
 def _floating():
-    """:mod:`exact_khk.linalg.floating` (numpy), imported by the first floating step."""
+    """:mod:`exact_khk.linalg.floating` (numpy), imported when a floating map is built."""
     from exact_khk.linalg import floating
 
     return floating
