@@ -132,8 +132,8 @@ def test_split_refuses_what_it_cannot_do():
     (2, "split", "split"), (9, "split", "split"), (12, "split", "split"),
     (7, "split below 2048 bits, then structured", "split"),
     (15, "split below 512 bits, then structured", "split"),
-    (11, "dense below 636 bits, then structured", "split"),
-    (16, "dense below 576 bits, then structured", "dense"), (64, "structured", "dense"),
+    (11, "dense below 640 bits, then structured", "split"),
+    (16, "structured", "dense"),
 ])
 def test_auto_paths(n, flint_path, gmpy2_path):
     """The auto rule as documented (split.AUTO_SPLIT_N, AUTO_SPLIT_BELOW; kahan.STRUCTURED_MIN_*)."""

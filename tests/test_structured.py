@@ -21,7 +21,7 @@ from exact_khk.systems.lie_poisson.system import structure_from_system
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.linalg import circulant
 from exact_khk.arith import point_height as _height
-from exact_khk.linalg.paths import STRUCTURED_BITS_PER_N, STRUCTURED_MIN_N
+from exact_khk.linalg.paths import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N
 from exact_khk.linalg import split as split_mod
 from exact_khk.linalg.paths import AUTO_SPLIT_BELOW
 from exact_khk.systems.lie_poisson.system import random_point
@@ -213,9 +213,7 @@ def test_auto_choice_and_fallbacks():
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
 
 
-@pytest.mark.parametrize("n, low, switch", [(11, "dense", STRUCTURED_BITS_PER_N * (STRUCTURED_MIN_N - 11)),
-                                            (24, "dense", STRUCTURED_BITS_PER_N * (STRUCTURED_MIN_N - 24)),
-                                            (15, "split", AUTO_SPLIT_BELOW[15])])
+@pytest.mark.parametrize("n, low, switch", [(11, "dense", STRUCTURED_MIN_BITS), (15, "split", AUTO_SPLIT_BELOW[15])])
 def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch):
     """Where ``auto`` does not split at every height (flint, n = 7, 11, 13, 14, 15), it
     steps dense (n = 11, 13) or split (n = 7, 14, 15) from low points and structured from
@@ -284,7 +282,7 @@ def test_large_n_structured_step_never_builds_the_dense_tensor():
     assert list(phi.inverse(y)) == [phi.arith(t) for t in x]   # the step is undone exactly
     assert "terms" not in fld._cache      # neither the step nor its inverse built the (2n)^3 terms
     # (structured equals dense: test_structured_equals_dense_exact, n = 2..8, and tests/test_lift.py up to n = 17;
-    # test_auto_switches_to_structured_with_height: whole orbits at n = 24)
+    # test_structured_equals_dense_at_larger_n: orbits at n = 16, 20, 32)
 
 
 def test_exact_orbit_at_n_256_is_reversible():

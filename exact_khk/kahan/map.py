@@ -44,10 +44,10 @@ whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
 n < 16, and for ``flint`` when n = 2, 3, 4, 5, 6, 8, 9, 10, 12
 (:data:`~exact_khk.linalg.split.AUTO_SPLIT_N`) and, below a height where the
 structured path overtakes it, n = 7, 14, 15 (:data:`~exact_khk.linalg.split.AUTO_SPLIT_BELOW`);
-otherwise the structured path for exact ``flint`` steps when n ≥ 64
-(:data:`~exact_khk.linalg.paths.STRUCTURED_MIN_N`), and for n = 11, 13, 16 … 63
-once the point's height reaches 12·(64 − n) bits
-(:data:`~exact_khk.linalg.paths.STRUCTURED_BITS_PER_N`); otherwise dense.  The rules follow the crossovers
+otherwise the structured path for exact ``flint`` steps when n ≥ 16
+(:data:`~exact_khk.linalg.paths.STRUCTURED_MIN_N`), and at n = 11, 13 once the
+point's height reaches :data:`~exact_khk.linalg.paths.STRUCTURED_MIN_BITS`;
+otherwise dense.  The rules follow the crossovers
 measured along orbits (docs/benchmarks.md).  Every path gives the same
 rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
 ``fraction`` may ask for the structured path explicitly.

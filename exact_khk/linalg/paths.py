@@ -16,9 +16,8 @@ circulant blocks, kernel flint  split for n in :data:`AUTO_SPLIT_N`;
                                 split below :data:`AUTO_SPLIT_BELOW` [n] bits, then
                                 structured (n = 7, 14, 15);
                                 structured for n ≥ :data:`STRUCTURED_MIN_N`;
-                                dense below :data:`STRUCTURED_BITS_PER_N` ·
-                                (:data:`STRUCTURED_MIN_N` − n) bits, then
-                                structured (n = 11, 13, 16 … 63)
+                                dense below :data:`STRUCTURED_MIN_BITS`, then
+                                structured (n = 11, 13)
 no structure, or other kernels  dense
 dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 8 ≤ N < 16) once an answer grew by < 2× and
@@ -39,13 +38,14 @@ SPLIT_N = tuple(range(1, 16))
 AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 9, 10, 12)
 #: flint: split below these heights, where the structured step overtakes it
 AUTO_SPLIT_BELOW = {7: 2048, 14: 2560, 15: 512}
-#: flint: structured from the first step for n ≥ 64 ...
-STRUCTURED_MIN_N = 64
-#: ... and for the remaining n (11, 13, 16..63) from STRUCTURED_BITS_PER_N·(64 − n) bits:
-#: the dense step is faster below (single steps along orbits, dense / structured = 1 near
-#: 750, 600, 550, 350, 300 bits for n = 11, 13, 16, 24, 32, and at 2 bits for n = 64;
-#: dense 2× faster at n = 16 and 1.6× at n = 32 from the first point: docs/benchmarks.md)
-STRUCTURED_BITS_PER_N = 12
+#: flint: structured from the first step for n ≥ 16: although a dense step is faster at
+#: the first orbit points for n = 16..63 once built (2× at n = 16, 1.6× at n = 32), its first
+#: call builds the field's (2n)³ Jacobian terms (about 1 s at n = 32), which the structured
+#: step never needs ...
+STRUCTURED_MIN_N = 16
+#: ... and for the remaining n = 11, 13 from this height (single steps along orbits:
+#: dense / structured = 1 near 750 bits for n = 11 and 600 bits for n = 13)
+STRUCTURED_MIN_BITS = 640
 #: dense orbit steps: Dixon from this height (crossover measured for N = 8..14) ...
 SMALL_ANSWER_MIN_BITS = 128
 #: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
@@ -72,4 +72,4 @@ def auto_path(n: int, kernel: str, splits: bool, circulant: bool):
             return True, True, AUTO_SPLIT_BELOW[n]
     if not circulant or kernel != "flint":
         return False, False, 0
-    return False, True, (0 if n >= STRUCTURED_MIN_N else STRUCTURED_BITS_PER_N * (STRUCTURED_MIN_N - n))
+    return False, True, (0 if n >= STRUCTURED_MIN_N else STRUCTURED_MIN_BITS)
