@@ -103,3 +103,15 @@ def test_orbit_method_refused_exit_2(capsys):
     assert "'split' needs" in err and len(err.strip().splitlines()) == 1
     code, out, err = run(capsys, "orbit", "--method", "fastest")
     assert code == 2 and "--method" in err
+
+
+def test_liouville_default_runs_on_the_built_in_system(capsys):
+    """`exact-khk liouville` with no options takes cyclo:n (n = 3): every involution needs
+    Q(omega); flint is refused with the arithmetic named."""
+    from exact_khk.cli.main import main
+
+    assert main(["liouville"]) == 0
+    out = capsys.readouterr().out
+    assert "exact in Q(zeta_3)" in out and "control:conservation" in out
+    assert main(["liouville", "--arith", "flint"]) == 2
+    assert "cyclo:3" in capsys.readouterr().err

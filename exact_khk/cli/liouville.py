@@ -23,7 +23,8 @@ def register(sub):
     p = sub.add_parser("liouville", help="certify complete integrability (all involutions)",
                        description="Check the n integrals, conservation by Φ_f and every Φ_g, "
                        "commutation, involutivity and rank n: exactly at orbit points "
-                       "(--arith cyclo:N, flint, ...) or as identities over gf:P (Schwartz–Zippel).")
+                       "(--arith cyclo:N, flint, ...; default cyclo:n for n >= 3, where the involutions "
+                       "need Q(omega)) or as identities over gf:P (Schwartz–Zippel).")
     add_system_options(p, steps_default=2)
     p.add_argument("--involutions", default="all",
                    help="'all' (2^n - 2 sign patterns), 'basis' (B_0..B_{n-1}) or a comma list "
@@ -81,7 +82,8 @@ def _report(args, system, recs, extra):
 def cmd_liouville(args):
     check_output(args.json)
     system, x0, eps = system_from_args(args)
-    ar = get_arith(args.arith)
+    # default: all involutions need Q(omega), omega = exp(2 pi i / n), from n = 3 on
+    ar = get_arith(args.arith if args.arith is not None or system.n <= 2 else f"cyclo:{system.n}")
     if not 1 <= args.trials <= MAX_TRIALS:
         raise InputError(f"--trials: expected an integer from 1 to {MAX_TRIALS} (MAX_TRIALS; the failure bound "
                          f"shrinks geometrically, a handful is enough), got {args.trials}")
