@@ -17,18 +17,8 @@ from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
 from exact_khk.studies import scaling
-from exact_khk.studies.output import OutputError, write_atomic
+from exact_khk.studies.output import prepare_folder, write_atomic
 
-
-def _check_out_dir(path):
-    """An --out folder must be creatable or a writable folder (checked before the work)."""
-    p = pathlib.Path(path)
-    if p.exists() and not p.is_dir():
-        raise OutputError(f"--out: {path!r} exists and is not a folder")
-    try:
-        p.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"--out: cannot create the folder {path!r}: {exc.strerror or exc}") from None
 
 #: the default of ``hard --ariths`` (= exact_khk.studies.hard.DEFAULT_ARITHS, written here so that
 #: building the parser does not import SymPy; a test keeps them equal)
@@ -169,7 +159,7 @@ def cmd_scale(args):
     _check_dim(system, "scale")
     ariths = _ariths(args.ariths, lohner=True)
     if args.out:
-        _check_out_dir(args.out)
+        prepare_folder(args.out)
     print(system.describe())
     study = scaling.scaling_study(system, x0, eps, args.steps, ariths,
                                   diagnostics=not args.no_diagnostics, progress=shows_progress(args))
@@ -336,7 +326,7 @@ def cmd_enclose(args):
     if eps.contains(0):
         raise InputError("--eps: the step size must be nonzero (the interval must not contain 0)")
     if args.out:
-        _check_out_dir(args.out)
+        prepare_folder(args.out)
     exact = None
     if args.check_exact:
         rational = (x0_text is None or all(is_rational_text(t.strip()) for t in x0_text.split(","))) and \

@@ -30,6 +30,21 @@ def check_writable(path, what: str = "output") -> str:
     return path
 
 
+def prepare_folder(path, what: str = "--out"):
+    """The output folder ``path`` (a Path), created if missing; :class:`OutputError` if a
+    file is in the way or it cannot be created (called before the work starts)."""
+    from pathlib import Path
+
+    folder = Path(path)
+    if folder.exists() and not folder.is_dir():
+        raise OutputError(f"{what}: {str(folder)!r} exists and is not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{what}: cannot create the folder {str(folder)!r}: {exc.strerror or exc}") from None
+    return folder
+
+
 def write_atomic(path, data, what: str = "output") -> None:
     """Write ``data`` — a str (UTF-8 text), bytes, or a function that writes to a
     binary file object (e.g. ``lambda fh: fig.savefig(fh, format="png")``) — to

@@ -48,10 +48,16 @@ def _plt():
     return plt
 
 
-def _save(fig, path):
+def _save(fig, path, legend_ax=None, rect=None):
+    """Finish a figure: the legend of ``legend_ax`` outside the data on the right, the
+    layout (within ``rect``), the PNG written atomically, the figure closed."""
     from exact_khk.studies.output import write_atomic
 
+    if legend_ax is not None:
+        legend_ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+    fig.tight_layout(**({"rect": rect} if rect else {}))
     write_atomic(path, lambda fh: fig.savefig(fh, format="png"), "--out")
+    _plt().close(fig)
 
 
 def work_precision(points, title, exact_seconds, path, styles=None):
@@ -81,10 +87,7 @@ def work_precision(points, title, exact_seconds, path, styles=None):
     ax.set_ylabel("log10 relative error at step K (balls/Lohner: radius)")
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="major", alpha=0.3)
-    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _save(fig, path, legend_ax=ax)
 
 
 def bits_lost(series, title, path, styles=None):
@@ -115,9 +118,7 @@ def bits_lost(series, title, path, styles=None):
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
     _save(fig, path)
-    plt.close(fig)
 
 
 def drift(series, integrals, title, path, styles=None):
@@ -142,9 +143,7 @@ def drift(series, integrals, title, path, styles=None):
     handles, labels = axes[0][0].get_legend_handles_labels()
     fig.legend(handles, labels, fontsize=8, loc="center right", frameon=False)
     fig.suptitle(title + " — integral drift (exactly 0 for the exact orbit)", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1 - 1.6 / width, 1))
-    _save(fig, path)
-    plt.close(fig)
+    _save(fig, path, rect=(0, 0, 1 - 1.6 / width, 1))
 
 
 def enclosure_radius(series, title, path, target_bits=None, styles=None):
@@ -170,7 +169,4 @@ def enclosure_radius(series, title, path, target_bits=None, styles=None):
     ax.set_ylabel("log2(max radius / max |x_k|)  (−correct bits)")
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
-    fig.tight_layout()
-    _save(fig, path)
-    plt.close(fig)
+    _save(fig, path, legend_ax=ax)

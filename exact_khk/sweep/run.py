@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from exact_khk.errors import InputError, OutputError
-from exact_khk.studies.output import check_writable, write_atomic
+from exact_khk.studies.output import check_writable, prepare_folder, write_atomic
 from exact_khk.sweep.tasks import FAILED, make_record, now_iso, run_task, worker_info
 
 RESULTS = "results.jsonl"
@@ -538,13 +538,7 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
     say = echo or (lambda line: None)
     timeout = spec.timeout if timeout == "spec" else (timeout or None)
     only = parse_only(only) if isinstance(only, str) else only
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise OutputError(f"--out: {str(out)!r} exists and is not a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"--out: cannot create the folder {str(out)!r}: {exc.strerror or exc}") from None
+    out = prepare_folder(out_dir)
     check_writable(out / RESULTS, "--out")
     tasks = spec.tasks()
     with _Lock(out):
