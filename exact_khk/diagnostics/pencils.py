@@ -142,10 +142,6 @@ def pencil_integrals(K, exps, notes):
     return out
 
 
-def _ptext(f):
-    return str(f).replace(" ", "")
-
-
 def _mod(a, f):
     return a % f if a.degree() >= f.degree() else a
 

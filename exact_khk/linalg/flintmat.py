@@ -52,11 +52,6 @@ def column(v):
     return fmpq_mat(len(v), 1, list(v))
 
 
-def row_vector(v):
-    """A 1×m ``fmpq_mat`` from a sequence."""
-    return fmpq_mat(1, len(v), list(v))
-
-
 def rows(M):
     """The rows of an ``fmpq_mat`` as lists of ``fmpq``."""
     c, flat = M.ncols(), M.entries()
