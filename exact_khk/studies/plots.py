@@ -60,6 +60,15 @@ def _save(fig, path, legend_ax=None, rect=None):
     _plt().close(fig)
 
 
+def _curve(ax, styles, name, i, pts):
+    """One series against the step in its arithmetic's colour and marker (the first
+    series drawn thick, so that one lying under the others stays visible)."""
+    color, marker = styles[name]
+    ks, ys = zip(*pts)
+    ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=8 if i == 0 else 5,
+            lw=3.0 if i == 0 else 1.2, ls=_LINES[i % 2], label=name)
+
+
 def work_precision(points, title, exact_seconds, path, styles=None):
     """``points``: [(name, seconds per step, log10 error or radius at step K, kind)] with kind
     ``'error'``, ``'radius'`` or ``'stopped'`` (no point at step K: drawn at 0 with ×).  The
@@ -108,10 +117,7 @@ def bits_lost(series, title, path, styles=None):
             pts = [(k, max(0.0, prec + e / math.log10(2))) for k, e in pts if e is not None and prec]
             if not pts:
                 continue
-            color, marker = st[name]
-            ks, ys = zip(*pts)
-            ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=9 if i == 0 else 5,
-                    lw=3.0 if i == 0 else 1.2, ls=_LINES[i % 2], label=name)
+            _curve(ax, st, name, i, pts)
         ax.set_xlabel("step k")
         ax.set_ylabel("bits lost = P + log2(relative error)")
         ax.set_title(head, fontsize=9)
@@ -133,10 +139,7 @@ def drift(series, integrals, title, path, styles=None):
             pts = [(k, d[integral]) for k, d in rows if d.get(integral) is not None]
             if not pts:
                 continue
-            color, marker = st[name]
-            ks, ys = zip(*pts)
-            ax.plot(ks, ys, color=color, marker=marker, markevery=max(1, len(ks) // 8), ms=8 if i == 0 else 4,
-                    lw=3.0 if i == 0 else 1.1, ls=_LINES[i % 2], label=name)
+            _curve(ax, st, name, i, pts)
         ax.set_xlabel("step k")
         ax.set_ylabel(f"log10 |{integral}(x_k) - {integral}(x_0)| / |{integral}(x_0)|")
         ax.grid(True, alpha=0.3)
