@@ -221,10 +221,11 @@ DENSE_BYTES_PER_CUBE = 250
 #: 19.4·n, 21.0·n, 23.2·n, 25.2·n bits)
 GROWTH_BITS_PER_N = 5
 #: the exact structured step's working memory, in bytes per n per bit of its
-#: output's height (its p-adic lift holds a few polynomials of n coefficients at
-#: twice that height): peak RSS of one step measured 2.6–3.5 · n · h at
-#: n = 256..4096 (h = 5 000 to 110 000 bits; 1.2 GB at n = 4096)
-STRUCTURED_STEP_BYTES_PER_BIT = 3
+#: output's height (it holds a few polynomials of n coefficients at up to twice
+#: that height, and a DFT of them): peak RSS measured 2.6–3.5 · n · h for the
+#: first step at n = 256..4096, but about 20 · n · h for two steps at n = 1024
+#: (1.05 GB at h ≈ 50 000 bits; the earlier p-adic step: 11 · n · h)
+STRUCTURED_STEP_BYTES_PER_BIT = 20
 
 
 def max_memory() -> int:
