@@ -108,3 +108,38 @@ def test_rational_reconstruction():
         num, den = num // int(g), den // int(g)
         a = num * pow(den, -1, int(m)) % int(m)
         assert rational_reconstruction(flint.fmpz(a), m) == (num, den)
+
+
+@pytest.mark.parametrize("n", [64, 100])
+def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
+    """Along an orbit the fixed-point division answers on its own: the dense circulant
+    solve is a fallback for numerics out of reach, and a precision search that gives
+    up early (as a first step with answers of ~n·hd bits once did for n ≥ 32) would
+    send every first step there.  The answers are checked against the dense solve."""
+    from fractions import Fraction
+
+    from exact_khk import get_arith
+    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson.system import LiePoissonSystem, random_point
+
+    st = C.circulant_structure(LiePoissonSystem.random(n, seed=3).field("f"))
+    ar = get_arith("flint")
+    x, eps = [ar(t) for t in random_point(n, 3)], ar(Fraction(1, 10))
+    dense = C.CirculantRing._solve_dense
+    calls = []
+
+    def refuse(self, d, rhs):
+        calls.append(n)
+        return dense(self, d, rhs)
+
+    monkeypatch.setattr(C.CirculantRing, "_solve_dense", refuse)
+    C.circulant_ring.cache_clear()
+    first = x = C.exact_step(st, x, eps, ar)
+    for _ in range(2):
+        x = C.exact_step(st, x, eps, ar)
+    assert calls == []
+    # control: the first step again with the division forced onto the dense solve
+    monkeypatch.setattr(C.CirculantRing, "_attempt", lambda *args: None)
+    C.circulant_ring.cache_clear()
+    x0 = [ar(t) for t in random_point(n, 3)]
+    assert C.exact_step(st, x0, eps, ar) == first and calls == [n]

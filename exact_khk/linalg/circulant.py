@@ -189,6 +189,13 @@ def cramer(a, r, mul, divide):
 UNIT_PRIME = 4611686018427387847
 #: bits of the floating approximation of d⁻¹ (an acb DFT) that Newton's iteration refines
 START_BITS = 128
+#: the division is a dense ``fmpz_mat.solve`` of the n×n circulant system when Cramer's
+#: bound on the answer is at most this many bits (first steps from small points at n = 16,
+#: 32: the fixed-point division's set-up costs more than FLINT's whole solve there)
+DENSE_DIVISION_MAX_BITS = 1024
+#: the last answer's height relative to its d, as a hint for the next division, is taken
+#: at most this large (a first step from a small point needs ~n·hd bits, the next ~1.1·hd)
+HINT_MAX_RATIO = 1.25
 #: the approximate quotients are trusted to within 2^TOLERANCE_BITS units (a heuristic:
 #: every answer is checked exactly)
 TOLERANCE_BITS = 12
@@ -221,8 +228,9 @@ class CirculantRing:
     coefficient (2×2 lattice reduction), and the candidate W = round(δ·r/d) is
     accepted only if d·W = δ·r holds exactly.  So the numerics decide the
     speed, never the answer.  Q starts from a hint (the last answer's height
-    relative to d) and doubles until the check passes; past twice the Cramer
-    bound the dense solve answers.  A division costs a few polynomial
+    relative to d) and doubles until the check passes, up to twice a bound on
+    the answer's height read off d's values at the roots of unity (δ divides
+    Π_ω d(ω)); if the attempt at that bound fails, the dense solve answers.  A division costs a few polynomial
     products at the size of the answer, all in FLINT (no p-adic reductions:
     a reduction modulo a big p^k costs about two products, a shift nearly
     nothing).
@@ -283,22 +291,24 @@ class CirculantRing:
         self._check_unit(d)
         n, hd = self.n, max(d.height_bits(), 1)
         hr = max(max(r.height_bits() for r in rhs), 1)
-        # Cramer/Hadamard: δ ≤ |det C(d)| ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d) the
-        # n×n circulant of d); Kahan orbits need far smaller answers than these bounds
-        norm_bits = n.bit_length() / 2 + 1  # ≥ log2 √n
-        adj_bits = int(n * (hd + norm_bits) + hr) + 1
-        if self.height_ratio is None:  # no hint: the Cramer bound, if near (a first step)
-            Q = min(2 * adj_bits, 8 * hd)
-        else:
-            Q = int(2 * min(max(self.height_ratio, 0.25), 4.0) * hd * 1.05)
-        Q += 64 + 2 * TOLERANCE_BITS
+        # Cramer/Hadamard: δ ≤ |det C(d)| ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d)
+        # the n×n circulant of d)
+        if n * (hd + n.bit_length() / 2 + 1) + hr <= DENSE_DIVISION_MAX_BITS:
+            return self._remember(self._solve_dense(d, rhs), hd)
         inverse = _Reciprocal(self, d, hd)
-        while Q <= 2 * adj_bits + 256:
+        # a sharper bound from d's values at the roots of unity (det C(d) = Π_ω d(ω));
+        # Kahan orbits need far smaller answers than this after their first step
+        cap = 2 * inverse.answer_bits(hr) + 64 + 2 * TOLERANCE_BITS
+        ratio = HINT_MAX_RATIO if self.height_ratio is None else min(max(self.height_ratio, 0.25),
+                                                                     HINT_MAX_RATIO)
+        Q = min(cap, int(2 * ratio * hd * 1.05) + 64 + 2 * TOLERANCE_BITS)
+        while True:
             found = self._attempt(d, rhs, inverse, hr, Q)
             if found is not None:
                 return self._remember(found, hd)
-            Q *= 2
-        return self._solve_dense(d, rhs)  # pragma: no cover  (numerics beyond reach)
+            if Q >= cap:
+                return self._solve_dense(d, rhs)  # pragma: no cover  (numerics beyond reach)
+            Q = cap if 8 * Q >= cap else 4 * Q  # a few cheap attempts, then the bound
 
     def _attempt(self, d, rhs, inverse, hr, Q):
         """(W, δ) from quotients approximated to 2^−Q, checked exactly, or None."""
@@ -348,7 +358,8 @@ class CirculantRing:
     def _solve_dense(self, d, rhs):
         """Fallback: the n×n circulant system C(d) W = δ r by ``fmpz_mat.solve``."""
         n = self.n
-        C = flint.fmpz_mat(n, n, [d[(i - j) % n] for i in range(n) for j in range(n)])
+        c = d.coeffs() + [0] * (n - d.length())
+        C = flint.fmpz_mat(n, n, [c[(i - j) % n] for i in range(n) for j in range(n)])
         X = C.solve(flint.fmpz_mat(n, len(rhs), [r[i] for i in range(n) for r in rhs]))
         num, delta = X.numer_denom()
         cols = num.transpose().entries()
@@ -365,19 +376,37 @@ class _Reciprocal:
     def __init__(self, ring, d, hd):
         self.ring, self.d, self.hd = ring, d, hd
         self.V, self.b, self.start = None, 0, START_BITS
+        self.logs = None  # (log2 |det C(d)|, log2 max 1/|d(ω)|), from the first start
 
     def _begin(self):
         """V at b = start bits from the DFT: d̂(ω) at every n-th root of unity, inverted."""
         n, b0 = self.ring.n, self.start
         top = [int(c) for c in _shift(self.d, b0 - self.hd).coeffs()] + [0] * n
         with flint.ctx.workprec(b0 + 64):
-            vals = flint.acb.dft([flint.acb(c) for c in top[:n]])
+            vals = flint.acb.dft([flint.acb(c) for c in top[:n]])  # 2^(b0 − hd)·d(ω)
             if any(0 in v for v in vals):
                 return False
+            if self.logs is None:  # |d(ω)| within n (truncation) of the DFT's balls
+                shift = b0 - self.hd
+                absv = [abs(v) for v in vals]
+                self.logs = (sum(_log2(a.upper() + n) for a in absv) - n * shift,
+                             shift - min(_log2(max(a.lower() - n, flint.arb(2) ** -b0)) for a in absv))
             inv = flint.acb.dft([1 / v for v in vals], inverse=True)
             self.V = flint.fmpz_poly([_arb_int(c.real, 2 * b0) for c in inv])
         self.b = b0
         return True
+
+    def answer_bits(self, hr):
+        """An upper estimate of the bits of δ and W for right-hand sides of height hr:
+        δ ≤ |det C(d)| and |W_i| ≤ δ·n·2^hr·max 1/|d(ω)| (from the floating start;
+        Hadamard's bound when d is too ill-conditioned for it)."""
+        while self.logs is None and not self._begin():
+            self.start *= 4
+            if self.start > 64 * START_BITS:
+                n = self.ring.n
+                return int(n * (self.hd + n.bit_length() / 2 + 1) + hr) + 1
+        det_bits, inv_bits = self.logs
+        return int(max(det_bits, det_bits + hr + self.ring.n.bit_length() + inv_bits)) + 2
 
     def refine(self, bits):
         R, d, hd = self.ring, self.d, self.hd
@@ -397,14 +426,20 @@ class _Reciprocal:
                 if self.start > 4 * bits:
                     return None, self.b
                 continue
-            P = R.fold(_shift(d, b2 - hd) * V)  # ≈ 2^(b + b2)·(1 − E)
-            E = _shift(flint.fmpz_poly([flint.fmpz(1) << (b + b2)]) - P, -b)  # ≈ 2^b2·E
+            h = min(hd, b2)  # d to at most b2 bits (its own hd bits cost less than zeros)
+            P = R.fold(_shift(d, h - hd) * V)  # ≈ 2^(b + h)·(1 − E)
+            E = _shift(flint.fmpz_poly([flint.fmpz(1) << (b + h)]) - P, b2 - h - b)  # ≈ 2^b2·E
             if E.height_bits() > b2 - b // 2:  # |E| > 2^−b/2: no convergence, start wider
                 self.V, self.start = None, self.start * 4
                 if self.start > 4 * bits:
                     return None, self.b
                 continue
             self.V, self.b = _shift(V, b2 - b) + _shift(R.fold(V * E), -b), b2
+
+
+def _log2(x) -> float:
+    """log2 of a positive arb, as a float (arbs far beyond the float range included)."""
+    return float(x.log() / flint.arb(2).log())
 
 
 def _small_denominator(a, m, tol, steps=48):
