@@ -131,8 +131,8 @@ def test_split_refuses_what_it_cannot_do():
 @pytest.mark.parametrize("n, flint_path, gmpy2_path", [
     (2, "split", "split"), (9, "split", "split"), (12, "split", "split"),
     (7, "split below 2048 bits, then structured", "split"),
-    (15, "split below 512 bits, then structured", "split"),
-    (11, "dense below 640 bits, then structured", "split"),
+    (15, "split below 768 bits, then structured", "split"),
+    (11, "dense below 512 bits, then structured", "split"),
     (16, "structured", "dense"),
 ])
 def test_auto_paths(n, flint_path, gmpy2_path):

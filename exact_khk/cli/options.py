@@ -20,7 +20,8 @@ an :class:`~exact_khk.errors.InputError` that names it and states the estimate:
   per point, and an exact structured step about
   :data:`STRUCTURED_STEP_BYTES_PER_BIT` · n · h bytes for an output of height h
   bits (so one exact step at n = 20 000, about 670 000 bits per coordinate, is
-  refused: about 40 GB; the float and mp:P structured steps are O(n));
+  refused: about 160 GB, and its output alone is about 3 GB; the float and mp:P
+  structured steps are O(n));
 * precisions, ``cyclo:N`` and ``gf:P`` are bounded in :mod:`exact_khk.arith`.
 
 A run that lasts more than about 2 s shows progress on stderr (a tqdm bar,
@@ -221,11 +222,11 @@ DENSE_BYTES_PER_CUBE = 250
 #: 19.4·n, 21.0·n, 23.2·n, 25.2·n bits)
 GROWTH_BITS_PER_N = 5
 #: the exact structured step's working memory, in bytes per n per bit of its
-#: output's height (it holds a few polynomials of n coefficients at up to twice
-#: that height, and a DFT of them): peak RSS measured 2.6–3.5 · n · h for the
-#: first step at n = 256..4096, but about 20 · n · h for two steps at n = 1024
-#: (1.05 GB at h ≈ 50 000 bits; the earlier p-adic step: 11 · n · h)
-STRUCTURED_STEP_BYTES_PER_BIT = 20
+#: output's height h (Newton's iteration and r·d⁻¹ hold polynomials of n coefficients
+#: at about twice that height; FLINT's products need a few times their operands):
+#: peak RSS growth over the process's base measured 4.0–11.8 · n · h (n = 256..2048,
+#: one to four steps from random_point(n, 1); the most at n = 256 after four steps)
+STRUCTURED_STEP_BYTES_PER_BIT = 12
 
 
 def max_memory() -> int:

@@ -36,16 +36,17 @@ SPLIT_N = tuple(range(1, 16))
 #: flint: split at every height (split faster than dense to 10 000 bits for n ≤ 8
 #: and than structured to 3000 bits for n = 9, 10, 12)
 AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 9, 10, 12)
-#: flint: split below these heights, where the structured step overtakes it
-AUTO_SPLIT_BELOW = {7: 2048, 14: 2560, 15: 512}
-#: flint: structured from the first step for n ≥ 16: although a dense step is faster at
-#: the first orbit points for n = 16..63 once built (2× at n = 16, 1.6× at n = 32), its first
-#: call builds the field's (2n)³ Jacobian terms (about 1 s at n = 32), which the structured
-#: step never needs ...
+#: flint: split below these heights, where the structured step overtakes it (4 orbit
+#: steps: split / structured = 1 near 1700, 1500, 750 bits for n = 7, 14, 15)
+AUTO_SPLIT_BELOW = {7: 2048, 14: 1536, 15: 768}
+#: flint: structured from the first step for n ≥ 16 (faster than a dense step even once
+#: that is built: 1.2× at the first orbit point at n = 16, 1.5× at n = 32; and a dense
+#: step's first call builds the field's (2n)³ Jacobian terms, about 1 s at n = 32) ...
 STRUCTURED_MIN_N = 16
-#: ... and for the remaining n = 11, 13 from this height (single steps along orbits:
-#: dense / structured = 1 near 750 bits for n = 11 and 600 bits for n = 13)
-STRUCTURED_MIN_BITS = 640
+#: ... and for the remaining n = 11, 13 from this height (4 orbit steps: dense / structured
+#: = 1 near 550 bits for n = 11 and 450 bits for n = 13; dense is 1.5–1.9× faster at the
+#: first points)
+STRUCTURED_MIN_BITS = 512
 #: dense orbit steps: Dixon from this height (crossover measured for N = 8..14) ...
 SMALL_ANSWER_MIN_BITS = 128
 #: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
