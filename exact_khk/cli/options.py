@@ -67,7 +67,8 @@ def add_system_options(p, steps_default=20):
                    help="a catalogue system (see 'exact-khk systems') or a system file (.toml, see "
                         "docs/system-files.md) instead of the Lie–Poisson family")
     g.add_argument("--n", type=int, help="half the phase-space dimension (n >= 2)")
-    g.add_argument("--a", help="first Hessian block vector, e.g. '1/2,-3,0'")
+    g.add_argument("--a", help="first Hessian block vector, e.g. '1/2,-3,0' (enclose: also reals such as "
+                               "'sqrt(2),[1.9,2.1],0')")
     g.add_argument("--b", help="second Hessian block vector")
     g.add_argument("--c", help="third Hessian block vector")
     g.add_argument("--seed", type=int, help="draw a, b, c (and x0 if not given) as small random integers")

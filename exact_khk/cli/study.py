@@ -73,7 +73,7 @@ def register(sub):
                        "integral's drift I(x_k) - I(x_0). --x0 and --eps take reals: rationals and decimals "
                        "(read as the exact rational they denote), exact reals such as sqrt(2) or pi/4, intervals "
                        "[lo,hi] and balls m+-r (see docs/precision.md). So do the Lie–Poisson blocks --a/--b/--c, e.g. --a "
-                       "'sqrt(2),0,[1.9,2.1]': every enclosure then holds for every parameter value in the boxes.")
+                       "'sqrt(2),0,2+-1e-12': every enclosure then holds for every parameter value in the boxes.")
     add_system_options(e, steps_default=1000)
     e.add_argument("--prec", type=int, default=256, help="working precision P in bits (default 256)")
     e.add_argument("--methods", default="naive,lohner", help="naive, lohner or both (default: %(default)s)")
