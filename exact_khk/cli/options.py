@@ -68,7 +68,8 @@ def add_system_options(p, steps_default=20):
                    help="a catalogue system (see 'exact-khk systems') or a system file (.toml, see "
                         "docs/system-files.md) instead of the Lie–Poisson family")
     g.add_argument("--n", type=int, help="half the phase-space dimension (n >= 2)")
-    g.add_argument("--a", help="first Hessian block vector, e.g. '1/2,-3,0'")
+    g.add_argument("--a", help="first Hessian block vector, e.g. '1/2,-3,0' (enclose: also reals such as "
+                               "'sqrt(2),[1.9,2.1],0')")
     g.add_argument("--b", help="second Hessian block vector")
     g.add_argument("--c", help="third Hessian block vector")
     g.add_argument("--seed", type=int, help="draw a, b, c (and x0 if not given) as small random integers")
@@ -98,13 +99,19 @@ def arith_help() -> str:
 
 
 
-def system_from_args(args):
-    """(system, x0, eps) from parsed options, with typed errors naming the option."""
+def system_from_args(args, reals=None):
+    """(system, x0, eps) from parsed options, with typed errors naming the option.
+
+    ``reals``: a precision P, for a command that reads ``--x0`` and ``--eps`` as reals
+    itself (``enclose``): a given ``--x0``/``--eps`` is then not read here (it comes back
+    as None), and ``--a/--b/--c`` with an entry that is not a plain rational give a
+    :class:`~exact_khk.systems.lie_poisson.real.RealLiePoissonSystem` with arb blocks at
+    P bits."""
     from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_VECTORS, DEFAULT_X0, LiePoissonSystem,
                                                       random_point)
 
     if getattr(args, "system", None) is not None:
-        return _named_system(args)
+        return _named_system(args, reals)
     given = [v is not None for v in (args.a, args.b, args.c)]
     if any(given) and not all(given):
         raise InputError("--a, --b and --c must be given together")
@@ -113,7 +120,14 @@ def system_from_args(args):
     if args.n is not None and args.n < 2:
         raise InputError(f"--n: the family needs n >= 2, got {args.n}")
     check_n(args.n)
-    if all(given):
+    if all(given) and reals is not None and not all(map(_rational_vector, (args.a, args.b, args.c))):
+        from exact_khk.systems.lie_poisson.real import RealLiePoissonSystem
+
+        system = RealLiePoissonSystem.from_reals(args.a, args.b, args.c, reals, ("--a", "--b", "--c"), args.n)
+        check_n(system.n, "--a")
+        if args.x0 is None:
+            raise InputError("--x0 is required with --a/--b/--c")
+    elif all(given):
         a = parse_vector(args.a, "--a", args.n)
         check_n(len(a), "--a")
         system = LiePoissonSystem(a, parse_vector(args.b, "--b", len(a)), parse_vector(args.c, "--c", len(a)))
@@ -127,11 +141,11 @@ def system_from_args(args):
         if args.n not in (None, 3):
             raise InputError("--n other than 3 needs --a/--b/--c or --seed")
         system = LiePoissonSystem.from_vectors(*DEFAULT_VECTORS)
-    eps = DEFAULT_EPS if args.eps is None else parse_rational(args.eps, "--eps")
+    eps = DEFAULT_EPS if args.eps is None else None if reals is not None else parse_rational(args.eps, "--eps")
     if eps == 0:
         raise InputError("--eps: the step size must be nonzero")
     if args.x0 is not None:
-        x0 = parse_vector(args.x0, "--x0", system.dim)
+        x0 = None if reals is not None else parse_vector(args.x0, "--x0", system.dim)
     elif args.seed is not None:  # off the degenerate sets (random_point), also those of this system and eps
         x0 = random_point(system.n, args.seed, system=system, eps=eps)
     else:
@@ -183,7 +197,14 @@ def _check_system_file(spec):
                          f"for a system file (MAX_SYSTEM_FILE_BYTES)")
 
 
-def _named_system(args):
+def _rational_vector(text) -> bool:
+    """Whether every entry of a comma-separated vector is a plain rational."""
+    from exact_khk.arith.reals import is_rational_text
+
+    return all(is_rational_text(t.strip()) for t in text.split(","))
+
+
+def _named_system(args, reals=None):
     """(system, x0, eps) for ``--system NAME|FILE``."""
     from exact_khk.systems.catalogue import resolve
 
@@ -193,12 +214,12 @@ def _named_system(args):
     _check_system_file(args.system)
     system = resolve(args.system)
     if args.x0 is not None:
-        x0 = parse_vector(args.x0, "--x0", system.dim)
+        x0 = None if reals is not None else parse_vector(args.x0, "--x0", system.dim)
     elif args.seed is not None:
         x0 = system.random_point(args.seed)
     else:
         x0 = parse_vector(list(system.default_x0), "--x0", system.dim)
-    eps = system.default_eps if args.eps is None else parse_rational(args.eps, "--eps")
+    eps = system.default_eps if args.eps is None else None if reals is not None else parse_rational(args.eps, "--eps")
     if eps == 0:
         raise InputError("--eps: the step size must be nonzero")
     if args.steps is not None:

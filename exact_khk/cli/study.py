@@ -72,12 +72,13 @@ def register(sub):
                        "radius growth in bits per step, the correct bits, and the enclosures of every declared "
                        "integral's drift I(x_k) - I(x_0). --x0 and --eps take reals: rationals and decimals "
                        "(read as the exact rational they denote), exact reals such as sqrt(2) or pi/4, intervals "
-                       "[lo,hi] and balls m+-r (see docs/precision.md).")
+                       "[lo,hi] and balls m+-r (see docs/precision.md). So do the Lie–Poisson blocks --a/--b/--c, e.g. --a "
+                       "'sqrt(2),0,2+-1e-12': every enclosure then holds for every parameter value in the boxes.")
     add_system_options(e, steps_default=1000)
     e.add_argument("--prec", type=int, default=256, help="working precision P in bits (default 256)")
     e.add_argument("--methods", default="naive,lohner", help="naive, lohner or both (default: %(default)s)")
     e.add_argument("--check-exact", action="store_true",
-                   help="also check every enclosure against the exact orbit (rational x0 and eps only; "
+                   help="also check every enclosure against the exact orbit (rational x0, eps, a, b, c only; "
                         "the exact orbit's height grows along it)")
     e.add_argument("--no-diagnostics", action="store_true", help="skip the integrals' drift")
     e.add_argument("--out", help="folder for enclosure.json and enclosure_radius.png")
@@ -317,8 +318,8 @@ def cmd_enclose(args):
     if not methods or bad or len(set(methods)) != len(methods):
         raise InputError(f"--methods: expected naive, lohner or both, got {args.methods!r}")
     x0_text, eps_text = args.x0, args.eps
-    args.x0 = args.eps = None  # the system and its defaults; the reals are read below
-    system, x0_default, eps_default = system_from_args(args)
+    # the system (real --a/--b/--c: arb blocks) and its defaults; --x0 and --eps are read as reals below
+    system, x0_default, eps_default = system_from_args(args, reals=args.prec)
     _check_dim(system, "enclose")
     x0 = parse_real_vector(x0_text, args.prec, "--x0", system.dim) if x0_text is not None else \
         tuple(parse_real(str(t), args.prec, "--x0") for t in x0_default)
@@ -329,6 +330,9 @@ def cmd_enclose(args):
         prepare_folder(args.out)
     exact = None
     if args.check_exact:
+        if getattr(system, "prec", None) is not None:
+            raise InputError("--check-exact needs rational --a/--b/--c (the exact orbit is the reference); real "
+                             "blocks are enclosed, not checked")
         rational = (x0_text is None or all(is_rational_text(t.strip()) for t in x0_text.split(","))) and \
             (eps_text is None or is_rational_text(eps_text))
         if not rational:

@@ -3,8 +3,10 @@
 The Kahan machinery (:mod:`exact_khk.kahan.map`) accepts any
 :class:`QuadraticField`; the Lie–Poisson family (:mod:`exact_khk.systems`) is
 one source of them.  Coefficients are exact (``Fraction``, or any value the
-arithmetic's ``convert`` accepts); they are converted into an arithmetic once
-and cached.
+arithmetic's ``convert`` accepts, e.g. arb balls that enclose real coefficients in
+``ball:P``); they are converted into an arithmetic once and cached.  A term is
+dropped only when its coefficient is certainly 0 (:func:`certainly_zero`): a ball
+that merely contains 0 stands for coefficients that may be nonzero.
 
 >>> from fractions import Fraction as F
 >>> from exact_khk.arith import get_arith
@@ -27,6 +29,13 @@ from math import lcm
 
 from ..arith import _as_fraction
 from ..errors import InputError
+
+
+def certainly_zero(c) -> bool:
+    """Whether the coefficient ``c`` is exactly 0.  ``c == 0`` is exact for rationals and,
+    for arb balls, true only for the exact ball 0 — unlike ``c != 0``, which is false for
+    every ball that contains 0 and would drop a term whose coefficient may be nonzero."""
+    return bool(c == 0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,11 +66,11 @@ class QuadraticField:
             for j in range(N):
                 for k in range(N):
                     c = T[i][j][k]
-                    if c != 0:
+                    if not certainly_zero(c):
                         key = (min(j, k), max(j, k))
                         terms[key] = terms.get(key, 0) + c
-            quad.append(tuple((key, c) for key, c in sorted(terms.items()) if c != 0))
-        lin = tuple(tuple((j, c) for j, c in enumerate(row) if c != 0) for row in linear) \
+            quad.append(tuple((key, c) for key, c in sorted(terms.items()) if not certainly_zero(c)))
+        lin = tuple(tuple((j, c) for j, c in enumerate(row) if not certainly_zero(c)) for row in linear) \
             if linear is not None else tuple(() for _ in range(N))
         cst = tuple(const) if const is not None else tuple(0 for _ in range(N))
         if len(lin) != N or len(cst) != N:
@@ -80,7 +89,7 @@ class QuadraticField:
     @property
     def homogeneous(self) -> bool:
         """True when f is a homogeneous quadratic (no linear or constant part)."""
-        return all(not row for row in self.linear) and all(c == 0 for c in self.const)
+        return all(not row for row in self.linear) and all(certainly_zero(c) for c in self.const)
 
     def _converted(self, ar):
         """Coefficients in ``ar``: f-terms, Jacobian linear forms, linear part, constants."""
@@ -88,15 +97,17 @@ class QuadraticField:
         if hit is not None:
             return hit
         conv = ar.convert
-        fterms = [[(j, k, conv(c)) for (j, k), c in terms] for terms in self.terms()]
-        jac = [[{} for _ in range(self.dim)] for _ in range(self.dim)]
-        for i, terms in enumerate(self.terms()):
-            for (j, k), c in terms:  # d/dx_j (c x_j x_k) = c x_k, and symmetrically
-                jac[i][j][k] = jac[i][j].get(k, 0) + c
-                jac[i][k][j] = jac[i][k].get(j, 0) + c
-        jterms = [[[(k, conv(c)) for k, c in sorted(d.items()) if c != 0] for d in row] for row in jac]
-        lin = [[(j, conv(c)) for j, c in row] for row in self.linear]
-        cst = [conv(c) for c in self.const]
+        with ar.local():  # ball coefficients are summed at the arithmetic's precision
+            fterms = [[(j, k, conv(c)) for (j, k), c in terms] for terms in self.terms()]
+            jac = [[{} for _ in range(self.dim)] for _ in range(self.dim)]
+            for i, terms in enumerate(self.terms()):
+                for (j, k), c in terms:  # d/dx_j (c x_j x_k) = c x_k, and symmetrically
+                    jac[i][j][k] = jac[i][j].get(k, 0) + c
+                    jac[i][k][j] = jac[i][k].get(j, 0) + c
+            jterms = [[[(k, conv(c)) for k, c in sorted(d.items()) if not certainly_zero(c)] for d in row]
+                      for row in jac]
+            lin = [[(j, conv(c)) for j, c in row] for row in self.linear]
+            cst = [conv(c) for c in self.const]
         out = (fterms, jterms, lin, cst)
         self._cache[ar.name] = out
         return out

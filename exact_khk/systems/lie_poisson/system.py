@@ -40,7 +40,7 @@ from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.parsing import format_signs, parse_signs, parse_vector
 from exact_khk.systems.base import System
-from exact_khk.systems.quadratic import QuadraticField
+from exact_khk.systems.quadratic import QuadraticField, certainly_zero
 
 # --- small exact matrix helpers (Fractions, lists of rows) ------------------
 
@@ -289,7 +289,7 @@ class LiePoissonSystem(System):
         s = ar.zero
         for r in range(self.dim):
             for cidx in range(self.dim):
-                if M[r][cidx] != 0:
+                if not certainly_zero(M[r][cidx]):
                     s = s + ar.convert(M[r][cidx]) * x[r] * x[cidx]
         return s / ar.convert(2)
 
@@ -534,10 +534,10 @@ class LiePoissonField(QuadraticField):
                     Mr = M[row + (k - ii) % n]
                     for l in range(N):
                         c = Mr[l]
-                        if c != 0:
+                        if not certainly_zero(c):  # a ball that contains 0 is kept
                             key = (min(k, l), max(k, l))
                             acc[key] = acc.get(key, 0) + sign * c
-                out.append(tuple((key, c) for key, c in sorted(acc.items()) if c != 0))
+                out.append(tuple((key, c) for key, c in sorted(acc.items()) if not certainly_zero(c)))
             hit = self._cache["terms"] = tuple(out)
         return hit
 

@@ -1,0 +1,229 @@
+"""Real parameters of the Lie–Poisson family in ``enclose`` (exact_khk.systems.lie_poisson.real).
+
+An enclosure computed with ball blocks a, b, c must contain the exact orbit of every
+rational parameter value in the boxes (decided exactly, ``contains_exact``); an
+irrational block is checked against an mpmath orbit at three times the precision,
+computed here from the Kahan formula (I − εf'(x)) x' = x with f(x) = J(x) Hs x written
+out independently of the library.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import flint
+import mpmath
+import pytest
+
+from exact_khk.arith import get_arith
+from exact_khk.arith.ball import arb_to_fmpq, contains_exact
+from exact_khk.cli.main import main
+from exact_khk.errors import InputError
+from exact_khk.studies import enclosure
+from exact_khk.studies.scaling import declared, exact_prefix
+from exact_khk.systems.lie_poisson import DEFAULT_X0, LiePoissonSystem
+from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.systems.lie_poisson.real import RealLiePoissonSystem
+
+X0 = ",".join(DEFAULT_X0)
+B, C = "0,1,0", "3,1,1"
+
+
+def _exact_orbit(a, b, c, steps, eps="1/10"):
+    fld = LiePoissonSystem.from_vectors(a, b, c).field("f")
+    orbit, _, err = exact_prefix(fld, list(DEFAULT_X0), eps, steps)
+    assert err is None and len(orbit) == steps + 1
+    return orbit
+
+
+def _contains(points, orbit):
+    return all(contains_exact(t, q) for X, x in zip(points, orbit) for t, q in zip(X, x))
+
+
+@pytest.mark.parametrize("a", ["[1,1],0,[2,2]", "sqrt(1),0,4/2", "1+-0,0,[2,2]"])
+def test_point_reals_equal_to_rationals_reproduce_the_rational_run(a):
+    real = RealLiePoissonSystem.from_reals(a, B, C, 128)
+    rational = LiePoissonSystem.from_vectors("1,0,2", B, C)
+    orbit = _exact_orbit("1,0,2", B, C, 15)
+    for method in enclosure.METHODS:
+        r = enclosure.enclose(real, X0, "1/10", 15, 128, method, keep_points=True)
+        q = enclosure.enclose(rational, X0, "1/10", 15, 128, method, orbit, keep_points=True)
+        assert r.status == q.status and r.steps_done == q.steps_done > 0
+        assert all(x.mid() == y.mid() and x.rad() == y.rad() for P, Q in zip(r.points, q.points)
+                   for x, y in zip(P, Q)), method  # the same balls, step by step
+        assert _contains(r.points, orbit) and q.encloses
+
+
+def test_width_zero_non_dyadic_interval_encloses_the_rational_orbit():
+    real = RealLiePoissonSystem.from_reals("[1/3,1/3],0,2", B, "3,[1/7,1/7],1", 128)
+    orbit = _exact_orbit("1/3,0,2", B, "3,1/7,1", 10)
+    for method in enclosure.METHODS:
+        run = enclosure.enclose(real, X0, "1/10", 10, 128, method, orbit, keep_points=True)
+        assert run.status == "ok" and run.encloses and _contains(run.points, orbit)
+
+
+def test_interval_box_contains_the_orbits_of_sampled_rational_parameters():
+    lo, hi = Fraction(2) - Fraction(1, 10 ** 9), Fraction(2) + Fraction(1, 10 ** 9)
+    blo, bhi = Fraction(1) - Fraction(1, 10 ** 10), Fraction(1) + Fraction(3, 10 ** 10)
+    real = RealLiePoissonSystem.from_reals(f"1,0,[{lo},{hi}]", f"0,[{blo},{bhi}],0", C, 128)
+    steps = 12
+    runs = [enclosure.enclose(real, X0, "1/10", steps, 128, m, keep_points=True) for m in enclosure.METHODS]
+    assert runs[1].status == "ok" and runs[1].min_correct_bits > 10
+    samples = [(lo, blo), (hi, bhi), (lo, bhi), (hi, blo), (Fraction(2), Fraction(1)),
+               (lo + Fraction(1, 3 * 10 ** 9), blo + Fraction(2, 7 * 10 ** 10))]
+    for a2, b1 in samples:
+        orbit = _exact_orbit(f"1,0,{a2}", f"0,{b1},0", C, steps)
+        for run in runs:
+            assert _contains(run.points, orbit), (run.method, a2, b1)
+    # a parameter outside the box: its orbit leaves the Lohner enclosure
+    orbit = _exact_orbit(f"1,0,{hi + Fraction(1, 10 ** 6)}", "0,1,0", C, steps)
+    assert not _contains(runs[1].points, orbit)
+
+
+def test_integrals_are_evaluated_with_the_ball_parameters():
+    lo, hi = Fraction(199, 100), Fraction(201, 100)
+    real = RealLiePoissonSystem.from_reals(f"1,0,[{lo},{hi}]", B, C, 128)
+    ints, _ = declared(real)
+    ar = get_arith("ball:128")
+    x0 = [ar.convert(Fraction(t)) for t in DEFAULT_X0]
+    for a2 in (lo, hi, Fraction(2)):
+        rational = LiePoissonSystem.from_vectors(f"1,0,{a2}", B, C)
+        exact, _ = declared(rational)
+        for name, I in ints.items():
+            v = I(ar, x0, flint.arb(flint.fmpq(1, 10)))
+            assert contains_exact(v, exact[name](get_arith("fraction"), [Fraction(t) for t in DEFAULT_X0],
+                                                 Fraction(1, 10))), (name, a2)
+    # the drift of a real run contains 0; with the integrals of another system (a_0 = 1), it does not
+    irr = RealLiePoissonSystem.from_reals("sqrt(2),0,2", B, C, 128)
+    run = enclosure.enclose(irr, X0, "1/10", 10, 128, "lohner", integrals=declared(irr)[0])
+    assert run.drift_contains_zero is True and run.rows[-1].drift["H~"][0] < -20
+    run = enclosure.enclose(irr, X0, "1/10", 10, 128, "lohner", integrals=ints)
+    assert run.drift_contains_zero is False
+
+
+# --- an irrational block against an independent high-precision orbit ---------------
+
+
+def _reference_orbit(a, b, c, x0, eps, steps, dps_bits):
+    """x_{k+1} solves (I − ε f'(x_k)) x_{k+1} = x_k, f(x) = J(x) Hs x, in mpmath."""
+    n = len(a)
+    with mpmath.workprec(dps_bits):
+        hank = lambda w: [[w[(i + j) % n] for j in range(n)] for i in range(n)]  # noqa: E731
+        Xa, Xb, Xc = hank(a), hank(b), hank(c)
+        Hs = mpmath.matrix([ra + rb for ra, rb in zip(Xa, Xb)] + [rb + rc for rb, rc in zip(Xb, Xc)])
+
+        def J(x):
+            Xu = hank([x[i] for i in range(n)])
+            M = mpmath.matrix(2 * n, 2 * n)
+            for i in range(n):
+                for j in range(n):
+                    M[i, n + j], M[n + i, j] = Xu[i][j], -Xu[i][j]
+            return M
+
+        def jac(x):  # f'(x) v = J(x) Hs v + J(v) Hs x
+            D = mpmath.matrix(2 * n, 2 * n)
+            JH, Hx = J(x) * Hs, Hs * x
+            for j in range(2 * n):
+                e = mpmath.matrix(2 * n, 1)
+                e[j] = 1
+                col = JH * e + J(e) * Hx
+                for i in range(2 * n):
+                    D[i, j] = col[i]
+            return D
+
+        x = mpmath.matrix([mpmath.mpf(t.numerator) / t.denominator for t in x0])
+        out = [x]
+        for _ in range(steps):
+            x = mpmath.lu_solve(mpmath.eye(2 * n) - eps * jac(x), x)
+            out.append(x)
+        return out
+
+
+def _mp_in_ball(ball, v, slack):
+    man, exp = v.man_exp  # exactly (mpmath.mpf(v) would round v to the global 53 bits); man is unsigned
+    man = -int(man) if v < 0 else int(man)
+    q = flint.fmpq(int(man) << exp) if exp >= 0 else flint.fmpq(int(man), 1 << -exp)
+    return abs(q - arb_to_fmpq(ball.mid())) <= arb_to_fmpq(ball.rad()) + slack
+
+
+def test_irrational_block_against_an_independent_mpmath_orbit():
+    prec, steps = 128, 20
+    with mpmath.workprec(3 * prec):
+        a = [mpmath.sqrt(2), mpmath.mpf(0), mpmath.mpf(2)]
+        ref = _reference_orbit(a, [0, 1, 0], [3, 1, 1], [Fraction(t) for t in DEFAULT_X0], mpmath.mpf(1) / 10,
+                               steps, 3 * prec)
+    slack = flint.fmpq(1, 2 ** 300)  # the reference's own error, far below every radius
+    good = RealLiePoissonSystem.from_reals("sqrt(2),0,2", B, C, prec)
+    for method in enclosure.METHODS:
+        run = enclosure.enclose(good, X0, "1/10", steps, prec, method, keep_points=True)
+        assert run.status == "ok" and run.steps_done == steps
+        for X, r in zip(run.points, ref):
+            assert all(_mp_in_ball(t, r[i], slack) for i, t in enumerate(X)), method
+    # negative control: sqrt(2) + 2^-100 instead of sqrt(2) misses the reference
+    wrong = RealLiePoissonSystem.from_reals("sqrt(2)+2^(-100),0,2", B, C, prec)
+    run = enclosure.enclose(wrong, X0, "1/10", steps, prec, "lohner", keep_points=True)
+    assert run.status == "ok"
+    assert all(_mp_in_ball(t, ref[0][i], slack) for i, t in enumerate(run.points[0]))
+    assert not all(_mp_in_ball(t, ref[-1][i], slack) for i, t in enumerate(run.points[-1]))
+
+
+# --- the command line and the API's errors --------------------------------------------
+
+
+def _cli(capsys, *argv):
+    code = main(["enclose", *argv, "--quiet"])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_cli_real_blocks(capsys):
+    code, out, err = _cli(capsys, "--a", "sqrt(2),0,[1.99999,2.00001]", "--b", B, "--c", C, "--x0", X0,
+                          "--steps", "5")
+    assert code == 0, err
+    assert "real blocks" in out and "lohner   ok" in out
+    code, out, err = _cli(capsys, "--a", "1,0,2", "--b", B, "--c", C, "--x0", X0, "--steps", "3",
+                          "--check-exact")
+    assert code == 0 and "lohner   ok" in out  # rational blocks: unchanged, checked exactly
+    assert out.splitlines()[0].startswith("Lie–Poisson system n=3: a=(1, 0, 2)")
+
+
+@pytest.mark.parametrize("argv", [
+    ["--a", "sqrt(2),0,2", "--b", B, "--c", C, "--x0", X0, "--check-exact"],
+    ["--a", "sqrt(2,0,2", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "sqrt(2),0,2", "--b", "0,1", "--c", C, "--x0", X0],
+    ["--a", "1,0,[2.1,1.9]", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "1,0,sqrt(" + "1" * 3000 + ")", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "1,0,nan", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "inf,0,2", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "1,0,log(0)", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "1,0,1e999999999", "--b", B, "--c", C, "--x0", X0],
+    ["--a", "sqrt(2),0,2", "--b", B, "--c", C],
+    ["--a", "sqrt(2),0,2", "--b", B, "--x0", X0],
+    ["--a", "sqrt(2)", "--b", "0", "--c", "1", "--x0", "1,2"],
+    ["--system", "euler-top", "--a", "sqrt(2),0,2"],
+])
+def test_cli_bad_real_blocks_are_one_line_exit_2(capsys, argv):
+    code, out, err = _cli(capsys, *argv, "--steps", "2")
+    assert code == 2, (out, err)
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+
+
+def test_other_commands_keep_rational_blocks(capsys):
+    assert main(["orbit", "--a", "sqrt(2),0,2", "--b", B, "--c", C, "--x0", X0, "--steps", "1"]) == 2
+    assert "--a" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args", [("1,0,[3,2]", B, C), ("1,0", B, C), ("1,0,2", "0,1", C), ("nan,0,2", B, C),
+                                  ("1", "0", "1"), ("1,0,x", B, C)])
+def test_api_errors_are_input_errors(args):
+    with pytest.raises(InputError):
+        RealLiePoissonSystem.from_reals(*args, prec=64)
+
+
+def test_api_refuses_non_balls_and_non_rational_involutions():
+    with pytest.raises(InputError):
+        RealLiePoissonSystem((Fraction(1), Fraction(0)), (flint.arb(0),) * 2, (flint.arb(1),) * 2)
+    s = RealLiePoissonSystem.from_reals("sqrt(2),0,1,0", "0,1,0,0", "1,1,1,2", 64)
+    with pytest.raises(InputError):
+        s.field("g", "+-++", cyclotomic=True)
+    assert s.field("g").signs == "-+++" and s.field("control").label == "control"
