@@ -144,12 +144,12 @@ def kahan_cramer(m, uh, vh, p, S, mul):
         (adj·x̂)_v = Sv̂ − p(v̂ f11 + û(2m11û + m12v̂)).
     """
     (m11, m12), (m21, m22) = m
-    a, b = mul(m11, uh), mul(m12, uh)
-    f11 = 2 * mul(m21, uh) + mul(m22, vh)
+    a, b, c = mul(m11, uh), mul(m12, uh), mul(m22, vh)
+    f11 = 2 * mul(m21, uh) + c
     g = a * 2 + mul(m12, vh)
     mu_u = mul(mul(m11, m22) - mul(m12, m21), uh)
     det = mul(uh, mu_u) * (2 * p * p) - (f11 - b) * (p * S) + S * S
-    ru = uh * S + mul(uh, b + mul(m22, vh)) * p
+    ru = uh * S + mul(uh, b + c) * p
     rv = vh * S - (mul(vh, f11) + mul(uh, g)) * p
     return det, (ru, rv)
 
