@@ -48,6 +48,9 @@ True
 
 from __future__ import annotations
 
+import functools
+import operator
+
 import numpy
 from numpy.lib.stride_tricks import as_strided
 from numpy.linalg import _umath_linalg
@@ -126,15 +129,24 @@ def _matrix_builder(data, N, ar, eps):
     on ε only computed once."""
     one = ar.one
     if data[0] == "circulant":
-        hankel, n = data[1], N // 2
-        e_rows = data[2] * -eps  # −ε × :data:`_FIRST_ROWS` (array first: ndarray · mpf)
+        hankel, n, F = data[1], N // 2, data[2]
         # block (a, c), entry (i, k) = w_ac[(k − i) mod n] = [w | w][2a + c, n − i + k]
         blocks = _viewer(float if ar.lapack else object, n, (2, n, 2, n), (4 * n, -1, 2 * n, 1))
+        # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1); w = −ε × the
+        # first rows of f11, f12, f21, f22 = (−ε F) p, F = :data:`_FIRST_ROWS`
+        if ar.lapack:
+            eF = F * -eps
+            first_rows = lambda x: eF @ (x.reshape(2, n) @ hankel).reshape(8, n)  # noqa: E731
+        else:  # objects: only the products that F's zeros do not cancel (p: 6 of 8 rows, F: 6 of 32
+            # entries), summed in the same order: the same values
+            terms = [[(k, F[r, k] * -eps) for k in range(8) if _FIRST_ROWS[r][k]] for r in range(4)]
+
+            def first_rows(x):
+                p = {k: x[n * (k % 2):][:n] @ hankel[k // 2] for k in (0, 2, 3, 4, 6, 7)}
+                return numpy.array([functools.reduce(operator.add, [p[k] * c for k, c in t]) for t in terms])
 
         def build(x):
-            # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1)
-            p = (x.reshape(2, n) @ hankel).reshape(8, n)
-            w = e_rows @ p  # −ε × the first rows of f11, f12, f21, f22
+            w = first_rows(x)
             w[0, 0] += one  # the diagonals of the circulants f11, f22: w[., 0]
             w[3, 0] += one
             return blocks(numpy.concatenate([w, w], axis=1)).reshape(N, N)  # a view, then one copy
