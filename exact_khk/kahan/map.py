@@ -70,6 +70,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 from fractions import Fraction
@@ -84,6 +85,7 @@ from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 
 METHODS = ("auto", "dense", "structured", "split")
 
+@functools.cache
 def _floating():
     """:mod:`exact_khk.linalg.floating` (numpy), imported when a floating map is built."""
     from exact_khk.linalg import floating
@@ -112,6 +114,8 @@ class KahanMap:
     method, split, structure, switch_bits = "dense", False, None, 0  # for maps built without __init__
     #: whether this map's last dense step found a small answer (see ``_integer_steps``)
     _small_answers = False
+    #: (ε, field, the prepared ``float`` step) (see ``_lapack_step``)
+    _float_stepper = None
 
     def __init__(self, field, eps, arith=None, method="auto"):
         self.field = field
@@ -274,6 +278,8 @@ class KahanMap:
 
     def step(self, x):
         """Φ_f(x, ε)."""
+        if self.arith.lapack:  # binary64 has no working context to enter
+            return self._step(self.point(x))
         with self.arith.local():  # e.g. the working precision of ball:P
             return self._step(self.point(x))
 
@@ -307,9 +313,14 @@ class KahanMap:
         """The ``float`` dense step (:func:`~exact_khk.linalg.floating.float_step`:
         I − εf'(x) built by numpy, ``numpy.linalg.solve`` — LAPACK's partially pivoted LU in
         binary64, i.e. p = 53 dense arithmetic — with the 1-norm κ); the point
-        comes back as a tuple of Python floats, checked finite."""
+        comes back as a tuple of Python floats, checked finite.  The map keeps the step's
+        ε-dependent constants (:func:`~exact_khk.linalg.floating.float_stepper`)."""
+        kept = self._float_stepper
+        if kept is None or kept[0] is not self.eps or kept[1] is not self.field:
+            kept = self._float_stepper = (self.eps, self.field,
+                                          _floating().float_stepper(self.field, self.arith, self.eps))
         try:
-            z, cond = _floating().float_step(self.field, self.arith, x, self.eps)
+            z, cond = kept[2](x)
         except SingularMatrix:
             raise self._singular(x, self.eps) from None
         self._check_condition(z, cond, x, self.eps)

@@ -157,7 +157,8 @@ def inverse_norm1_estimate(ar, LU, perm) -> float:
     n = len(LU)
     col = lambda v: [row[0] for row in lu_solve(LU, perm, [[t] for t in v])]  # noqa: E731
     norm = lambda v: sum(ar.magnitude(t) for t in v)  # noqa: E731
-    x = [ar.one / ar.convert(n)] * n
+    one, minus_one, zero = ar.one, -ar.one, ar.zero
+    x = [one / ar.convert(n)] * n
     est, j = 0.0, None
     for it in range(5):
         y = col(x)
@@ -165,12 +166,12 @@ def inverse_norm1_estimate(ar, LU, perm) -> float:
         if it and new <= est:
             break
         est = new
-        z = lu_solve_transposed(LU, perm, [ar.one if not t < ar.zero else -ar.one for t in y])
+        z = lu_solve_transposed(LU, perm, [one if not t < zero else minus_one for t in y])
         mags = [ar.magnitude(t) for t in z]
         k = max(range(n), key=mags.__getitem__)
-        if it and (k == j or mags[k] <= ar.magnitude(sum((a * b for a, b in zip(z, x)), ar.zero))):
+        if it and (k == j or mags[k] <= mags[j]):  # x = e_j after the first round: zᵀx = z_j
             break
-        j, x = k, [ar.one if i == k else ar.zero for i in range(n)]
+        j, x = k, [one if i == k else zero for i in range(n)]
     # Higham's alternating vector guards against the cases where the above stalls
     alt = [ar.convert((-1) ** i * (1 + i / max(n - 1, 1))) for i in range(n)]
     return max(est, 2 * norm(col(alt)) / (3 * n))

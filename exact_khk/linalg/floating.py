@@ -23,11 +23,16 @@ some order):
 ``numpy.linalg.solve`` (LAPACK ``gesv``: partially pivoted LU in binary64,
 i.e. p = 53 dense arithmetic) and the 1-norm condition number
 κ = ‖M‖₁‖M⁻¹‖₁ with M⁻¹ = ``numpy.linalg.inv(M)`` — exactly
-``numpy.linalg.cond(M, 1)``, not an estimate.  numpy exposes no LU factors for
-LAPACK's O(N²) estimator ``gecon``, so κ costs a second factorisation; one
-``gesv`` of M [X | Y] = [B | I] would save it but measured up to 1.8× slower
-than the two calls for N ≤ 256 (OpenBLAS 0.3.31).  An exactly zero pivot
-raises :class:`~exact_khk.linalg.dense.SingularMatrix`.
+``numpy.linalg.cond(M, 1)``, not an estimate.  Both are called as the gufuncs
+behind ``numpy.linalg.solve`` and ``inv`` (as ``numpy.linalg.cond`` itself does),
+which skips their Python wrappers, a tenth of a step for N ≤ 32, and gives the
+same bits.  numpy exposes no LU factors for LAPACK's O(N²) estimator ``gecon``,
+so κ costs a second factorisation.  One ``gesv`` of M [X | Y] = [B | I] would
+save it (0.8–0.9× the two calls for N = 32..512, but 1.3× for N ≤ 8; OpenBLAS
+0.3.31) at the price of X's bits: LAPACK solves one right-hand side with a
+different kernel (OpenBLAS: ``trsv``, not ``trsm``), so X would no longer be
+``numpy.linalg.solve(M, B)``.  An exactly zero pivot raises
+:class:`~exact_khk.linalg.dense.SingularMatrix`.
 
 >>> from exact_khk import LiePoissonSystem, get_arith
 >>> f = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1").field("f")
@@ -43,8 +48,12 @@ True
 
 from __future__ import annotations
 
+import functools
+import operator
+
 import numpy
 from numpy.lib.stride_tricks import as_strided
+from numpy.linalg import _umath_linalg
 
 from exact_khk.linalg.dense import SingularMatrix
 
@@ -63,7 +72,7 @@ def _data(field, ar):
         rows = [ar.convert(q) for row in st.m for w in row for q in w]
         m = numpy.array(rows, dtype=dtype).reshape(4, st.n)
         # the four cyclic Hankel matrices X(m_kl) as views (row k: m_kl[k], …, m_kl[k+n−1])
-        hit = ("circulant", _view(numpy.concatenate([m, m], axis=1), 0, (4, st.n, st.n), (2 * st.n, 1, 1)),
+        hit = ("circulant", _viewer(dtype, 0, (4, st.n, st.n), (2 * st.n, 1, 1))(numpy.concatenate([m, m], axis=1)),
                numpy.array([[ar.convert(t) for t in row] for row in _FIRST_ROWS], dtype=dtype))
     elif ar.lapack:
         N, jac = field.dim, {}
@@ -89,14 +98,15 @@ def _data(field, ar):
 _FIRST_ROWS = ((0, 0, 0, 0, 2, 0, 0, 1), (0, 0, 0, 0, 0, 0, 1, 0), (-2, 0, 0, -1, 0, 0, 0, 0), (0, 0, -1, 0, 0, 0, 0, 0))
 
 
-def _view(a, offset, shape, strides):
-    """A view of the contiguous array ``a`` from element ``offset`` with ``strides`` in
-    elements (no copy; numpy's constructor for binary64, ``as_strided`` for objects)."""
-    size = a.itemsize
+def _viewer(dtype, offset, shape, strides):
+    """``a ↦`` the view of a contiguous array ``a`` of ``dtype`` from element ``offset``
+    with ``strides`` in elements (no copy; numpy's constructor for binary64,
+    ``as_strided`` for objects)."""
+    size = numpy.dtype(dtype).itemsize
     strides = tuple(size * t for t in strides)
-    if a.dtype == object:
-        return as_strided(a.reshape(-1)[offset:], shape, strides, writeable=False)
-    return numpy.ndarray(shape, a.dtype, a, size * offset, strides)
+    if dtype is object:
+        return lambda a: as_strided(a.reshape(-1)[offset:], shape, strides, writeable=False)
+    return lambda a: numpy.ndarray(shape, dtype, a, size * offset, strides)
 
 
 def has_system_matrix(field, ar) -> bool:
@@ -108,30 +118,49 @@ def has_system_matrix(field, ar) -> bool:
 def system_matrix(field, ar, x, eps):
     """I − ε f'(x) as an N×N numpy array (binary64 for ``float``, else an object
     array of ``ar``'s elements); ``x`` a sequence of ``ar``'s elements."""
+    data = _data(field, ar)
+    x = numpy.asarray(x, dtype=float if ar.lapack else object)
     with numpy.errstate(all="ignore"):  # overflow gives inf, found by the caller's finiteness check
-        return _system_matrix(_data(field, ar), field.dim, ar, x, eps)
+        return _matrix_builder(data, field.dim, ar, eps)(x)
 
 
-def _system_matrix(data, N, ar, x, eps):
+def _matrix_builder(data, N, ar, eps):
+    """``x ↦`` I − ε f'(x) for a numpy vector x of ``ar``'s elements, with what depends
+    on ε only computed once."""
+    one = ar.one
     if data[0] == "circulant":
-        hankel, n = data[1], N // 2
-        # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1)
-        p = (numpy.array(x, dtype=hankel.dtype).reshape(2, n) @ hankel).reshape(8, n)
-        w = (data[2] * -eps) @ p  # −ε × the first rows of f11, f12, f21, f22 (array first: mpf · ndarray)
-        w[0, 0] += ar.one  # the diagonals of the circulants f11, f22: w[., 0]
-        w[3, 0] += ar.one
-        r = numpy.concatenate([w, w], axis=1)
-        # block (a, c), entry (i, k) = w_ac[(k − i) mod n] = r[2a + c, n − i + k]: a view, then one copy
-        M = _view(r, n, (2, n, 2, n), (4 * n, -1, 2 * n, 1)).reshape(N, N)
-    else:
-        _, rows, ks, coefs, L = data
-        xv = numpy.array(x, dtype=float)
-        M = numpy.bincount(rows, weights=coefs * xv[ks], minlength=N * N)
+        hankel, n, F = data[1], N // 2, data[2]
+        # block (a, c), entry (i, k) = w_ac[(k − i) mod n] = [w | w][2a + c, n − i + k]
+        blocks = _viewer(float if ar.lapack else object, n, (2, n, 2, n), (4 * n, -1, 2 * n, 1))
+        # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1); w = −ε × the
+        # first rows of f11, f12, f21, f22 = (−ε F) p, F = :data:`_FIRST_ROWS`
+        if ar.lapack:
+            eF = F * -eps
+            first_rows = lambda x: eF @ (x.reshape(2, n) @ hankel).reshape(8, n)  # noqa: E731
+        else:  # objects: only the products that F's zeros do not cancel (p: 6 of 8 rows, F: 6 of 32
+            # entries), summed in the same order: the same values
+            terms = [[(k, F[r, k] * -eps) for k in range(8) if _FIRST_ROWS[r][k]] for r in range(4)]
+
+            def first_rows(x):
+                p = {k: x[n * (k % 2):][:n] @ hankel[k // 2] for k in (0, 2, 3, 4, 6, 7)}
+                return numpy.array([functools.reduce(operator.add, [p[k] * c for k, c in t]) for t in terms])
+
+        def build(x):
+            w = first_rows(x)
+            w[0, 0] += one  # the diagonals of the circulants f11, f22: w[., 0]
+            w[3, 0] += one
+            return blocks(numpy.concatenate([w, w], axis=1)).reshape(N, N)  # a view, then one copy
+        return build
+    _, rows, ks, coefs, L = data
+
+    def build(x):
+        M = numpy.bincount(rows, weights=coefs * x[ks], minlength=N * N)
         M += L
         M *= -eps
         M = M.reshape(N, N)
-        M.flat[::N + 1] += ar.one
-    return M
+        M.flat[::N + 1] += one
+        return M
+    return build
 
 
 def _values_data(field):
@@ -159,15 +188,27 @@ def float_step(field, ar, x, eps):
     (the same formulas as the generic dense step).  Raises
     :class:`~exact_khk.linalg.dense.SingularMatrix` on an exactly zero pivot.
     """
-    M, xv, data = system_matrix(field, ar, x, eps), numpy.array(x, dtype=float), _values_data(field)
-    if not data:
-        z, cond = float_solve(M, xv[:, None])
-        return z[:, 0].tolist(), cond
-    i, j, k, c, lin, const = data
-    with numpy.errstate(all="ignore"):  # overflow gives inf, found by the caller's finiteness check
-        fx = numpy.bincount(i, weights=c * xv[j] * xv[k], minlength=field.dim) + lin @ xv + const
-        X, cond = float_solve(M, fx[:, None])
-        return (xv + (eps + eps) * X[:, 0]).tolist(), cond
+    return float_stepper(field, ar, eps)(x)
+
+
+def float_stepper(field, ar, eps):
+    """``x ↦`` :func:`float_step` ``(field, ar, x, eps)``, with what depends on ε only
+    computed once (a :class:`~exact_khk.kahan.map.KahanMap` keeps one)."""
+    build, data, two_eps = _matrix_builder(_data(field, ar), field.dim, ar, eps), _values_data(field), eps + eps
+
+    def step(x):
+        xv = numpy.array(x, dtype=float)
+        with numpy.errstate(all="ignore"):  # overflow gives inf, found by the caller's finiteness check
+            M = build(xv)
+        if not data:
+            z, cond = float_solve(M, xv[:, None])
+            return z[:, 0].tolist(), cond
+        i, j, k, c, lin, const = data
+        with numpy.errstate(all="ignore"):
+            fx = numpy.bincount(i, weights=c * xv[j] * xv[k], minlength=field.dim) + lin @ xv + const
+            X, cond = float_solve(M, fx[:, None])
+            return (xv + two_eps * X[:, 0]).tolist(), cond
+    return step
 
 
 def float_solve(M, B):
@@ -175,12 +216,16 @@ def float_solve(M, B):
     ``numpy.linalg.inv`` (see the module docstring); ``M`` N×N, ``B`` N×m (numpy).  Raises
     :class:`~exact_khk.linalg.dense.SingularMatrix` on an exactly zero pivot;
     non-finite data give non-finite X or κ."""
-    try:  # numpy.linalg silences floating-point warnings itself
-        X, Y = numpy.linalg.solve(M, B), numpy.linalg.inv(M)
-    except numpy.linalg.LinAlgError as exc:
-        raise SingularMatrix(str(exc)) from None
+    # the gufuncs of numpy.linalg.solve and inv, in their error state: an exactly zero
+    # pivot sets the invalid flag (and nothing else in them does)
+    try:
+        with numpy.errstate(invalid="raise", over="ignore", divide="ignore", under="ignore"):
+            X, Y = _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
+    except FloatingPointError:
+        raise SingularMatrix("Singular matrix") from None
     # 1-norms by ufunc reductions; Python floats: inf·0 is nan without a warning
     return X, float(_max(_add(numpy.abs(M), 0))) * float(_max(_add(numpy.abs(Y), 0)))
 
 
 _add, _max = numpy.add.reduce, numpy.maximum.reduce
+_gesv, _inv = _umath_linalg.solve, _umath_linalg.inv
