@@ -115,3 +115,26 @@ def test_non_finite_coordinates_are_refused(name):
         with pytest.raises(InputError, match=r"x0\[2\]"):
             phi.orbit(x, 1)
     assert all(ar.is_finite(t) for t in phi.step(DEFAULT_X0))  # control: a finite point steps
+
+
+def test_float_solve_gives_the_bits_of_numpys_public_functions(monkeypatch):
+    """float_solve calls the gufuncs behind numpy.linalg.solve and inv (a private numpy
+    module); without them it calls the public functions: the same bits, and the same
+    SingularMatrix on an exactly zero pivot."""
+    import numpy
+
+    from exact_khk.linalg import floating
+    from exact_khk.linalg.dense import SingularMatrix
+
+    rng = numpy.random.default_rng(5)
+    cases = [(rng.standard_normal((N, N)), rng.standard_normal((N, 1))) for N in (2, 3, 8, 33)]
+    fast = [floating.float_solve(M, B) for M, B in cases]
+    assert all(X.tolist() == numpy.linalg.solve(M, B).tolist() for (M, B), (X, _) in zip(cases, fast))
+    monkeypatch.setattr(floating, "_gesv", None)
+    public = [floating.float_solve(M, B) for M, B in cases]
+    assert [(X.tolist(), k) for X, k in fast] == [(X.tolist(), k) for X, k in public]
+    singular = numpy.array([[1.0, 2.0], [2.0, 4.0]])
+    for gesv in (None, floating._umath_linalg.solve):
+        monkeypatch.setattr(floating, "_gesv", gesv)
+        with pytest.raises(SingularMatrix):
+            floating.float_solve(singular, numpy.ones((2, 1)))

@@ -53,7 +53,6 @@ import operator
 
 import numpy
 from numpy.lib.stride_tricks import as_strided
-from numpy.linalg import _umath_linalg
 
 from exact_khk.linalg.dense import SingularMatrix
 
@@ -219,13 +218,21 @@ def float_solve(M, B):
     # the gufuncs of numpy.linalg.solve and inv, in their error state: an exactly zero
     # pivot sets the invalid flag (and nothing else in them does)
     try:
-        with numpy.errstate(invalid="raise", over="ignore", divide="ignore", under="ignore"):
-            X, Y = _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
-    except FloatingPointError:
+        if _gesv is None:
+            X, Y = numpy.linalg.solve(M, B), numpy.linalg.inv(M)
+        else:
+            with numpy.errstate(invalid="raise", over="ignore", divide="ignore", under="ignore"):
+                X, Y = _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
+    except (FloatingPointError, numpy.linalg.LinAlgError):
         raise SingularMatrix("Singular matrix") from None
     # 1-norms by ufunc reductions; Python floats: inf·0 is nan without a warning
     return X, float(_max(_add(numpy.abs(M), 0))) * float(_max(_add(numpy.abs(Y), 0)))
 
 
 _add, _max = numpy.add.reduce, numpy.maximum.reduce
-_gesv, _inv = _umath_linalg.solve, _umath_linalg.inv
+try:  # numpy's private module (numpy 1.x and 2.x); without it, the public functions
+    from numpy.linalg import _umath_linalg
+
+    _gesv, _inv = _umath_linalg.solve, _umath_linalg.inv
+except ImportError:  # pragma: no cover
+    _gesv = _inv = None
