@@ -530,3 +530,15 @@ def test_progress_only_on_a_terminal(monkeypatch):
     monkeypatch.setattr(sys, "stderr", Tty())
     assert shows_progress(argparse.Namespace(quiet=False)) is True
     assert shows_progress(argparse.Namespace(quiet=True)) is False
+
+
+def test_real_vectors_of_unknown_length_are_limited_per_coordinate():
+    """A real vector read without a known dimension (``enclose --a`` without ``--n``)
+    is limited per coordinate, like one of known dimension: 300 entries ``sqrt(2)``
+    are read; one entry longer than the limit is refused."""
+    from exact_khk.arith.reals import MAX_REAL_CHARS, parse_real_vector
+    from exact_khk.errors import InputError
+
+    assert len(parse_real_vector(",".join(["sqrt(2)"] * 300), 64, "--a")) == 300
+    with pytest.raises(InputError, match="per coordinate"):
+        parse_real_vector("1" * (MAX_REAL_CHARS + 1), 64, "--a")

@@ -204,7 +204,7 @@ def parse_real_vector(text, prec: int, name: str = "x0", dim: int | None = None)
     """A comma-separated vector of reals (commas inside ``[..]`` or ``(..)`` do not
     separate), or a sequence of texts/numbers, as a tuple of arb balls."""
     if isinstance(text, str):
-        if len(text) > MAX_REAL_CHARS * max(dim or 1, 1):
+        if len(text) > MAX_REAL_CHARS * max(dim or text.count(",") + 1, 1):
             raise InputError(f"{name}: the text has {len(text)} characters, beyond the limit of "
                              f"{MAX_REAL_CHARS} per coordinate")
         items = [p.strip() for p in _split_top(text, name)]
