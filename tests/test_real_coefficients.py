@@ -227,3 +227,76 @@ def test_api_refuses_non_balls_and_non_rational_involutions():
     with pytest.raises(InputError):
         s.field("g", "+-++", cyclotomic=True)
     assert s.field("g").signs == "-+++" and s.field("control").label == "control"
+
+
+# --- parameters as Lohner coordinates (LinearParameters) ------------------------------
+
+
+def _coefficients(fld):
+    return {(i, key): c for i, terms in enumerate(fld.terms()) for key, c in terms}
+
+
+@pytest.mark.parametrize("kind,signs,power", [("f", None, 0), ("f", None, 1), ("g", None, 0), ("control", None, 0)])
+def test_linear_parameters_are_the_rational_fields_at_every_parameter(kind, signs, power):
+    """f(·; p) = mid + Σ_j (p_j − m_j) f_j, exactly, against the rational system built at p."""
+    real = RealLiePoissonSystem.from_reals("sqrt(2),0,[1.9,2.1]", "0,1+-1/8,0", "3,1,1", 64)
+    lin = real.linear_parameters(kind, signs, power)
+    assert lin.names == ("a_0", "a_2", "b_1")
+    mids = [arb_to_fmpq(t.mid()) for t in (real.a[0], real.a[2], real.b[1])]
+    ball = _coefficients(real.field(kind, signs, power))
+    for p in [mids, [Fraction(7, 5), Fraction(19, 10), Fraction(9, 8)], [Fraction(3, 2), Fraction(21, 10), 1]]:
+        a, b = [str(p[0]), "0", str(p[1])], ["0", str(p[2]), "0"]
+        exact = _coefficients(LiePoissonSystem.from_vectors(",".join(a), ",".join(b), C).field(kind, signs, power))
+        units = [_coefficients(u) for u in lin.units]
+        mid = _coefficients(lin.mid)
+        keys = set(exact) | set(mid) | {k for u in units for k in u}
+        for key in keys:
+            v = Fraction(mid.get(key, 0)) + sum((Fraction(str(q)) - Fraction(str(m))) * Fraction(u.get(key, 0))
+                                               for q, m, u in zip(p, mids, units))
+            assert v == exact.get(key, 0), key
+    for key, c in _coefficients(lin.mid).items():  # the ball field contains the midpoint field
+        assert contains_exact(ball[key], c), key
+    assert RealLiePoissonSystem.from_reals("1,0,[2,2]", B, C, 64).linear_parameters() is None
+
+
+def _boxed(a2, b1, eps=(Fraction(1, 10), Fraction(1, 10))):
+    """The real system with a_2 ∈ [a2], b_1 ∈ [b1] (pairs lo, hi), and the ε text."""
+    real = RealLiePoissonSystem.from_reals(f"1,0,[{a2[0]},{a2[1]}]", f"0,[{b1[0]},{b1[1]}],0", C, 128)
+    return real, f"[{eps[0]},{eps[1]}]"
+
+
+def test_parameter_box_contains_exact_orbits_over_many_steps():
+    """A box of width 2·10^-6 in a_2 (and 4·10^-7 in b_1, 2·10^-9 in ε): the Lohner enclosure
+    stays decided over 40 steps (before parameters were coordinates: undecided at step 12) and
+    contains the exact orbits of the corners, the centre and interior points."""
+    a2 = (Fraction(2) - Fraction(1, 10 ** 6), Fraction(2) + Fraction(1, 10 ** 6))
+    b1 = (Fraction(1) - Fraction(1, 10 ** 7), Fraction(1) + Fraction(3, 10 ** 7))
+    eps = (Fraction(1, 10) - Fraction(1, 10 ** 9), Fraction(1, 10) + Fraction(1, 10 ** 9))
+    real, e = _boxed(a2, b1, eps)
+    steps = 40
+    run = enclosure.enclose(real, X0, e, steps, 128, "lohner", keep_points=True)
+    assert run.status == "ok" and run.min_correct_bits > 15
+    samples = [(x, y, z) for x in a2 for y in b1 for z in eps]
+    samples += [(Fraction(2), Fraction(1), Fraction(1, 10)),
+                (a2[0] + Fraction(1, 3 * 10 ** 6), b1[1] - Fraction(2, 7 * 10 ** 7), eps[0] + Fraction(1, 10 ** 10))]
+    for x, y, z in samples:
+        orbit = _exact_orbit(f"1,0,{x}", f"0,{y},0", C, steps, z)
+        assert _contains(run.points, orbit), (x, y, z)
+    # negative control: a_2 outside the box by 10^-7 (a twentieth of its width)
+    orbit = _exact_orbit(f"1,0,{a2[1] + Fraction(1, 10 ** 7)}", "0,1,0", C, steps)
+    assert not _contains(run.points, orbit)
+
+
+def test_parameters_as_coordinates_keep_the_true_spread():
+    """Box of width 2·10^-12 in a_2: the enclosure after 100 steps is within 1 bit of the
+    spread of the exact orbits of the box's two ends (a lower bound of every enclosure)."""
+    lo, hi = Fraction(2) - Fraction(1, 10 ** 12), Fraction(2) + Fraction(1, 10 ** 12)
+    real, _ = _boxed((lo, hi), (1, 1))
+    steps = 100
+    run = enclosure.enclose(real, X0, "1/10", steps, 128, "lohner", keep_points=True)
+    assert run.status == "ok"
+    ends = [_exact_orbit(f"1,0,{t}", B, C, steps)[-1] for t in (lo, hi)]
+    assert _contains(run.points[-1:], [ends[0]]) and _contains(run.points[-1:], [ends[1]])
+    spread = max(abs(p - q) for p, q in zip(*ends)) / 2  # fmpq, exact
+    rad = max(arb_to_fmpq(t.rad()) for t in run.points[-1])
+    assert spread <= rad <= 2 * spread  # within one bit (measured: 1.0000002)

@@ -38,6 +38,23 @@ def certainly_zero(c) -> bool:
     return bool(c == 0)
 
 
+@dataclass(frozen=True)
+class LinearParameters:
+    """A field linear in real parameters p_j known only to lie in balls [m_j ± r_j]:
+
+        f(x; p) = mid(x) + Σ_j (p_j − m_j) units[j](x),
+
+    ``mid`` = f(·; m) at the (dyadic) midpoints and ``units[j]`` = ∂f/∂p_j, both
+    :class:`QuadraticField` with exact rational coefficients; ``radii[j]`` = r_j > 0 (an
+    exact arb); ``names[j]`` names p_j (``'a_2'``).  The Lohner enclosure
+    (:mod:`exact_khk.studies.enclosure`) carries δ_j = p_j − m_j as coordinates."""
+
+    mid: "QuadraticField"
+    units: tuple
+    radii: tuple
+    names: tuple
+
+
 @dataclass(frozen=True, eq=False)
 class QuadraticField:
     """A quadratic vector field on K^dim.
