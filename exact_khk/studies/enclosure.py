@@ -29,9 +29,9 @@ bits, each certified to contain the exact orbit at every step:
        ∂Φ/∂p_j = (I − ε f'(x))^{-1} ε (f_j'(x)(Φ(x) − x) + 2 f_j(x)): both from the
        step's equation (I − ε f'(x))(Φ − x) = 2ε f(x) (the form BallKahan.step
        solves; for a homogeneous f, (I − ε f'(x)) Φ = x is the same equation, as
-       f'(x) x = 2 f(x)), differentiated in ε, resp. in p_j for f linear in p,
-       f(x; p) = f_0(x) + Σ_j p_j f_j(x): −ε f_j'(x)(Φ − x) + (I − ε f'(x)) ∂Φ/∂p_j
-       = 2ε f_j(x);
+       f'(x) x = 2 f(x)), differentiated in ε, resp. in p_j with f_j = ∂f/∂p_j(·; p)
+       (for f linear in p, f(x; p) = f_0(x) + Σ_j p_j f_j(x), the unit fields):
+       −ε f_j'(x)(Φ − x) + (I − ε f'(x)) ∂Φ/∂p_j = 2ε f_j(x);
     3. by the mean-value theorem (row by row, on the segment from (c_k, q̂) to
        (x_k, q), inside the convex box X_k × box(q)),
        x_{k+1} − Φ(c_k; q̂) = J̃_x (x_k − c_k) + J̃_q (q − q̂) with J̃ ∈ [J_x | J_q];
@@ -72,27 +72,30 @@ True
 Real input (:mod:`exact_khk.arith.reals`): x_0 and ε may be intervals, balls or
 exact reals such as ``sqrt(2)``.  So may the parameters of a system whose field
 has ball coefficients: the Lie–Poisson blocks a, b, c
-(:class:`~exact_khk.systems.lie_poisson.real.RealLiePoissonSystem`; every
-coefficient ball of f(x; p) = Σ_j p_j f_j(x) contains the true coefficient for
-every p in the box P).  The enclosures then hold for every p ∈ P at once:
+(:class:`~exact_khk.systems.lie_poisson.real.RealLiePoissonSystem`, where
+f(x; p) = Σ_j p_j f_j(x)) and a system file's parameters given as reals
+(:class:`~exact_khk.systems.real_expressions.RealExpressionSystem`, coefficients
+rational functions of p); every coefficient ball contains the true coefficient for
+every p in the box P.  The enclosures then hold for every p ∈ P at once:
 
 * naive: X_{k+1} = Φ(X_k; P) in balls contains Φ(x; p) for every x ∈ X_k, p ∈ P;
-* Lohner: the field is linear in its parameters, and the system says so
-  (``system.linear_parameters('f')``, a
-  :class:`~exact_khk.systems.quadratic.LinearParameters`: the midpoint field f(·; m)
-  and the unit fields f_j = ∂f/∂p_j, exact rationals, for the parameters of nonzero
-  radius r_j), so f(x; p) = f(x; m) + Σ_j δ_j f_j(x) and the δ_j are coordinates of
-  q above.  Step 1 steps the centre with the midpoint field (its image is exact up
-  to rounding: z does not contain the spread over P); step 2 evaluates f, f' with
-  the ball field (its coefficients contain those of f(·; p) for every p ∈ P) and
-  f_j, f_j' on X_k, so [J_x | J_q] contains the derivative at every point of the
-  box X_k × box(q).  Fix p ∈ P: s ↦ Φ(s; p) is smooth on the box (its pivots are
+* Lohner: the system gives ``system.parameter_fields('f')``, a
+  :class:`~exact_khk.systems.quadratic.ParameterFields`: the midpoint field f(·; m)
+  (exact rationals) and, for each parameter of nonzero radius r_j, a field f_j whose
+  coefficients contain those of ∂f/∂p_j(·; p) for every p ∈ P (for the Lie–Poisson
+  blocks, f is linear in p and f_j is the exact unit field; for a system file, the
+  derivatives of the rational coefficients, evaluated in balls over P); the δ_j
+  are coordinates of q above.  Step 1 steps the centre with the midpoint field
+  (its image is exact up to rounding: z does not contain the spread over P);
+  step 2 evaluates f, f' with the ball field (its coefficients contain those of
+  f(·; p) for every p ∈ P) and f_j, f_j' on X_k, so [J_x | J_q] contains the
+  derivative at every point of the box X_k × box(q).  Fix p ∈ P: s ↦ Φ(s; p) is smooth on the box (its pivots are
   certified nonzero there), so step 3 holds for this p's orbit, and by induction
   every X_k contains x_k(p) for every p ∈ P.  The parameters' effect is carried in
   C_k; only the width of G (second order) is wrapped: on the built-in orbit a box
   of width 2·10^-6 in a_2 keeps 21.5 correct bits over 200 steps, where the
   orbits of its two ends alone differ by 2^-21.8 (relative).  A field with ball
-  coefficients whose system gives no ``linear_parameters`` (q = (ε) only) is
+  coefficients whose system gives no ``parameter_fields`` (q = (ε) only) is
   still enclosed: step 1 then steps the centre with the ball field, so
   y ∋ Φ(c_k; p) for every p ∈ P and the spread over P is wrapped into r at
   every step (so were the Lie–Poisson blocks before: the box above was
@@ -154,7 +157,7 @@ class BallKahan:
     """Kahan steps and Jacobians of a quadratic field in arb balls at ``prec`` bits,
     with ε itself a ball; every result encloses the exact one for every point of
     the input balls.  ``params``: the field's real parameters as a
-    :class:`~exact_khk.systems.quadratic.LinearParameters` (``centre`` steps with its
+    :class:`~exact_khk.systems.quadratic.ParameterFields` (``centre`` steps with its
     midpoint field, :meth:`jacobian` adds a column ∂Φ/∂p_j per parameter), or None.
     Call inside ``flint.ctx.workprec(prec)``."""
 
@@ -353,7 +356,7 @@ def enclose(system, x0, eps, steps, prec=256, method="lohner", exact=None, integ
     e = parse_real(eps, prec, "eps")
     if e.contains(0):
         raise InputError("eps: the step size (interval) must not contain 0")
-    params = getattr(system, "linear_parameters", None)
+    params = getattr(system, "parameter_fields", None)
     K = BallKahan(fld, prec, params("f") if params is not None and method == "lohner" else None)
     ar = K.ar
     rows, points, times = [], [], []

@@ -133,8 +133,8 @@ class RealLiePoissonSystem(LiePoissonSystem):
         self._fields[key] = fld
         return fld
 
-    def linear_parameters(self, kind: str = "f", signs=None, power: int = 0):
-        """``field(kind, signs, power)`` as a :class:`~exact_khk.systems.quadratic.LinearParameters`
+    def parameter_fields(self, kind: str = "f", signs=None, power: int = 0):
+        """``field(kind, signs, power)`` as a :class:`~exact_khk.systems.quadratic.ParameterFields`
         in the block entries of nonzero radius (None when every entry is a point).
 
         The field is linear in (a, b, c) (every Hessian entry is one entry of a, b or c,
@@ -145,7 +145,7 @@ class RealLiePoissonSystem(LiePoissonSystem):
         from fractions import Fraction
 
         from exact_khk.arith.ball import ball_mid
-        from exact_khk.systems.quadratic import LinearParameters
+        from exact_khk.systems.quadratic import ParameterFields
 
         blocks = {k: getattr(self, k) for k in ("a", "b", "c")}
         free = [(k, i) for k, v in blocks.items() for i, t in enumerate(v) if not t.rad().is_zero()]
@@ -160,4 +160,4 @@ class RealLiePoissonSystem(LiePoissonSystem):
                           for k, v in blocks.items()})
         units = [rational(**{k: tuple(Fraction(int(j == i)) for j in range(self.n))}) for k, i in free]
         radii = tuple(flint.arb(blocks[k][i].rad()) for k, i in free)
-        return LinearParameters(mid, tuple(units), radii, tuple(f"{k}_{i}" for k, i in free))
+        return ParameterFields(mid, tuple(units), radii, tuple(f"{k}_{i}" for k, i in free))
