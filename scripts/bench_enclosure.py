@@ -62,7 +62,7 @@ def main():
             runs[m + "_seconds"] = time.perf_counter() - t
         lo = runs["lohner"]
         ks = [r.step for r in lo.rows if r.step >= 1 and r.rad_log2 is not None]
-        logk_slope = enclosure._slope([math.log2(k) for k in ks], [r.rad_log2 for r in lo.rows
+        logk_slope = scaling._slope([math.log2(k) for k in ks], [r.rad_log2 for r in lo.rows
                                                                    if r.step >= 1 and r.rad_log2 is not None])
         rec = {
             "x0": x0, "eps": eps, "exact_steps_checked": len(exact) - 1, "exact_seconds": t_exact,

@@ -9,6 +9,7 @@ out independently of the library.
 
 from __future__ import annotations
 
+import pathlib
 from fractions import Fraction
 
 import flint
@@ -23,7 +24,9 @@ from exact_khk.studies import enclosure
 from exact_khk.studies.scaling import declared, exact_prefix
 from exact_khk.systems.lie_poisson import DEFAULT_X0, LiePoissonSystem
 from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.systems.expressions import ExpressionSystem, load_system, tomllib
 from exact_khk.systems.lie_poisson.real import RealLiePoissonSystem
+from exact_khk.systems.real_expressions import RealExpressionSystem
 
 X0 = ",".join(DEFAULT_X0)
 B, C = "0,1,0", "3,1,1"
@@ -227,3 +230,183 @@ def test_api_refuses_non_balls_and_non_rational_involutions():
     with pytest.raises(InputError):
         s.field("g", "+-++", cyclotomic=True)
     assert s.field("g").signs == "-+++" and s.field("control").label == "control"
+
+
+# --- parameters as Lohner coordinates (ParameterFields) ------------------------------
+
+
+def _coefficients(fld):
+    return {(i, key): c for i, terms in enumerate(fld.terms()) for key, c in terms}
+
+
+@pytest.mark.parametrize("kind,signs,power", [("f", None, 0), ("f", None, 1), ("g", None, 0), ("control", None, 0)])
+def test_parameter_fields_are_the_rational_fields_at_every_parameter(kind, signs, power):
+    """f(·; p) = mid + Σ_j (p_j − m_j) f_j, exactly, against the rational system built at p."""
+    real = RealLiePoissonSystem.from_reals("sqrt(2),0,[1.9,2.1]", "0,1+-1/8,0", "3,1,1", 64)
+    lin = real.parameter_fields(kind, signs, power)
+    assert lin.names == ("a_0", "a_2", "b_1")
+    mids = [arb_to_fmpq(t.mid()) for t in (real.a[0], real.a[2], real.b[1])]
+    ball = _coefficients(real.field(kind, signs, power))
+    for p in [mids, [Fraction(7, 5), Fraction(19, 10), Fraction(9, 8)], [Fraction(3, 2), Fraction(21, 10), 1]]:
+        a, b = [str(p[0]), "0", str(p[1])], ["0", str(p[2]), "0"]
+        exact = _coefficients(LiePoissonSystem.from_vectors(",".join(a), ",".join(b), C).field(kind, signs, power))
+        units = [_coefficients(u) for u in lin.units]
+        mid = _coefficients(lin.mid)
+        keys = set(exact) | set(mid) | {k for u in units for k in u}
+        for key in keys:
+            v = Fraction(mid.get(key, 0)) + sum((Fraction(str(q)) - Fraction(str(m))) * Fraction(u.get(key, 0))
+                                               for q, m, u in zip(p, mids, units))
+            assert v == exact.get(key, 0), key
+    for key, c in _coefficients(lin.mid).items():  # the ball field contains the midpoint field
+        assert contains_exact(ball[key], c), key
+    assert RealLiePoissonSystem.from_reals("1,0,[2,2]", B, C, 64).parameter_fields() is None
+
+
+def _boxed(a2, b1, eps=(Fraction(1, 10), Fraction(1, 10))):
+    """The real system with a_2 ∈ [a2], b_1 ∈ [b1] (pairs lo, hi), and the ε text."""
+    real = RealLiePoissonSystem.from_reals(f"1,0,[{a2[0]},{a2[1]}]", f"0,[{b1[0]},{b1[1]}],0", C, 128)
+    return real, f"[{eps[0]},{eps[1]}]"
+
+
+def test_parameter_box_contains_exact_orbits_over_many_steps():
+    """A box of width 2·10^-6 in a_2 (and 4·10^-7 in b_1, 2·10^-9 in ε): the Lohner enclosure
+    stays decided over 40 steps (before parameters were coordinates: undecided at step 12) and
+    contains the exact orbits of the corners, the centre and interior points."""
+    a2 = (Fraction(2) - Fraction(1, 10 ** 6), Fraction(2) + Fraction(1, 10 ** 6))
+    b1 = (Fraction(1) - Fraction(1, 10 ** 7), Fraction(1) + Fraction(3, 10 ** 7))
+    eps = (Fraction(1, 10) - Fraction(1, 10 ** 9), Fraction(1, 10) + Fraction(1, 10 ** 9))
+    real, e = _boxed(a2, b1, eps)
+    steps = 40
+    run = enclosure.enclose(real, X0, e, steps, 128, "lohner", keep_points=True)
+    assert run.status == "ok" and run.min_correct_bits > 15
+    samples = [(x, y, z) for x in a2 for y in b1 for z in eps]
+    samples += [(Fraction(2), Fraction(1), Fraction(1, 10)),
+                (a2[0] + Fraction(1, 3 * 10 ** 6), b1[1] - Fraction(2, 7 * 10 ** 7), eps[0] + Fraction(1, 10 ** 10))]
+    for x, y, z in samples:
+        orbit = _exact_orbit(f"1,0,{x}", f"0,{y},0", C, steps, z)
+        assert _contains(run.points, orbit), (x, y, z)
+    # negative control: a_2 outside the box by 10^-7 (a twentieth of its width)
+    orbit = _exact_orbit(f"1,0,{a2[1] + Fraction(1, 10 ** 7)}", "0,1,0", C, steps)
+    assert not _contains(run.points, orbit)
+
+
+def test_parameters_as_coordinates_keep_the_true_spread():
+    """Box of width 2·10^-12 in a_2: the enclosure after 100 steps is within 1 bit of the
+    spread of the exact orbits of the box's two ends (a lower bound of every enclosure)."""
+    lo, hi = Fraction(2) - Fraction(1, 10 ** 12), Fraction(2) + Fraction(1, 10 ** 12)
+    real, _ = _boxed((lo, hi), (1, 1))
+    steps = 100
+    run = enclosure.enclose(real, X0, "1/10", steps, 128, "lohner", keep_points=True)
+    assert run.status == "ok"
+    ends = [_exact_orbit(f"1,0,{t}", B, C, steps)[-1] for t in (lo, hi)]
+    assert _contains(run.points[-1:], [ends[0]]) and _contains(run.points[-1:], [ends[1]])
+    spread = max(abs(p - q) for p, q in zip(*ends)) / 2  # fmpq, exact
+    rad = max(arb_to_fmpq(t.rad()) for t in run.points[-1])
+    assert spread <= rad <= 2 * spread  # within one bit (measured: 1.0000002)
+
+
+# --- a system file's parameters as reals: enclose --system FILE --param NAME=REAL --------------
+
+SCALED = pathlib.Path(__file__).parent / "data" / "scaled-euler-top.toml"
+
+
+def _file_system(**values):
+    """The test file's system with some parameters replaced by exact rationals (the exact reference)."""
+    table = tomllib.loads(SCALED.read_text())
+    table["parameters"].update({k: str(v) for k, v in values.items()})
+    return ExpressionSystem(table)
+
+
+def _file_orbit(steps, **values):
+    fld = _file_system(**values).field("f")
+    orbit, _, err = exact_prefix(fld, ["1", "2", "-1"], "1/5", steps)
+    assert err is None and len(orbit) == steps + 1
+    return orbit
+
+
+def _real_file(*assignments, prec=128):
+    return RealExpressionSystem.from_assignments(load_system(SCALED), list(assignments), prec)
+
+
+@pytest.mark.parametrize("name,lo,hi", [("a3", Fraction(29, 10), Fraction(31, 10)),
+                                         ("s", Fraction(9, 10), Fraction(11, 10))])
+def test_parameter_fields_of_a_file_against_the_rational_files(name, lo, hi):
+    """Every coefficient ball contains the rational file's coefficient at sampled parameters;
+    mid is the file at the midpoint exactly; df/dp contains the difference quotients' limit,
+    checked by exact finite differences of the rational files (linear a3: equal; 1/s: between)."""
+    real = _real_file(f"{name}=[{lo},{hi}]")
+    pf = real.parameter_fields()
+    assert pf.names == (name,)
+    m = (lo + hi) / 2
+    at_mid = _coefficients(_file_system(**{name: m}).field("f"))
+    assert _coefficients(pf.mid) == {k: Fraction(c) for k, c in at_mid.items()}
+    ball, unit = _coefficients(real.field("f")), _coefficients(pf.units[0])
+    assert all(t.is_finite() for t in unit.values())
+    for p in (lo, hi, m, lo + (hi - lo) / 3):
+        exact = _coefficients(_file_system(**{name: p}).field("f"))
+        assert set(exact) == set(ball) and all(contains_exact(ball[k], flint.fmpq(c.numerator, c.denominator))
+                                               for k, c in exact.items())
+    h = (hi - lo) / 10 ** 6
+    for p in (lo, hi - h):
+        a, b = (_coefficients(_file_system(**{name: t}).field("f")) for t in (p, p + h))
+        for k in set(a) | set(b):
+            q = (Fraction(b.get(k, 0)) - Fraction(a.get(k, 0))) / h  # a derivative at some point in [p, p + h]
+            assert contains_exact(unit[k], flint.fmpq(q.numerator, q.denominator)) if k in unit else q == 0, k
+    assert _real_file("s=[1/2,3/2]").parameter_fields() is None  # den² in balls contains 0: no coordinates
+
+
+@pytest.mark.parametrize("name,width,steps", [("a3", Fraction(1, 10 ** 6), 30), ("s", Fraction(1, 10 ** 7), 30)])
+def test_file_parameter_box_contains_exact_orbits(name, width, steps):
+    """A box around a3 = 3 (linear) or s = 1 (in a denominator): the Lohner and naive enclosures
+    contain the exact orbits of the corners, the centre and an interior point of the file with
+    those rational values; a value outside the box is missed."""
+    c = {"a3": Fraction(3), "s": Fraction(1)}[name]
+    lo, hi = c - width, c + width
+    real = _real_file(f"{name}=[{lo},{hi}]")
+    runs = [enclosure.enclose(real, "1,2,-1", "1/5", steps, 128, m, keep_points=True) for m in enclosure.METHODS]
+    assert runs[1].status == "ok" and runs[1].min_correct_bits > 10
+    for p in (lo, hi, c, lo + width / 3):
+        orbit = _file_orbit(steps, **{name: p})
+        for run in runs:
+            assert _contains(run.points, orbit), (run.method, p)
+    assert not _contains(runs[1].points, _file_orbit(steps, **{name: hi + width / 10}))
+
+
+def test_file_parameters_width_zero_and_integrals():
+    base = load_system(SCALED)
+    orbit = _file_orbit(12)
+    for method in enclosure.METHODS:  # width zero: the balls of the rational file
+        r = enclosure.enclose(_real_file("a3=[3,3]", "s=1"), "1,2,-1", "1/5", 12, 128, method, keep_points=True)
+        q = enclosure.enclose(base, "1,2,-1", "1/5", 12, 128, method, orbit, keep_points=True)
+        assert r.steps_done == q.steps_done == 12 and q.encloses
+        assert all(x.mid() == y.mid() and x.rad() == y.rad() for P, Q in zip(r.points, q.points) for x, y in zip(P, Q))
+    # integrals: H12 does not mention a3 or s and is kept (its drift encloses 0); H23 is skipped
+    real = _real_file("a3=3+-1e-9")
+    assert list(real.integrals()) == ["H12"] and "a3" in real.skipped["H23"] and "H23 skipped" in real.describe()
+    run = enclosure.enclose(real, "1,2,-1", "1/5", 20, 128, "lohner", integrals=declared(real)[0])
+    assert run.drift_contains_zero is True
+    assert list(_real_file("a1=1+-1e-9", "s=1").integrals()) == []
+
+
+def test_cli_param(capsys):
+    code, out, err = _cli(capsys, "--system", str(SCALED), "--param", "s=1+-1e-9", "--param", "a3=sqrt(9)",
+                          "--steps", "20")
+    assert code == 0, err
+    assert "real parameters" in out and "lohner   ok" in out and "H23 skipped" in out
+
+
+@pytest.mark.parametrize("params", [["b=1"], ["a3"], ["a3="], ["=1"], ["a3=[1,"], ["a3=1", "a3=2"], ["s=[-1,1]"],
+                                    ["a3=nan"], ["s=0"]])
+def test_cli_bad_param_is_one_line_exit_2(capsys, params):
+    argv = ["--system", str(SCALED), "--steps", "2"] + [t for p in params for t in ("--param", p)]
+    code, out, err = _cli(capsys, *argv)
+    assert code == 2, (out, err)
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("argv", [["--param", "a=1"],
+                                  ["--system", str(SCALED), "--param", "s=1+-1e-9", "--check-exact"],
+                                  ["--a", "1,0,2", "--b", B, "--c", C, "--x0", X0, "--param", "a=1"]])
+def test_cli_param_needs_a_system_file(capsys, argv):
+    code, out, err = _cli(capsys, *argv, "--steps", "2")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--param" in err, (out, err)

@@ -73,8 +73,12 @@ def register(sub):
                        "integral's drift I(x_k) - I(x_0). --x0 and --eps take reals: rationals and decimals "
                        "(read as the exact rational they denote), exact reals such as sqrt(2) or pi/4, intervals "
                        "[lo,hi] and balls m+-r (see docs/precision.md). So do the Lie–Poisson blocks --a/--b/--c, e.g. --a "
-                       "'sqrt(2),0,2+-1e-12': every enclosure then holds for every parameter value in the boxes.")
+                       "'sqrt(2),0,2+-1e-12': every enclosure then holds for every parameter value in the boxes; "
+                       "so does a system file's parameter given by --param NAME=REAL.")
     add_system_options(e, steps_default=1000)
+    e.add_argument("--param", action="append", metavar="NAME=REAL",
+                   help="with --system: override the file's parameter NAME by a real (same syntax as --x0; "
+                        "repeatable); integrals that mention it are skipped")
     e.add_argument("--prec", type=int, default=256, help="working precision P in bits (default 256)")
     e.add_argument("--methods", default="naive,lohner", help="naive, lohner or both (default: %(default)s)")
     e.add_argument("--check-exact", action="store_true",
@@ -320,6 +324,10 @@ def cmd_enclose(args):
     x0_text, eps_text = args.x0, args.eps
     # the system (real --a/--b/--c: arb blocks) and its defaults; --x0 and --eps are read as reals below
     system, x0_default, eps_default = system_from_args(args, reals=args.prec)
+    if args.param is not None:
+        from exact_khk.systems.real_expressions import RealExpressionSystem
+
+        system = RealExpressionSystem.from_assignments(system, args.param, args.prec)
     _check_dim(system, "enclose")
     x0 = parse_real_vector(x0_text, args.prec, "--x0", system.dim) if x0_text is not None else \
         tuple(parse_real(str(t), args.prec, "--x0") for t in x0_default)
@@ -331,8 +339,8 @@ def cmd_enclose(args):
     exact = None
     if args.check_exact:
         if getattr(system, "prec", None) is not None:
-            raise InputError("--check-exact needs rational --a/--b/--c (the exact orbit is the reference); real "
-                             "blocks are enclosed, not checked")
+            raise InputError("--check-exact needs rational --a/--b/--c and no --param (the exact orbit is the "
+                             "reference); real parameters are enclosed, not checked")
         rational = (x0_text is None or all(is_rational_text(t.strip()) for t in x0_text.split(","))) and \
             (eps_text is None or is_rational_text(eps_text))
         if not rational:

@@ -55,21 +55,27 @@ _SYSTEM_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*\Z")
 
 def _quadratic_field(polys, label: str) -> QuadraticField:
     """The QuadraticField with f_i = polys[i] (ring polynomials of degree <= 2, no ε)."""
+    return quadratic_field_from_terms([[(m[:-1], frac(c)) for m, c in p.items()] for p in polys], label)
+
+
+def quadratic_field_from_terms(rows, label: str) -> QuadraticField:
+    """The QuadraticField with f_i = Σ c x^m over the (exponent tuple m, coefficient c) pairs
+    of rows[i] (total degree <= 2; coefficients exact rationals or arb balls)."""
     quad, lin, const = [], [], []
-    for p in polys:
+    for row in rows:
         q, l, c = [], [], Fraction(0)
-        for m, coef in p.items():
-            idx = tuple(i for i, k in enumerate(m[:-1]) for _ in range(k))
+        for m, coef in row:
+            idx = tuple(i for i, k in enumerate(m) for _ in range(k))
             if len(idx) == 2:
-                q.append((idx, frac(coef)))
+                q.append((idx, coef))
             elif len(idx) == 1:
-                l.append((idx[0], frac(coef)))
+                l.append((idx[0], coef))
             else:
-                c = frac(coef)
-        quad.append(tuple(sorted(q)))
-        lin.append(tuple(sorted(l)))
+                c = coef
+        quad.append(tuple(sorted(q, key=lambda t: t[0])))
+        lin.append(tuple(sorted(l, key=lambda t: t[0])))
         const.append(c)
-    return QuadraticField(len(polys), tuple(quad), tuple(lin), tuple(const), label)
+    return QuadraticField(len(rows), tuple(quad), tuple(lin), tuple(const), label)
 
 
 def _rational(value, where: str) -> Fraction:

@@ -38,6 +38,22 @@ def certainly_zero(c) -> bool:
     return bool(c == 0)
 
 
+@dataclass(frozen=True)
+class ParameterFields:
+    """A field f(x; p) whose real parameters p_j are known only to lie in balls [m_j ± r_j]:
+    ``mid`` = f(·; m) at the (dyadic) midpoints, with exact rational coefficients, and
+    ``units[j]`` ⊇ ∂f/∂p_j(·; p) for every p in the boxes (a :class:`QuadraticField` whose
+    coefficients are exact rationals when f is affine in p — e.g. the unit fields of the
+    Lie–Poisson blocks — and arb balls over the boxes otherwise); ``radii[j]`` = r_j > 0
+    (an exact arb); ``names[j]`` names p_j (``'a_2'``).  The Lohner enclosure
+    (:mod:`exact_khk.studies.enclosure`) carries δ_j = p_j − m_j as coordinates."""
+
+    mid: "QuadraticField"
+    units: tuple
+    radii: tuple
+    names: tuple
+
+
 @dataclass(frozen=True, eq=False)
 class QuadraticField:
     """A quadratic vector field on K^dim.

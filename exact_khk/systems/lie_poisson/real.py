@@ -132,3 +132,32 @@ class RealLiePoissonSystem(LiePoissonSystem):
             object.__setattr__(fld, "signs", s)
         self._fields[key] = fld
         return fld
+
+    def parameter_fields(self, kind: str = "f", signs=None, power: int = 0):
+        """``field(kind, signs, power)`` as a :class:`~exact_khk.systems.quadratic.ParameterFields`
+        in the block entries of nonzero radius (None when every entry is a point).
+
+        The field is linear in (a, b, c) (every Hessian entry is one entry of a, b or c,
+        and ``'g'``, ``'control'`` and the powers multiply the Hessian by rational
+        matrices), so f(x; p) = f(x; m) + Σ_j (p_j − m_j) f_{e_j}(x): the midpoint field
+        is the rational system at the balls' midpoints, and the unit field of entry j is
+        the rational system with that entry 1 and every other entry 0."""
+        from fractions import Fraction
+
+        from exact_khk.arith.ball import ball_mid
+        from exact_khk.systems.quadratic import ParameterFields
+
+        blocks = {k: getattr(self, k) for k in ("a", "b", "c")}
+        free = [(k, i) for k, v in blocks.items() for i, t in enumerate(v) if not t.rad().is_zero()]
+        if not free:
+            return None
+        zero = (Fraction(0),) * self.n
+
+        def rational(**vectors):
+            return LiePoissonSystem(*(vectors.get(k, zero) for k in blocks)).field(kind, signs, power)
+
+        mid = rational(**{k: tuple(Fraction(int(q.p), int(q.q)) for q in map(ball_mid, v))
+                          for k, v in blocks.items()})
+        units = [rational(**{k: tuple(Fraction(int(j == i)) for j in range(self.n))}) for k, i in free]
+        radii = tuple(flint.arb(blocks[k][i].rad()) for k, i in free)
+        return ParameterFields(mid, tuple(units), radii, tuple(f"{k}_{i}" for k, i in free))

@@ -1,0 +1,216 @@
+"""System files with real parameters: ``exact-khk enclose --system FILE --param NAME=REAL``.
+
+A system file's ``[parameters]`` are exact rationals substituted at parse time
+(:mod:`.expressions`).  :class:`RealExpressionSystem` overrides some of them by reals
+(:func:`~exact_khk.arith.reals.parse_real` syntax: ``sqrt(2)``, ``[1.9,2.1]``,
+``2+-1e-6``) read as arb balls at P bits, and re-reads the field's components with
+the overridden parameters p as extra polynomial generators: each component is
+num(x, p)/den(p), and the coefficient of each monomial x^m is a polynomial c_m(p)
+divided by den(p) (rationals; a denominator that involves x, or a term of degree
+above 2 in x for symbolic p, is refused).  Evaluated in arb over the parameter
+balls, each coefficient ball contains c_m(p)/den(p) for every p in the boxes; a
+denominator whose ball may be 0 is refused (InputError).
+
+:meth:`~RealExpressionSystem.parameter_fields` gives the field at the midpoints
+(exact rationals: c(m)/den(m)) and ∂f/∂p_j, whose coefficients
+(∂c·den − c·∂den)/den² are evaluated in balls over the boxes (exact rationals
+when f is affine in p), so the Lohner enclosure carries the parameters of nonzero
+radius as coordinates (:mod:`exact_khk.studies.enclosure`).
+
+Integrals: those whose text does not mention an overridden parameter are kept
+(their values do not depend on it); the others are skipped, with the reason in
+:attr:`~RealExpressionSystem.skipped` and in :meth:`describe` (the file claims them
+for its own parameter values only, and an integral is never evaluated at other
+values).  Poisson tensors, other fields and controls are not carried over: this
+system serves ``enclose`` only.
+
+>>> from exact_khk.systems.catalogue import resolve
+>>> s = RealExpressionSystem.from_assignments(resolve("euler-top"), ["a3=[2.9,3.1]"], 64)
+>>> s.field("f").terms()[2]
+(((0, 1), [3e+0 +/- 0.101]),)
+>>> sorted(s.integrals()), sorted(s.skipped)
+(['H12'], ['H23', 'H31'])
+"""
+
+from __future__ import annotations
+
+import re
+from fractions import Fraction
+
+import flint
+import sympy
+from sympy.polys.rings import ring
+
+from ..arith import check_precision
+from ..errors import InputError
+from .base import System
+from .expression_parser import Parser, frac, text_of
+from .expressions import EPS, ExpressionSystem, quadratic_field_from_terms
+from .quadratic import ParameterFields
+
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _fraction_arb(q: Fraction):
+    """An arb ball containing the rational q (at the current precision)."""
+    return flint.arb(flint.fmpq(q.numerator, q.denominator))
+
+
+class RealExpressionSystem(System):
+    """A system file's system with some parameters real (arb balls at ``prec`` bits); build
+    it with :meth:`from_assignments`.  Only the field ``'f'`` (ball coefficients) and the
+    integrals that do not mention an overridden parameter."""
+
+    kind = "expressions-real"
+
+    def __init__(self, base: ExpressionSystem, values: dict, prec: int = 256):
+        self.prec = check_precision("ball", prec)
+        self.base, self.values = base, dict(values)
+        self.name, self.variables, self.dim = base.name, base.variables, base.dim
+        self.default_x0, self.default_eps = base.default_x0, base.default_eps
+        self.default_steps = base.default_steps
+        texts = base.to_json().get("field")
+        if texts is None:
+            raise InputError(f"--param: {base.name} gives its field by [hamiltonian] only; real parameters need "
+                             f"a [field] section")
+        self._rows = self._read(texts)
+        with flint.ctx.workprec(self.prec):
+            self._field = self._ball_field()
+        self._integrals, self.skipped = {}, {}
+        spec = base.to_json().get("integrals", {})
+        for name, fn in base.integrals().items():
+            used = sorted(set(_WORD.findall(spec.get(name, ""))) & set(values))
+            if used:
+                self.skipped[name] = (f"mentions the real parameter{'s' * (len(used) > 1)} {', '.join(used)} "
+                                      f"(claimed for the file's values only)")
+            else:
+                self._integrals[name] = fn
+
+    @classmethod
+    def from_assignments(cls, base, assignments, prec: int = 256, option: str = "--param"):
+        """From ``['NAME=REAL', ...]``: each NAME a declared parameter of ``base``, given once."""
+        from exact_khk.arith.reals import parse_real
+
+        if not isinstance(base, ExpressionSystem):
+            raise InputError(f"{option}: needs a system file (--system FILE or a catalogue name); the Lie–Poisson "
+                             f"blocks take reals in --a/--b/--c")
+        declared = ", ".join(base.parameters) or "none"
+        values = {}
+        for item in assignments:
+            name, eq, text = str(item).partition("=")
+            name = name.strip()
+            if not eq or not name or not text.strip():
+                raise InputError(f"{option}: expected NAME=REAL, got {str(item)[:80]!r}")
+            if name not in base.parameters:
+                raise InputError(f"{option}: {base.name} has no parameter {name!r} (declared: {declared})")
+            if name in values:
+                raise InputError(f"{option}: {name} is given twice")
+            values[name] = parse_real(text, prec, f"{option} {name}")
+        if not values:
+            raise InputError(f"{option}: expected at least one NAME=REAL")
+        return cls(base, values, prec)
+
+    # --- the field, re-read with the overridden parameters as generators -------------
+
+    def _read(self, texts):
+        """Per component: ({x-exponents: coefficient c_m(p)}, den(p)) as ring polynomials in
+        the parameters (the ring's generators are x, ε, p)."""
+        names, N = list(self.values), self.dim
+        R, *gens = ring([sympy.Symbol(v) for v in (*self.variables, EPS, *names)], sympy.QQ)
+        self._pgens = gens[N + 1:]
+        table = dict(zip(self.variables, gens[:N]), **dict(zip(names, self._pgens)))
+        table.update({p: R(sympy.QQ(q.numerator, q.denominator)) for p, q in self.base.parameters.items()
+                      if p not in self.values})
+        refused = {EPS: "eps is not allowed here: it is the step size, and a vector field does not depend on it"}
+        rows = []
+        for v in self.variables:
+            where = f"{self.name}: field {v}"
+            num, den = Parser(texts[v], where, R, table, refused, "a name of the file").value
+            if any(any(m[:N + 1]) for m in den.monoms()):
+                raise InputError(f"{where}: with real {', '.join(names)}, the denominator {text_of(den)} depends "
+                                 f"on the variables")
+            coefs = {}
+            for m, c in num.items():
+                if sum(m[:N]) > 2:
+                    raise InputError(f"{where}: with real {', '.join(names)}, the field has a term of degree "
+                                     f"{sum(m[:N])} in the variables (the file's values cancel it)")
+                coefs[m[:N]] = coefs.get(m[:N], R.zero) + R({(0,) * (N + 1) + m[N + 1:]: c})
+            rows.append((coefs, den))
+        return rows
+
+    def _evaluate(self, poly, point, convert):
+        """poly(p) at the point (arb balls or Fractions; ``convert`` maps a rational coefficient)."""
+        out = convert(Fraction(0))
+        for m, c in poly.items():
+            term = convert(frac(c))
+            for t, k in zip(point, m[self.dim + 1:]):
+                for _ in range(k):  # not t ** k: arb's power of a ball with negative points is nan
+                    term = term * t
+            out = out + term
+        return out
+
+    def _fields(self, coefficient, label):
+        """The QuadraticField whose coefficient of x^m in component i is coefficient(c_m, den_i)."""
+        return quadratic_field_from_terms([[(m, coefficient(c, den)) for m, c in coefs.items()]
+                                           for coefs, den in self._rows], label)
+
+    def _ball_field(self):
+        balls = list(self.values.values())
+        for v, (_, den) in zip(self.variables, self._rows):
+            d = self._evaluate(den, balls, _fraction_arb)
+            if d.contains(0):
+                raise InputError(f"--param: field {v}: its denominator {text_of(den)} may be 0 for the given "
+                                 f"{', '.join(self.values)} (it lies in {d.str(5, radius=True)})")
+        return self._fields(lambda c, den: self._evaluate(c, balls, _fraction_arb) /
+                            self._evaluate(den, balls, _fraction_arb), "f")
+
+    def parameter_fields(self, kind: str = "f"):
+        """f as a :class:`~exact_khk.systems.quadratic.ParameterFields` in the overridden
+        parameters of nonzero radius (None when every one is a point): the field at the
+        midpoints (exact), and for each parameter ∂f/∂p_j = (∂c·den − c·∂den)/den² in balls
+        over the boxes (None if such a ball is not finite: the box is too wide for
+        midpoint-radius arithmetic, e.g. den² over s ∈ [1/2, 3/2])."""
+        from exact_khk.arith.ball import ball_mid
+
+        free = [j for j, b in enumerate(self.values.values()) if not b.rad().is_zero()]
+        if kind != "f" or not free:
+            return None
+        balls = list(self.values.values())
+        mids = [Fraction(int(q.p), int(q.q)) for q in map(ball_mid, balls)]
+        with flint.ctx.workprec(self.prec):
+            mid = self._fields(lambda c, den: self._evaluate(c, mids, Fraction) / self._evaluate(den, mids, Fraction),
+                               "f")
+
+            def derivative(g):
+                return lambda c, den: (self._evaluate(c.diff(g) * den - c * den.diff(g), balls, _fraction_arb) /
+                                       self._evaluate(den ** 2, balls, _fraction_arb))
+
+            units = tuple(self._fields(derivative(self._pgens[j]), f"df/d{list(self.values)[j]}") for j in free)
+        if not all(c.is_finite() for u in units for terms in u.terms() for _, c in terms):
+            return None  # a box so wide that a derivative is unbounded in balls: the ball field alone
+        return ParameterFields(mid, units, tuple(flint.arb(balls[j].rad()) for j in free),
+                               tuple(list(self.values)[j] for j in free))
+
+    # --- the System interface -------------------------------------------------------------
+
+    def field(self, name: str = "f"):
+        if name != "f":
+            raise InputError(f"{self.name}: with real parameters only the field 'f' is available")
+        return self._field
+
+    def integrals(self) -> dict:
+        return dict(self._integrals)
+
+    def random_point(self, seed: int, bound: int = 3) -> tuple:
+        return self.base.random_point(seed, bound)
+
+    def describe(self) -> str:
+        real = ", ".join(f"{k} = {v.str(10, radius=True)}" for k, v in self.values.items())
+        kept = ", ".join(self._integrals) or "none"
+        skipped = "".join(f"; integral {k} skipped: it {why}" for k, why in self.skipped.items())
+        return (f"{self.name}: {self.base.title or 'quadratic system'} (dimension {self.dim}) with real parameters "
+                f"(arb balls at {self.prec} bits) {real}; integrals kept: {kept}{skipped}")
+
+    def to_json(self) -> dict:
+        return dict(self.base.to_json(), real_parameters={k: v.str(30, radius=True) for k, v in self.values.items()},
+                    prec=self.prec, skipped_integrals=dict(self.skipped))
