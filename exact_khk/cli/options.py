@@ -18,10 +18,10 @@ an :class:`~exact_khk.errors.InputError` that names it and states the estimate:
   n·(2·log2 n + 5) bits per step); the structured path (``--method
   structured``, or ``auto`` for exact flint steps at n ≥ 16) needs O(n) numbers
   per point, and an exact structured step about
-  :data:`STRUCTURED_STEP_BYTES_PER_BIT` · n · h bytes for an output of height h
-  bits (so one exact step at n = 20 000, about 670 000 bits per coordinate, is
-  refused: about 160 GB, and its output alone is about 3 GB; the float and mp:P
-  structured steps are O(n));
+  :data:`STRUCTURED_STEP_BYTES_PER_BIT` · n · (h + 2h₀) bytes from a point of
+  height h₀ to an output of height h bits (so one exact step at n = 20 000, about
+  670 000 bits per coordinate, is refused: about 67 GB, and its output alone is
+  about 3 GB; the float and mp:P structured steps are O(n));
 * precisions, ``cyclo:N`` and ``gf:P`` are bounded in :mod:`exact_khk.arith`.
 
 A run that lasts more than about 2 s shows progress on stderr (a tqdm bar,
@@ -242,12 +242,13 @@ DENSE_BYTES_PER_CUBE = 250
 #: about 13·n, 16·n, 17·n per step; the first step at n = 256, 512, 1024, 2048:
 #: 19.4·n, 21.0·n, 23.2·n, 25.2·n bits)
 GROWTH_BITS_PER_N = 5
-#: the exact structured step's working memory, in bytes per n per bit of its
-#: output's height h (Newton's iteration and r·d⁻¹ hold polynomials of n coefficients
-#: at about twice that height; FLINT's products need a few times their operands):
-#: peak RSS growth over the process's base measured 4.0–11.8 · n · h (n = 256..2048,
-#: one to four steps from random_point(n, 1); the most at n = 256 after four steps)
-STRUCTURED_STEP_BYTES_PER_BIT = 12
+#: the exact structured step's working memory, in bytes per n per bit of h + 2h₀ (h the
+#: output's height, h₀ the input's: the divisor d has about 2h₀ bits, Newton's iteration
+#: and r·d⁻¹ hold polynomials of n coefficients at about twice h; FLINT's products need a
+#: few times their operands): peak RSS growth over the process's base measured
+#: 4.0–4.7 · n · (h + 2h₀) for one to four steps from random_point(n, 1), n = 256..2048
+#: (7.2 for one step at n = 256, where the 9 MB are mostly fixed costs)
+STRUCTURED_STEP_BYTES_PER_BIT = 5
 
 
 def max_memory() -> int:
@@ -335,18 +336,19 @@ def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_poi
         need = (DENSE_BYTES_PER_CUBE if dense else 0) * N ** 3 + cube_numbers * N ** 3 * _number_bytes(ar, 64)
         if need > limit:
             hint = (" (the structured path, --method structured, needs O(n) memory with --arith float or mp:P; "
-                    "an exact structured step about 3 bytes x n x its height in bits)" if what == "orbit" else "")
+                    f"an exact structured step about {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (its output's + "
+                    f"twice its input's height in bits))" if what == "orbit" else "")
             raise InputError(f"--n: {what} at n = {n} solves dense {N}x{N} systems, which need about "
                              f"{human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x (2n)^3"
                              + (f" + {cube_numbers} x (2n)^3 numbers" if cube_numbers else "")
                              + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY){hint}")
     h0, g = _growth(phi, x0, steps, ar)
-    if phi.structure is not None and ar.exact and steps:  # the last structured step's p-adic lift
-        step = STRUCTURED_STEP_BYTES_PER_BIT * n * (h0 + g * steps)
+    if phi.structure is not None and ar.exact and steps:  # the last structured step's division
+        step = STRUCTURED_STEP_BYTES_PER_BIT * n * (h0 + g * steps + 2 * (h0 + g * (steps - 1)))
         if step > limit:
             raise InputError(f"--n: one exact structured step at n = {n} needs about {human_bytes(step)} of "
-                             f"working memory (estimate: {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x the step's "
-                             f"height, heights growing from {h0} by about {g} bits per step), beyond the limit of "
+                             f"working memory (estimate: {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (the step's output "
+                             f"height + twice its input height), heights growing from {h0} by about {g} bits per step), beyond the limit of "
                              f"{human_bytes(limit)} (EXACT_KHK_MAX_MEMORY); exact heights grow like n log n bits "
                              f"per step: use --arith float or mp:P with --method structured for large n")
     mean_bits = h0 + g * steps / 2
