@@ -389,7 +389,7 @@ class FlintForms:
 
     def _ring(self, purpose):
         """A :class:`~exact_khk.linalg.circulant.CirculantRing` of its own for each kind of
-        solve: the ring adapts the first precision of its p-adic division to the last
+        solve: the ring adapts the first precision of its fixed-point division to the last
         answer's height, and the H̃ solves, the J((x+x~)/2) solves and the Kahan steps
         (which use the shared ring) have answers of different heights."""
         rings = self.__dict__.setdefault("_rings", {})
