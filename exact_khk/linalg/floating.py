@@ -50,6 +50,7 @@ from __future__ import annotations
 
 import functools
 import operator
+import threading
 
 import numpy
 from numpy.lib.stride_tricks import as_strided
@@ -123,9 +124,11 @@ def system_matrix(field, ar, x, eps):
         return _matrix_builder(data, field.dim, ar, eps)(x)
 
 
-def _matrix_builder(data, N, ar, eps):
+def _matrix_builder(data, N, ar, eps, reuse=False):
     """``x ↦`` I − ε f'(x) for a numpy vector x of ``ar``'s elements, with what depends
-    on ε only computed once."""
+    on ε only computed once.  ``reuse`` (binary64 circulant data): every call of a thread
+    writes M into the same array, overwritten by the next call (LAPACK runs up to 1.4×
+    slower on a freshly allocated M of 0.5–2 MB, N = 256..512: glibc maps new pages for it)."""
     one = ar.one
     if data[0] == "circulant":
         hankel, n, F = data[1], N // 2, data[2]
@@ -144,11 +147,20 @@ def _matrix_builder(data, N, ar, eps):
                 p = {k: x[n * (k % 2):][:n] @ hankel[k // 2] for k in (0, 2, 3, 4, 6, 7)}
                 return numpy.array([functools.reduce(operator.add, [p[k] * c for k, c in t]) for t in terms])
 
+        local = threading.local() if reuse else None
+
         def build(x):
             w = first_rows(x)
             w[0, 0] += one  # the diagonals of the circulants f11, f22: w[., 0]
             w[3, 0] += one
-            return blocks(numpy.concatenate([w, w], axis=1)).reshape(N, N)  # a view, then one copy
+            view = blocks(numpy.concatenate([w, w], axis=1))
+            if local is None:
+                return view.reshape(N, N)  # one copy
+            M = getattr(local, "M", None)
+            if M is None:
+                M = local.M = numpy.empty((N, N))
+            numpy.copyto(M.reshape(2, n, 2, n), view)
+            return M
         return build
     _, rows, ks, coefs, L = data
 
@@ -193,7 +205,8 @@ def float_step(field, ar, x, eps):
 def float_stepper(field, ar, eps):
     """``x ↦`` :func:`float_step` ``(field, ar, x, eps)``, with what depends on ε only
     computed once (a :class:`~exact_khk.kahan.map.KahanMap` keeps one)."""
-    build, data, two_eps = _matrix_builder(_data(field, ar), field.dim, ar, eps), _values_data(field), eps + eps
+    build = _matrix_builder(_data(field, ar), field.dim, ar, eps, reuse=True)  # M is used within a step only
+    data, two_eps = _values_data(field), eps + eps
 
     def step(x):
         xv = numpy.array(x, dtype=float)
