@@ -309,8 +309,8 @@ class CirculantRing:
             found = self._attempt(d, rhs, inverse, hr, Q)
             if found is not None:
                 return self._remember(found, hd)
-            if Q >= cap:
-                return self._out_of_reach(d, rhs)  # pragma: no cover
+            if Q >= cap:  # numerics out of reach (d far too ill-conditioned for the floating start)
+                return self._solve_inverse(d, rhs)  # pragma: no cover
             Q = cap if 8 * Q >= cap else 4 * Q  # a few cheap attempts, then the bound
 
     def _attempt(self, d, rhs, inverse, hr, Q):
@@ -358,11 +358,6 @@ class CirculantRing:
         self.height_ratio = max(delta.bit_length(), *(w.height_bits() for w in W)) / hd
         return found
 
-    def _out_of_reach(self, d, rhs):
-        """The fallback when the fixed-point division fails at its largest precision
-        (d far too ill-conditioned for its floating start)."""
-        return self._solve_inverse(d, rhs)
-
     def _solve_inverse(self, d, rhs):
         """(W, δ) from d⁻¹ over Q (``fmpq_poly.xgcd`` with tⁿ − 1: FLINT's multimodular
         gcd): for small answers, where it beats the fixed-point division's set-up, and
@@ -373,6 +368,7 @@ class CirculantRing:
         for p in q:
             delta = delta.lcm(p.denom())
         return [(p * delta).numer() for p in q], delta
+
 
 class _Reciprocal:
     """Fixed-point approximations V ≈ 2^b·d̂⁻¹ of the inverse of d̂ = 2^−hd·d (a unit of
@@ -385,6 +381,12 @@ class _Reciprocal:
         self.ring, self.d, self.hd = ring, d, hd
         self.V, self.b, self.start = None, 0, START_BITS
         self.logs = None  # (log2 |det C(d)|, log2 max 1/|d(ω)|), from the first start
+
+    def _widen(self, limit):
+        """Drop V and start again from a 4× wider floating start; False once the start
+        would exceed ``limit`` bits."""
+        self.V, self.start = None, self.start * 4
+        return self.start <= limit
 
     def _begin(self):
         """V at b = start bits from the DFT: d̂(ω) at every n-th root of unity, inverted."""
@@ -409,8 +411,7 @@ class _Reciprocal:
         δ ≤ |det C(d)| and |W_i| ≤ δ·n·2^hr·max 1/|d(ω)| (from the floating start;
         Hadamard's bound when d is too ill-conditioned for it)."""
         while self.logs is None and not self._begin():
-            self.start *= 4
-            if self.start > 64 * START_BITS:
+            if not self._widen(64 * START_BITS):
                 n = self.ring.n
                 return int(n * (self.hd + n.bit_length() / 2 + 1) + hr) + 1
         det_bits, inv_bits = self.logs
@@ -420,8 +421,7 @@ class _Reciprocal:
         R, d, hd = self.ring, self.d, self.hd
         while True:
             if self.V is None and not self._begin():
-                self.start *= 4
-                if self.start > 4 * bits:
+                if not self._widen(4 * bits):
                     return None, self.b
                 continue
             excess = max(self.V.height_bits() - self.b, 0) + R.n.bit_length() + 8  # log ‖V‖ + guard
@@ -430,16 +430,14 @@ class _Reciprocal:
             b, V = self.b, self.V
             b2 = min(2 * b - excess, bits + excess)
             if b2 <= b:  # ‖V‖ too large for the start's precision
-                self.V, self.start = None, self.start * 4
-                if self.start > 4 * bits:
+                if not self._widen(4 * bits):
                     return None, self.b
                 continue
             h = min(hd, b2)  # d to at most b2 bits (its own hd bits cost less than zeros)
             P = R.fold(_shift(d, h - hd) * V)  # ≈ 2^(b + h)·(1 − E)
             E = _shift(flint.fmpz_poly([flint.fmpz(1) << (b + h)]) - P, b2 - h - b)  # ≈ 2^b2·E
             if E.height_bits() > b2 - b // 2:  # |E| > 2^−b/2: no convergence, start wider
-                self.V, self.start = None, self.start * 4
-                if self.start > 4 * bits:
+                if not self._widen(4 * bits):
                     return None, self.b
                 continue
             self.V, self.b = _shift(V, b2 - b) + _shift(R.fold(V * E), -b), b2
