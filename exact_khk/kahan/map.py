@@ -114,7 +114,7 @@ class KahanMap:
     method, split, structure, switch_bits = "dense", False, None, 0  # for maps built without __init__
     #: whether this map's last dense step found a small answer (see ``_integer_steps``)
     _small_answers = False
-    #: (ε, field, the prepared ``float`` step) (see ``_lapack_step``)
+    #: the prepared ``float`` step of this map's field and ε (see ``_lapack_step``)
     _float_stepper = None
 
     def __init__(self, field, eps, arith=None, method="auto"):
@@ -315,12 +315,10 @@ class KahanMap:
         binary64, i.e. p = 53 dense arithmetic — with the 1-norm κ); the point
         comes back as a tuple of Python floats, checked finite.  The map keeps the step's
         ε-dependent constants (:func:`~exact_khk.linalg.floating.float_stepper`)."""
-        kept = self._float_stepper
-        if kept is None or kept[0] is not self.eps or kept[1] is not self.field:
-            kept = self._float_stepper = (self.eps, self.field,
-                                          _floating().float_stepper(self.field, self.arith, self.eps))
+        if self._float_stepper is None:
+            self._float_stepper = _floating().float_stepper(self.field, self.arith, self.eps)
         try:
-            z, cond = kept[2](x)
+            z, cond = self._float_stepper(x)
         except SingularMatrix:
             raise self._singular(x, self.eps) from None
         self._check_condition(z, cond, x, self.eps)

@@ -75,18 +75,15 @@ def _data(field, ar):
         hit = ("circulant", _viewer(dtype, 0, (4, st.n, st.n), (2 * st.n, 1, 1))(numpy.concatenate([m, m], axis=1)),
                numpy.array([[ar.convert(t) for t in row] for row in _FIRST_ROWS], dtype=dtype))
     elif ar.lapack:
-        N, jac = field.dim, {}
-        for i, terms in enumerate(field.terms()):
-            for (j, k), c in terms:  # d/dx_j (c x_j x_k) = c x_k, and symmetrically
-                jac[i * N + j, k] = jac.get((i * N + j, k), 0) + c
-                jac[i * N + k, j] = jac.get((i * N + k, j), 0) + c
-        jac = [(r, k, ar.convert(c)) for (r, k), c in sorted(jac.items()) if c != 0]
+        N = field.dim
+        _, jterms, lin, _ = field._converted(ar)  # ∂f_i/∂x_j = Σ_k c x_k, in the arithmetic
+        jac = [(i * N + j, k, c) for i in range(N) for j in range(N) for k, c in jterms[i][j]]
         L = numpy.zeros(N * N)
-        for i, row in enumerate(field.linear):
+        for i, row in enumerate(lin):
             for j, c in row:
-                L[i * N + j] += ar.convert(c)
+                L[i * N + j] += c
         hit = ("terms", numpy.array([t[0] for t in jac], dtype=numpy.intp),
-               numpy.array([t[1] for t in jac], dtype=numpy.intp), numpy.array([t[2] for t in jac]), L)
+               numpy.array([t[1] for t in jac], dtype=numpy.intp), numpy.array([t[2] for t in jac], dtype=float), L)
     else:
         hit = (None,)
     field._cache[key] = hit
@@ -174,19 +171,20 @@ def _matrix_builder(data, N, ar, eps, reuse=False):
     return build
 
 
-def _values_data(field):
+def _values_data(field, ar):
     """f's terms as numpy data for :func:`float_step` (cached; ``()`` for homogeneous f)."""
     data = field._cache.get("numpy values")
     if data is None:
         data = ()
         if not field.homogeneous:
-            fl = [(i, j, k, float(c)) for i, terms in enumerate(field.terms()) for (j, k), c in terms]
-            lin = numpy.zeros((field.dim, field.dim))
-            for i, row in enumerate(field.linear):
+            fterms, _, lin, const = field._converted(ar)
+            fl = [(i, j, k, c) for i, terms in enumerate(fterms) for j, k, c in terms]
+            L = numpy.zeros((field.dim, field.dim))
+            for i, row in enumerate(lin):
                 for j, c in row:
-                    lin[i, j] += float(c)
+                    L[i, j] += c
             data = (*(numpy.array([t[s] for t in fl], dtype=numpy.intp) for s in range(3)),
-                    numpy.array([t[3] for t in fl]), lin, numpy.array([float(c) for c in field.const]))
+                    numpy.array([t[3] for t in fl], dtype=float), L, numpy.array(const, dtype=float))
         field._cache["numpy values"] = data
     return data
 
@@ -206,7 +204,7 @@ def float_stepper(field, ar, eps):
     """``x ↦`` :func:`float_step` ``(field, ar, x, eps)``, with what depends on ε only
     computed once (a :class:`~exact_khk.kahan.map.KahanMap` keeps one)."""
     build = _matrix_builder(_data(field, ar), field.dim, ar, eps, reuse=True)  # M is used within a step only
-    data, two_eps = _values_data(field), eps + eps
+    data, two_eps = _values_data(field, ar), eps + eps
 
     def step(x):
         xv = numpy.array(x, dtype=float)
