@@ -41,7 +41,7 @@ import flint
 import sympy
 from sympy.polys.rings import ring
 
-from ..arith import check_precision
+from ..arith import check_precision, get_arith
 from ..errors import InputError
 from .base import System
 from .expression_parser import Parser, frac, text_of
@@ -49,11 +49,6 @@ from .expressions import EPS, ExpressionSystem, quadratic_field_from_terms
 from .quadratic import ParameterFields
 
 _WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-
-
-def _fraction_arb(q: Fraction):
-    """An arb ball containing the rational q (at the current precision)."""
-    return flint.arb(flint.fmpq(q.numerator, q.denominator))
 
 
 class RealExpressionSystem(System):
@@ -149,20 +144,26 @@ class RealExpressionSystem(System):
             out = out + term
         return out
 
-    def _fields(self, coefficient, label):
-        """The QuadraticField whose coefficient of x^m in component i is coefficient(c_m, den_i)."""
-        return quadratic_field_from_terms([[(m, coefficient(c, den)) for m, c in coefs.items()]
-                                           for coefs, den in self._rows], label)
+    def _fields(self, rule, label):
+        """The QuadraticField whose coefficient of x^m in component v is rule(v, den_v)(c_m):
+        ``rule`` does the work that depends on the component's denominator once."""
+        rows = []
+        for v, (coefs, den) in zip(self.variables, self._rows):
+            coefficient = rule(v, den)
+            rows.append([(m, coefficient(c)) for m, c in coefs.items()])
+        return quadratic_field_from_terms(rows, label)
 
     def _ball_field(self):
-        balls = list(self.values.values())
-        for v, (_, den) in zip(self.variables, self._rows):
-            d = self._evaluate(den, balls, _fraction_arb)
+        balls, ball = list(self.values.values()), get_arith(f"ball:{self.prec}").convert
+
+        def rule(v, den):
+            d = self._evaluate(den, balls, ball)
             if d.contains(0):
                 raise InputError(f"--param: field {v}: its denominator {text_of(den)} may be 0 for the given "
                                  f"{', '.join(self.values)} (it lies in {d.str(5, radius=True)})")
-        return self._fields(lambda c, den: self._evaluate(c, balls, _fraction_arb) /
-                            self._evaluate(den, balls, _fraction_arb), "f")
+            return lambda c: self._evaluate(c, balls, ball) / d
+
+        return self._fields(rule, "f")
 
     def parameter_fields(self, kind: str = "f"):
         """f as a :class:`~exact_khk.systems.quadratic.ParameterFields` in the overridden
@@ -175,15 +176,20 @@ class RealExpressionSystem(System):
         free = [j for j, b in enumerate(self.values.values()) if not b.rad().is_zero()]
         if kind != "f" or not free:
             return None
-        balls = list(self.values.values())
+        balls, ball = list(self.values.values()), get_arith(f"ball:{self.prec}").convert
         mids = [Fraction(int(q.p), int(q.q)) for q in map(ball_mid, balls)]
         with flint.ctx.workprec(self.prec):
-            mid = self._fields(lambda c, den: self._evaluate(c, mids, Fraction) / self._evaluate(den, mids, Fraction),
-                               "f")
+            def at_mids(_, den):
+                d = self._evaluate(den, mids, Fraction)
+                return lambda c: self._evaluate(c, mids, Fraction) / d
+
+            mid = self._fields(at_mids, "f")
 
             def derivative(g):
-                return lambda c, den: (self._evaluate(c.diff(g) * den - c * den.diff(g), balls, _fraction_arb) /
-                                       self._evaluate(den ** 2, balls, _fraction_arb))
+                def rule(_, den):  # (∂c·den − c·∂den)/den², the denominator's parts once per component
+                    dg, square = den.diff(g), self._evaluate(den ** 2, balls, ball)
+                    return lambda c: self._evaluate(c.diff(g) * den - c * dg, balls, ball) / square
+                return rule
 
             units = tuple(self._fields(derivative(self._pgens[j]), f"df/d{list(self.values)[j]}") for j in free)
         if not all(c.is_finite() for u in units for terms in u.terms() for _, c in terms):
