@@ -278,8 +278,6 @@ class KahanMap:
 
     def step(self, x):
         """Φ_f(x, ε)."""
-        if self.arith.lapack:  # binary64 has no working context to enter
-            return self._step(self.point(x))
         with self.arith.local():  # e.g. the working precision of ball:P
             return self._step(self.point(x))
 
