@@ -133,6 +133,29 @@ def test_condition_numbers_reported():
         assert kappa / 3 <= est <= kappa * (1 + 1e-20)
 
 
+def test_mp_condition_from_binary64_and_where_not():
+    """mp:P takes κ₁ from binary64 where that is accurate (to 2^-20 of the exact κ₁ of
+    the rational system), and from p-bit arithmetic where binary64 cannot hold it:
+    an entry beyond the double range, a nonzero that underflows, N·κ > 2^32."""
+    fr, mp = get_arith("fraction"), get_arith("mp:200")
+    for field, n, seed in CASES:
+        x, eps = random_point(n, seed), F(1, 10 * n)
+        M = KahanMap(field, eps, fr, method="dense").system_matrix([fr(t) for t in x])
+        N = len(M)
+        Minv, _ = solve(fr, M, [[F(int(i == j)) for j in range(N)] for i in range(N)])
+        norm1 = lambda A: max(sum(abs(A[i][j]) for i in range(N)) for j in range(N))  # noqa: E731
+        kappa = norm1(M) * norm1(Minv)
+        got = floating.binary64_condition([[mp(t) for t in row] for row in M])
+        assert got is not None and abs(F(got) / kappa - 1) < F(1, 2 ** 20)
+    big, tiny, one = mp("1e400"), mp("1e-400"), mp(1)
+    t = F(1, 2 ** 40)  # [[1, 1], [1, 1 + t]]: κ₁ = (2 + t)²/t > 2^32
+    close = [[one, one], [one, mp(1 + t)]]
+    for M in ([[big, one], [one, one]], [[tiny, one], [one, one]], close):
+        assert floating.binary64_condition(M) is None
+    _, cond = solve(mp, close, [[one], [one]], condition=floating.binary64_condition)  # p-bit κ₁
+    assert abs(F(cond) / ((2 + t) ** 2 / t) - 1) < F(1, 2 ** 40)
+
+
 @pytest.mark.parametrize("name", ["float", "mp:64"])
 def test_singular_and_near_singular_steps(name):
     """An exactly singular step raises; ε a hair off a root of det(I − εf'(x)) warns

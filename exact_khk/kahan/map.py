@@ -12,8 +12,10 @@ The step is undefined where det(I − ε f'(x)) = 0.  Exact arithmetics detect
 this exactly and raise :class:`~exact_khk.errors.SingularStepError`.
 Floating arithmetics (``float``, ``mp:P``) compute a condition estimate κ of
 I − ε f'(x) at every step (on the dense path |M|₁|M⁻¹|₁: for ``float`` with
-M⁻¹ by LAPACK, i.e. ``numpy.linalg.cond(M, 1)``, for ``mp:P`` with |M⁻¹|₁
-estimated by LAPACK's method, a lower bound, or exact for N ≤ 5 — see
+M⁻¹ by LAPACK, i.e. ``numpy.linalg.cond(M, 1)``, for ``mp:P`` the same in
+binary64 where that is accurate (N·κ ≤ 2^32,
+:func:`exact_khk.linalg.floating.binary64_condition`), else with |M⁻¹|₁ in p-bit
+arithmetic, estimated by LAPACK's method, a lower bound, or exact for N ≤ 5 — see
 :func:`exact_khk.linalg.dense.solve`; on the structured path max_j |M_j|₁ · max_j |M_j⁻¹|₁ over the n 2×2 Fourier
 blocks M_j, within a factor 2 of the 2-norm condition number) and
 
@@ -186,7 +188,8 @@ class KahanMap:
         ar = self.arith
         with ar.local():
             try:
-                X, cond = _floating().float_solve(M, B) if ar.lapack else solve(ar, M, B)
+                X, cond = _floating().float_solve(M, B) if ar.lapack else \
+                    solve(ar, M, B, condition=_floating().binary64_condition)
             except SingularMatrix:
                 raise self._singular(x, eps) from None
         if not ar.exact:

@@ -215,11 +215,13 @@ def bareiss_solve(M, B):
     return Y, d
 
 
-def solve(ar, M, B):
+def solve(ar, M, B, condition=None):
     """Solve ``M X = B``; returns ``(X, condition)``.
 
     ``condition`` is ``None`` for exact contexts, else the 1-norm condition
-    estimate ``|M|_1 |M^-1|_1`` from the same factorisation: |M⁻¹|₁ of the
+    estimate ``|M|_1 |M^-1|_1``: what the ``condition`` argument (a callable
+    ``M ↦ κ or None``, e.g. :func:`~exact_khk.linalg.floating.binary64_condition`)
+    returns, if anything; else from the same factorisation, |M⁻¹|₁ of the
     inverse for N ≤ :data:`~exact_khk.linalg.paths.EXACT_INVERSE_MAX_N`, else
     estimated (:func:`inverse_norm1_estimate`, O(N²), LAPACK's method).
     Raises :class:`SingularMatrix` if ``M`` is (exactly) singular.
@@ -241,6 +243,9 @@ def solve(ar, M, B):
     X = lu_solve(LU, perm, B)
     if ar.exact:
         return X, None
+    kappa = condition(M) if condition is not None else None
+    if kappa is not None:
+        return X, kappa
     if len(M) <= EXACT_INVERSE_MAX_N:
         return X, norm1(ar, M) * norm1(ar, lu_solve(LU, perm, identity(ar, len(M))))
     return X, norm1(ar, M) * inverse_norm1_estimate(ar, LU, perm)

@@ -56,6 +56,7 @@ import numpy
 from numpy.lib.stride_tricks import as_strided
 
 from exact_khk.linalg.dense import SingularMatrix
+from exact_khk.linalg.paths import BINARY64_CONDITION_MAX
 
 
 def _data(field, ar):
@@ -241,6 +242,40 @@ def float_solve(M, B):
 
 
 _add, _max = numpy.add.reduce, numpy.maximum.reduce
+
+
+
+def binary64_condition(M):
+    """κ₁(M) = ‖M‖₁‖M⁻¹‖₁ of a matrix of ``mp:P`` numbers, computed in binary64 (M
+    rounded to doubles, M⁻¹ by LAPACK), or None where binary64 cannot be trusted with
+    it: an entry that is not a normal double (out of range, or a nonzero that
+    underflows), an exactly zero pivot, or N·κ > :data:`BINARY64_CONDITION_MAX`.
+
+    Why that suffices: rounding perturbs each entry by a relative 2^-53, so
+    ‖ΔM‖₁ ≤ 2^-53‖M‖₁ and ‖M⁻¹‖₁ moves by a relative ≲ κ·2^-53; LAPACK's inverse
+    adds about N·κ·2^-53 (backward stable LU with small growth).  With N·κ ≤ 2^32 both
+    stay below 2^-20: κ to five digits, for a quantity that is compared with 2^(p/2)
+    and 2^p.  Otherwise the caller computes κ in p-bit arithmetic
+    (:func:`~exact_khk.linalg.dense.solve`).  For N = 4..6 this is a third of an
+    ``mp:128`` step less (the p-bit inverse takes N column solves).
+    """
+    A = numpy.array(M, dtype=object)
+    try:
+        F = A.astype(float)
+    except (OverflowError, TypeError, ValueError):
+        return None
+    mag = numpy.abs(F)
+    nonzero = mag != 0
+    if not numpy.isfinite(mag).all() or (mag[nonzero] < 2.0 ** -1022).any() \
+            or numpy.count_nonzero(nonzero) != numpy.count_nonzero(A):
+        return None
+    try:
+        with numpy.errstate(invalid="raise", over="raise", divide="raise", under="ignore"):
+            Y = _inv(F, signature="d->d") if _inv is not None else numpy.linalg.inv(F)
+    except (FloatingPointError, numpy.linalg.LinAlgError):
+        return None
+    kappa = float(_max(_add(mag, 0))) * float(_max(_add(numpy.abs(Y), 0)))
+    return kappa if kappa * len(F) <= BINARY64_CONDITION_MAX else None
 try:  # numpy's private module (numpy 1.x and 2.x); without it, the public functions
     from numpy.linalg import _umath_linalg
 

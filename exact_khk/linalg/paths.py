@@ -24,9 +24,11 @@ dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 :data:`SMALL_ANSWER_MIN_BITS` ≤ h <
                                 :data:`DIXON_BITS` · (N − 6)
 exact H̃ (flint, rational)       structured for n ≥ :data:`HTILDE_STRUCTURED_MIN_N`
-floating arithmetics            dense (genuine p-bit arithmetic); κ's ‖M⁻¹‖₁ from
-                                the inverse for N ≤ :data:`EXACT_INVERSE_MAX_N`,
-                                else estimated (``linalg.dense.solve``)
+floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
+                                binary64 where N·κ ≤ :data:`BINARY64_CONDITION_MAX`,
+                                else κ's ‖M⁻¹‖₁ in p bits from the inverse for
+                                N ≤ :data:`EXACT_INVERSE_MAX_N`, else estimated
+                                (``linalg.dense.solve``)
 =============================  ==================================================
 """
 
@@ -56,6 +58,11 @@ DIXON_BITS = 10_000
 #: N column solves cost no more than the estimator's five triangular solves (an
 #: operation count; at N = 4 the estimate would be ~50 % of the step)
 EXACT_INVERSE_MAX_N = 5
+#: ``mp:P`` dense steps: κ from binary64 (M rounded, LAPACK's inverse) when N·κ ≤ this, where
+#: rounding and the inverse move κ by less than 2^-20 (an accuracy rule, not a tuned one;
+#: :func:`~exact_khk.linalg.floating.binary64_condition`); 0.6–0.7× mpmath.lu_solve's time
+#: at n = 2, 3 against 0.94–0.99× with κ in p bits
+BINARY64_CONDITION_MAX = 2.0 ** 32
 #: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
 HTILDE_STRUCTURED_MIN_N = 3
 
