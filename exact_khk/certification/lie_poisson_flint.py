@@ -199,11 +199,6 @@ class FlintForms:
             out.append(self._Ezmat[m] * c - inner * p ** 2)
         return out, c
 
-    def dPi(self, x):
-        """[∂_m Π for m < n] (∂_m Π = 0 for m ≥ n: Π does not depend on v)."""
-        D, c = self._dPi_int(x)
-        return [fmpq_mat(Dm) / c for Dm in D]
-
     def jacobiator(self, x):
         """All cyclic sums Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k
         (order as in :func:`~exact_khk.certification.checks.jacobiator`), from the integer

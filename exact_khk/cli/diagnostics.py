@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from exact_khk.cli.options import add_system_options, check_output, system_from_args, write_json
+from exact_khk.cli.options import (add_field_options, add_system_options, check_output, field_name,
+                                   system_from_args, write_json)
 from exact_khk.errors import InputError
 
 
@@ -14,7 +15,7 @@ def register(sub):
                        "denominator in lowest terms), computed on random lines over F_p; the shortest integer "
                        "recurrence, the dynamical degree and the growth class; heights of the exact orbit of x0.")
     add_system_options(p, steps_default=20)
-    _field_options(p)
+    add_field_options(p)
     p.add_argument("--primes", default="2", help="number of random 62-bit primes, or a comma-separated list (default 2)")
     p.add_argument("--lines", type=int, default=1, help="random lines per prime (default 1)")
     p.add_argument("--line-seed", type=int, default=0, help="seed of the random primes and lines (default 0)")
@@ -33,7 +34,7 @@ def register(sub):
                        "lift them to Q and report conserved ratios of kernel polynomials, each checked exactly on "
                        "a fresh orbit (docs/diagnostics.md).")
     add_system_options(q, steps_default=0)
-    _field_options(q)
+    add_field_options(q)
     g = q.add_mutually_exclusive_group()
     g.add_argument("--degree", type=int, help="candidates: all monomials of degree <= D (default 2)")
     g.add_argument("--monomials", help="candidates: a comma-separated list such as '1,x*y,z^2'")
@@ -44,20 +45,6 @@ def register(sub):
     q.add_argument("--verify-steps", type=int, default=6, help="steps of the fresh exact orbit of the check (default 6)")
     q.add_argument("--json", action="store_true", help="print one JSON object instead of the summary")
     q.set_defaults(func=cmd_find_integrals)
-
-
-def _field_options(p):
-    p.add_argument("--field", default="f",
-                   help="Lie–Poisson family: f, g (see --signs) or control; --system: f or a field of the file")
-    p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
-
-
-def _field_spec(system, args):
-    if args.signs is not None:
-        if system.kind != "lie-poisson" or args.field != "g":
-            raise InputError("--signs applies only to --field g of the Lie–Poisson family")
-        return f"g[{args.signs}]"
-    return args.field
 
 
 def _primes(text):
@@ -77,7 +64,7 @@ def cmd_degrees(args):
         check_output(args.plot, "--plot")
     system, x0, eps = system_from_args(args)
     try:
-        res = degree_sequence(system, steps=args.steps, eps=eps, field=_field_spec(system, args),
+        res = degree_sequence(system, steps=args.steps, eps=eps, field=field_name(system, args),
                               primes=_primes(args.primes), lines=args.lines, seed=args.line_seed, exact=args.exact,
                               confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits)
     except InputError as exc:  # name the command-line options
@@ -100,7 +87,7 @@ def cmd_find_integrals(args):
     from exact_khk.diagnostics import find_integrals
 
     system, x0, eps = system_from_args(args)
-    kw = dict(field=_field_spec(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
+    kw = dict(field=field_name(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
               steps=args.steps or None, primes=_primes(args.primes), seed=args.line_seed,
               x0=x0 if args.x0 is not None else None, verify_steps=args.verify_steps)
     if args.monomials is not None:

@@ -98,6 +98,24 @@ def arith_help() -> str:
             f"prime field F_P, P prime, {MIN_PRIME} <= P < 2^64")
 
 
+def add_field_options(p):
+    """``--field`` and ``--signs`` (read by :func:`field_name`)."""
+    p.add_argument("--field", default="f",
+                   help="Lie–Poisson family: f (Hessian Hs), g (B Hs, see --signs; also g[SIGNS]) or control (A Hs; "
+                        "(2I+A) Hs for n = 2); --system: f or a field named in the system file")
+    p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
+
+
+def field_name(system, args) -> str:
+    """The name of the field chosen by ``--field`` and ``--signs`` (``g[SIGNS]``), for
+    :func:`~exact_khk.systems.base.named_field`; ``--signs`` goes only with ``--field g``
+    of the Lie–Poisson family."""
+    if args.signs is None:
+        return args.field
+    if system.kind != "lie-poisson" or args.field != "g":
+        raise InputError("--signs applies only to --field g of the Lie–Poisson family")
+    return f"g[{args.signs}]"
+
 
 def system_from_args(args, reals=None):
     """(system, x0, eps) from parsed options, with typed errors naming the option.

@@ -7,20 +7,17 @@ import math
 from fractions import Fraction
 
 from exact_khk.arith import get_arith, point_height
-from exact_khk.cli.options import Progress, add_system_options, check_resources, system_from_args, write_json
-from exact_khk.errors import InputError
+from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_resources, field_name,
+                                   system_from_args, write_json)
 from exact_khk.kahan.map import METHODS, KahanMap
-from exact_khk.systems.lie_poisson.system import b0_signs
+from exact_khk.systems.base import named_field
 
 
 def register(sub):
     p = sub.add_parser("orbit", help="iterate a Kahan map and print the orbit",
                        description="Iterate the Kahan map of a Lie–Poisson field.")
     add_system_options(p)
-    p.add_argument("--field", default="f",
-                   help="Lie–Poisson family: f (Hessian Hs), g (B Hs, see --signs) or control (A Hs; (2I+A) Hs "
-                        "for n = 2); --system: f or a field named in the system file")
-    p.add_argument("--signs", help="sign pattern of the involution for --field g (default B_0 = '-+...+')")
+    add_field_options(p)
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
                         "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n = 2, 3, 4, "
@@ -87,21 +84,14 @@ def _height_growth(ar, pts):
 
 
 def _field(system, args, ar):
-    """The field to iterate: by kind (and signs) for the Lie–Poisson family, by name otherwise."""
-    if system.kind != "lie-poisson":
-        if args.signs is not None:
-            raise InputError("--signs applies only to the Lie–Poisson family")
-        return system.field(args.field)
-    if args.field not in ("f", "g", "control"):
-        raise InputError(f"--field: expected f, g or control for the Lie–Poisson family, got {args.field!r}")
-    if args.signs is not None and args.field != "g":
-        raise InputError("--signs applies only to --field g")
-    if args.field != "g":
-        return system.field(args.field)
-    from exact_khk.certification.lie_poisson import expresses_omega  # a non-rational involution needs ω
+    """The field to iterate (:func:`~exact_khk.systems.base.named_field`); a non-rational
+    involution is built over Q(ω) when ``ar`` holds ω."""
+    def holds_omega():  # asked only when a sign pattern is named
+        from exact_khk.certification.lie_poisson import expresses_omega
 
-    signs = args.signs if args.signs is not None else b0_signs(system.n)
-    return system.field("g", signs=signs, cyclotomic=expresses_omega(ar, system.n))
+        return expresses_omega(ar, system.n)
+
+    return named_field(system, field_name(system, args), cyclotomic=holds_omega)
 
 
 def _display(ar, t) -> str:

@@ -67,6 +67,7 @@ import flint
 
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational
+from exact_khk.systems.base import named_field
 from exact_khk.systems.quadratic import QuadraticField
 
 MAX_STEPS = 100_000
@@ -114,9 +115,10 @@ def random_primes(count: int, seed=0, bits: int = DEFAULT_PRIME_BITS) -> tuple:
 
 
 def resolve_field(system, field="f") -> tuple:
-    """(system or None, QuadraticField) from a System (and a field name such as
-    ``'f'``, ``'g'``, ``'g[-++]'``, ``'control'``), a catalogue name / system file,
-    or a QuadraticField."""
+    """(system or None, QuadraticField) from a System (and a field name for
+    :func:`~exact_khk.systems.base.named_field`, such as ``'f'``, ``'g'``,
+    ``'g[-++]'``, ``'-++'``, ``'control'``), a catalogue name / system file, or a
+    QuadraticField."""
     if isinstance(system, QuadraticField):
         return None, system
     from exact_khk.systems.catalogue import resolve
@@ -124,14 +126,7 @@ def resolve_field(system, field="f") -> tuple:
     system = resolve(system)
     if isinstance(field, QuadraticField):
         return system, field
-    if not isinstance(field, str):
-        raise InputError(f"field: expected a field name, got {field!r}")
-    if system.kind == "lie-poisson":
-        kind, _, signs = field.partition("[")
-        if kind not in ("f", "g", "control"):
-            raise InputError(f"field: expected f, g, g[signs] or control for the Lie–Poisson family, got {field!r}")
-        return system, system.field(kind, signs=signs.rstrip("]") or None)
-    return system, system.field(field)
+    return system, named_field(system, field)
 
 
 def check_count(value, name, low, high):

@@ -264,18 +264,16 @@ def _certify(inp: TaskInput) -> dict:
 def _orbit(inp: TaskInput) -> dict:
     from exact_khk.arith import get_arith, point_height
     from exact_khk.kahan.map import KahanMap
+    from exact_khk.systems.base import named_field
 
     ar = get_arith(inp.arith)
-    name = inp.options.get("field", "f")
-    system = inp.system
-    if system.kind == "lie-poisson" and name not in ("f", "control"):
-        from exact_khk.certification.lie_poisson import expresses_omega
-        from exact_khk.systems.lie_poisson.system import b0_signs
 
-        signs = b0_signs(system.n) if name in ("g", "b0") else name
-        fld = system.field("g", signs=signs, cyclotomic=expresses_omega(ar, system.n))
-    else:
-        fld = system.field(name)
+    def holds_omega():  # asked only when a sign pattern is named
+        from exact_khk.certification.lie_poisson import expresses_omega
+
+        return expresses_omega(ar, inp.system.n)
+
+    fld = named_field(inp.system, inp.options.get("field", "f"), cyclotomic=holds_omega)
     phi = KahanMap(fld, inp.eps, ar, method=inp.options.get("method", "auto"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -329,19 +327,10 @@ def _scale(inp: TaskInput) -> dict:
     return {"verdict": verdict, "detail": _one_line(run.message), "figures": jsonable(figures)}
 
 
-def _field_name(inp: TaskInput) -> str:
-    """The diagnostics' field name: 'g' means B_0 for the Lie–Poisson family, a sign
-    pattern means g[signs]."""
-    name = inp.options.get("field", "f")
-    if inp.system.kind == "lie-poisson" and name not in ("f", "g", "control") and not name.startswith("g["):
-        return f"g[{name}]"
-    return name
-
-
 def _degrees(inp: TaskInput) -> dict:
     from exact_khk.diagnostics import degree_sequence
 
-    res = degree_sequence(inp.system, steps=inp.steps, eps=inp.eps, field=_field_name(inp),
+    res = degree_sequence(inp.system, steps=inp.steps, eps=inp.eps, field=inp.options.get("field", "f"),
                           primes=inp.options.get("primes", 2), seed=inp.options.get("line_seed", 0),
                           heights=inp.options.get("heights", False), x0=inp.x0)
     fit = res.fit
@@ -359,8 +348,8 @@ def _degrees(inp: TaskInput) -> dict:
 def _find_integrals(inp: TaskInput) -> dict:
     from exact_khk.diagnostics import find_integrals
 
-    res = find_integrals(inp.system, degree=inp.options.get("degree", 2), field=_field_name(inp), eps=inp.eps,
-                         steps=inp.steps or None, seed=inp.options.get("line_seed", 0))
+    res = find_integrals(inp.system, degree=inp.options.get("degree", 2), field=inp.options.get("field", "f"),
+                         eps=inp.eps, steps=inp.steps or None, seed=inp.options.get("line_seed", 0))
     verified = sum(1 for f in res.integrals if f.verified)
     return {"verdict": "FOUND" if verified else "NONE", "detail": "",
             "figures": {"kernel_dim": res.kernel_dim, "trivial_dim": res.trivial_dim, "new_dim": res.new_dim,
@@ -395,6 +384,10 @@ def _probe(inp: TaskInput) -> dict:
         "n": n, "seed": seed, "value": (n * 7 + (seed or 0) * 3) % 11, "eps": float(inp.eps)}}
 
 
+#: the field of a task (:func:`~exact_khk.systems.base.named_field`)
+_FIELD = Option(_text, "the field: f, control, g (= b0: B_0), a sign pattern or g[SIGNS] (Lie–Poisson), "
+                       "or a field of the system file")
+
 register(TaskKind(
     "certify", _certify, "certify the orbit (exact_khk.certify): VALID / INVALID / INCONCLUSIVE",
     options={"signs": Option(_signs, "involutions: 'b0', 'default' or a list of sign patterns", "lie-poisson"),
@@ -407,8 +400,7 @@ register(TaskKind(
     verdicts=("VALID", "INVALID", "INCONCLUSIVE"), ok="VALID", figures=("height_bits", "false", "open")))
 register(TaskKind(
     "orbit", _orbit, "iterate the Kahan map: heights and their growth, the last point's size",
-    options={"field": Option(_text, "the field: f, control, g (B_0) or a sign pattern (Lie–Poisson), "
-                                    "or a field of the system file"),
+    options={"field": _FIELD,
              "method": Option(_method, "how each step is solved (auto, dense, structured, split)")},
     min_steps=0, figures=("final_height_bits", "height_growth_exponent", "final_abs_max")))
 register(TaskKind(
@@ -418,8 +410,7 @@ register(TaskKind(
     figures=("final_error_log10", "bits_left", "loss_rate", "drift_log10[H~]")))
 register(TaskKind(
     "degrees", _degrees, "degree growth of the iterates over F_p: recurrence, dynamical degree, growth class",
-    options={"field": Option(_text, "the field: f, control, g (B_0) or a sign pattern (Lie–Poisson), "
-                                    "or a field of the system file"),
+    options={"field": _FIELD,
              "primes": Option(_positive_int, "random 62-bit primes (default 2)"),
              "line_seed": Option(_nonnegative_int, "seed of the random primes and lines (default 0)"),
              "heights": Option(_bool, "also the height growth of the exact orbit of the point")},
@@ -428,8 +419,7 @@ register(TaskKind(
 register(TaskKind(
     "find-integrals", _find_integrals, "conserved rational functions discovered from orbits (HK bases), "
     "each verified exactly",
-    options={"field": Option(_text, "the field: f, control, g (B_0) or a sign pattern (Lie–Poisson), "
-                                    "or a field of the system file"),
+    options={"field": _FIELD,
              "degree": Option(_positive_int, "candidates: all monomials of degree <= D (default 2)"),
              "line_seed": Option(_nonnegative_int, "seed of the random orbits and primes (default 0)")},
     arith="exact", default_steps=0, min_steps=0, verdicts=("FOUND", "NONE"), ok="FOUND",  # steps 0: automatic
