@@ -1,4 +1,4 @@
-"""One resolution of field names (exact_khk.systems.base.named_field), as the command
+"""One resolution of field names (System.named_field), as the command
 line, the sweep tasks and the diagnostics take them."""
 
 import json
@@ -11,7 +11,6 @@ from exact_khk.diagnostics.degrees import resolve_field
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.kahan.map import KahanMap
 from exact_khk.sweep.tasks import run_task
-from exact_khk.systems.base import named_field
 from exact_khk.systems.expressions import ExpressionSystem
 from exact_khk.systems.lie_poisson.system import LiePoissonSystem, b0_signs
 
@@ -30,31 +29,31 @@ def same(a, b):
     ("+--", "g", "+--"), ("g[+--]", "g", "+--"), ("-++", "g", "-++"), ("g[-++]", "g", "-++"),
 ])
 def test_lie_poisson_names(name, kind, signs):
-    assert same(named_field(LP, name), LP.field(kind, signs=signs))
+    assert same(LP.named_field(name), LP.field(kind, signs=signs))
     assert same(resolve_field(LP, name)[1], LP.field(kind, signs=signs))
 
 
 def test_non_rational_pattern_needs_omega_and_omega_is_asked_only_for_patterns():
     for name in ("+-+", "g[+-+]"):
         with pytest.raises(NotRationalError):
-            named_field(LP, name)
-        assert same(named_field(LP, name, cyclotomic=True), LP.field("g", "+-+", cyclotomic=True))
-        assert named_field(LP, name, cyclotomic=lambda: True).label == "g[+-+]"
+            LP.named_field(name)
+        assert same(LP.named_field(name, cyclotomic=True), LP.field("g", "+-+", cyclotomic=True))
+        assert LP.named_field(name, cyclotomic=lambda: True).label == "g[+-+]"
     asked = []
     for name in ("f", "g", "b0", "control"):
-        named_field(LP, name, cyclotomic=lambda: asked.append(name))
+        LP.named_field(name, cyclotomic=lambda: asked.append(name))
     assert asked == []
-    named_field(LP, "-++", cyclotomic=lambda: asked.append("-++"))
+    LP.named_field("-++", cyclotomic=lambda: asked.append("-++"))
     assert asked == ["-++"]
 
 
 def test_file_field_names():
-    assert same(named_field(EULER, "f"), EULER.field("f"))
-    assert same(named_field(EULER, "g"), EULER.field("g"))
-    assert named_field(EULER, "g").quad != named_field(EULER, "f").quad
+    assert same(EULER.named_field("f"), EULER.field("f"))
+    assert same(EULER.named_field("g"), EULER.field("g"))
+    assert EULER.named_field("g").quad != EULER.named_field("f").quad
     for name in ("b0", "-++", "g[-++]", "h"):  # the family's forms are not names of a file's fields
         with pytest.raises(InputError, match=rf"unknown field {name!r}".replace("[", r"\[").replace("+", r"\+")):
-            named_field(EULER, name)
+            EULER.named_field(name)
 
 
 @pytest.mark.parametrize("name, message", [
@@ -71,7 +70,7 @@ def test_file_field_names():
 ])
 def test_bad_names_are_one_typed_line(name, message):
     with pytest.raises(InputError, match=message) as info:
-        named_field(LP, name, cyclotomic=lambda: pytest.fail("omega asked for a bad name"))
+        LP.named_field(name, cyclotomic=lambda: pytest.fail("omega asked for a bad name"))
     assert "\n" not in str(info.value)
 
 

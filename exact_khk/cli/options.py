@@ -108,7 +108,7 @@ def add_field_options(p):
 
 def field_name(system, args) -> str:
     """The name of the field chosen by ``--field`` and ``--signs`` (``g[SIGNS]``), for
-    :func:`~exact_khk.systems.base.named_field`; ``--signs`` goes only with ``--field g``
+    :meth:`~exact_khk.systems.base.System.named_field`; ``--signs`` goes only with ``--field g``
     of the Lie–Poisson family."""
     if args.signs is None:
         return args.field

@@ -10,7 +10,6 @@ from exact_khk.arith import get_arith, point_height
 from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_resources, field_name,
                                    system_from_args, write_json)
 from exact_khk.kahan.map import METHODS, KahanMap
-from exact_khk.systems.base import named_field
 
 
 def register(sub):
@@ -84,14 +83,14 @@ def _height_growth(ar, pts):
 
 
 def _field(system, args, ar):
-    """The field to iterate (:func:`~exact_khk.systems.base.named_field`); a non-rational
+    """The field to iterate (:meth:`~exact_khk.systems.base.System.named_field`); a non-rational
     involution is built over Q(ω) when ``ar`` holds ω."""
     def holds_omega():  # asked only when a sign pattern is named
         from exact_khk.certification.lie_poisson import expresses_omega
 
         return expresses_omega(ar, system.n)
 
-    return named_field(system, field_name(system, args), cyclotomic=holds_omega)
+    return system.named_field(field_name(system, args), cyclotomic=holds_omega)
 
 
 def _display(ar, t) -> str:

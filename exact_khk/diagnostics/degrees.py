@@ -67,7 +67,6 @@ import flint
 
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational
-from exact_khk.systems.base import named_field
 from exact_khk.systems.quadratic import QuadraticField
 
 MAX_STEPS = 100_000
@@ -116,7 +115,7 @@ def random_primes(count: int, seed=0, bits: int = DEFAULT_PRIME_BITS) -> tuple:
 
 def resolve_field(system, field="f") -> tuple:
     """(system or None, QuadraticField) from a System (and a field name for
-    :func:`~exact_khk.systems.base.named_field`, such as ``'f'``, ``'g'``,
+    :meth:`~exact_khk.systems.base.System.named_field`, such as ``'f'``, ``'g'``,
     ``'g[-++]'``, ``'-++'``, ``'control'``), a catalogue name / system file, or a
     QuadraticField."""
     if isinstance(system, QuadraticField):
@@ -126,7 +125,7 @@ def resolve_field(system, field="f") -> tuple:
     system = resolve(system)
     if isinstance(field, QuadraticField):
         return system, field
-    return system, named_field(system, field)
+    return system, system.named_field(field)
 
 
 def check_count(value, name, low, high):

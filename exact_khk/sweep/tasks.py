@@ -264,7 +264,6 @@ def _certify(inp: TaskInput) -> dict:
 def _orbit(inp: TaskInput) -> dict:
     from exact_khk.arith import get_arith, point_height
     from exact_khk.kahan.map import KahanMap
-    from exact_khk.systems.base import named_field
 
     ar = get_arith(inp.arith)
 
@@ -273,7 +272,7 @@ def _orbit(inp: TaskInput) -> dict:
 
         return expresses_omega(ar, inp.system.n)
 
-    fld = named_field(inp.system, inp.options.get("field", "f"), cyclotomic=holds_omega)
+    fld = inp.system.named_field(inp.options.get("field", "f"), cyclotomic=holds_omega)
     phi = KahanMap(fld, inp.eps, ar, method=inp.options.get("method", "auto"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -384,7 +383,7 @@ def _probe(inp: TaskInput) -> dict:
         "n": n, "seed": seed, "value": (n * 7 + (seed or 0) * 3) % 11, "eps": float(inp.eps)}}
 
 
-#: the field of a task (:func:`~exact_khk.systems.base.named_field`)
+#: the field of a task (:meth:`~exact_khk.systems.base.System.named_field`)
 _FIELD = Option(_text, "the field: f, control, g (= b0: B_0), a sign pattern or g[SIGNS] (Lie–Poisson), "
                        "or a field of the system file")
 

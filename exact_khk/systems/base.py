@@ -19,9 +19,9 @@ a system; it never tests which family a system belongs to.
   measure), else None;
 * ``default_x0``, ``default_eps``, :meth:`random_point`.
 
-:func:`named_field` resolves the name of a field as the command line, the sweep
-tasks and the diagnostics take it (for the Lie–Poisson family also ``'b0'``, a
-sign pattern and ``'g[SIGNS]'``).
+:meth:`System.named_field` resolves the name of a field as the command line, the
+sweep tasks and the diagnostics take it (the Lie–Poisson family also takes ``'b0'``,
+a sign pattern and ``'g[SIGNS]'``).
 
 A :class:`Function` is evaluated in any arithmetic context ``ar``
 (:mod:`exact_khk.arith`): ``fn(ar, x, eps)`` returns an element of ``ar`` or
@@ -34,7 +34,6 @@ from __future__ import annotations
 from fractions import Fraction
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import parse_signs
 
 
 class Function:
@@ -116,6 +115,14 @@ class System:
     def field_names(self) -> tuple:
         return ("f",)
 
+    def named_field(self, name="f", cyclotomic=False):
+        """The field called ``name`` as the command line, the sweep tasks and the
+        diagnostics take it (here: a field name of the system; ``cyclotomic`` is for
+        families whose names may ask for Q(ω)); every bad name is an InputError."""
+        if not isinstance(name, str):
+            raise InputError(f"field: expected a field name, got {name!r}")
+        return self.field(name)
+
     def integrals(self) -> dict:
         return {}
 
@@ -138,39 +145,3 @@ class System:
             if any(x):
                 return x
 
-
-def named_field(system, name="f", cyclotomic=False):
-    """The field of ``system`` called ``name``; every bad name is an InputError naming it.
-
-    For the Lie–Poisson family: ``'f'``, ``'control'``, ``'g'`` or its alias ``'b0'``
-    (g for B_0 = '-+…+'), and ``'g[SIGNS]'`` or the bare pattern ``'SIGNS'`` (g for
-    that involution).  ``cyclotomic``: build a g of a non-rational pattern over Q(ω)
-    (see :meth:`~exact_khk.systems.lie_poisson.system.LiePoissonSystem.field`) — a
-    bool, or a function returning one, called only when a pattern is named (deciding
-    whether an arithmetic holds ω costs O(n²)).  Other systems: a field name of the
-    system, checked by the system.
-
-    >>> from exact_khk.systems.lie_poisson.system import default_system
-    >>> s = default_system()
-    >>> [named_field(s, t).label for t in ("f", "g", "b0", "+--", "g[+--]", "control")]
-    ['f', 'g[-++]', 'g[-++]', 'g[+--]', 'g[+--]', 'control']
-    >>> named_field(s, "g[")
-    Traceback (most recent call last):
-    ...
-    exact_khk.errors.InputError: field: expected f, g, b0, g[SIGNS], a sign pattern SIGNS or control for the Lie–Poisson family, got 'g['
-    """
-    if not isinstance(name, str):
-        raise InputError(f"field: expected a field name, got {name!r}")
-    if system.kind != "lie-poisson" or name in ("f", "g", "control"):
-        return system.field(name)
-    if name == "b0":
-        return system.field("g")
-    if name.startswith("g[") and name.endswith("]"):
-        signs = name[2:-1]
-    elif name and set(name) <= set("+-"):
-        signs = name
-    else:
-        raise InputError(f"field: expected f, g, b0, g[SIGNS], a sign pattern SIGNS or control for the "
-                         f"Lie–Poisson family, got {name!r}")
-    parse_signs(signs, system.n)  # a bad pattern is refused before ω is asked for
-    return system.field("g", signs=signs, cyclotomic=cyclotomic() if callable(cyclotomic) else cyclotomic)

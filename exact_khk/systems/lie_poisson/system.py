@@ -294,6 +294,39 @@ class LiePoissonSystem(System):
         return s / ar.convert(2)
 
     # fields --------------------------------------------------------------
+    def named_field(self, name="f", cyclotomic=False) -> "LiePoissonField":
+        """The field called ``name`` (:meth:`System.named_field`): ``'f'``, ``'control'``,
+        ``'g'`` or its alias ``'b0'`` (g for B_0 = '-+…+'), and ``'g[SIGNS]'`` or the
+        bare pattern ``'SIGNS'`` (g for that involution).  ``cyclotomic``: build a g of a
+        non-rational pattern over Q(ω) (see :meth:`field`) — a bool, or a function
+        returning one, called only when a pattern is named (deciding whether an
+        arithmetic holds ω costs O(n²)).
+
+        >>> s = default_system()
+        >>> [s.named_field(t).label for t in ("f", "g", "b0", "+--", "g[+--]", "control")]
+        ['f', 'g[-++]', 'g[-++]', 'g[+--]', 'g[+--]', 'control']
+        >>> s.named_field("g[")
+        Traceback (most recent call last):
+        ...
+        exact_khk.errors.InputError: field: expected f, g, b0, g[SIGNS], a sign pattern SIGNS or control \
+for the Lie–Poisson family, got 'g['
+        """
+        if not isinstance(name, str):
+            raise InputError(f"field: expected a field name, got {name!r}")
+        if name in ("f", "g", "control"):
+            return self.field(name)
+        if name == "b0":
+            return self.field("g")
+        if name.startswith("g[") and name.endswith("]"):
+            signs = name[2:-1]
+        elif name and set(name) <= set("+-"):
+            signs = name
+        else:
+            raise InputError(f"field: expected f, g, b0, g[SIGNS], a sign pattern SIGNS or control "
+                             f"for the Lie–Poisson family, got {name!r}")
+        parse_signs(signs, self.n)  # a bad pattern is refused before ω is asked for
+        return self.field("g", signs=signs, cyclotomic=cyclotomic() if callable(cyclotomic) else cyclotomic)
+
     def field_for_signs(self, signs) -> "LiePoissonField":
         """f for the identity pattern '+…+', else the associated g[signs] (over Q(ω)
         when the involution is not rational)."""
