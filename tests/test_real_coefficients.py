@@ -15,6 +15,7 @@ from fractions import Fraction
 import flint
 import mpmath
 import pytest
+import sympy
 
 from exact_khk.arith import get_arith
 from exact_khk.arith.ball import arb_to_fmpq, contains_exact
@@ -410,3 +411,195 @@ def test_cli_bad_param_is_one_line_exit_2(capsys, params):
 def test_cli_param_needs_a_system_file(capsys, argv):
     code, out, err = _cli(capsys, *argv, "--steps", "2")
     assert code == 2 and len(err.strip().splitlines()) == 1 and "--param" in err, (out, err)
+
+
+# --- a [hamiltonian]-only file: f = K∇H re-read with the real parameters -------------------
+
+Q = sympy.symbols("q1 q2 p1 p2")
+PA, PB, PK = sympy.symbols("a b k")
+#: H and K written once in SymPy; the file's texts are their str() (which the parser reads)
+H_SYM = ((Q[2] ** 2 + Q[3] ** 2 + Q[0] ** 2 + Q[1] ** 2) / 2 + PA * Q[0] ** 2 * Q[1] + Q[1] ** 3 / (3 * PB)
+         + PA ** 2 * Q[2] * Q[1] - Q[0] / 2)
+K_SYM = sympy.Matrix([[0, 0, PK, 0], [0, 0, 0, 1], [-PK, 0, 0, 0], [0, -1, 0, 0]])
+HAM_VALUES = {"a": "1", "b": "2", "k": "1"}
+
+
+def _ham_table(K=None, H=None, **values):
+    """The test file as a TOML table: [hamiltonian] only, parameters a (polynomial in H), b (in a
+    denominator of H) and k (in K); ``values`` override [parameters], K/H the texts."""
+    K = K or [[str(e) for e in row] for row in K_SYM.tolist()]
+    return {"name": "ham-test", "variables": [str(q) for q in Q],
+            "parameters": dict(HAM_VALUES, **{n: str(v) for n, v in values.items()}),
+            "hamiltonian": {"K": K, "H": H or str(H_SYM)},
+            "integrals": {"H": str(H_SYM), "E": "q2**2/2 + p2**2/2"},
+            "defaults": {"x0": ["1/5", "-1/10", "1/4", "1/5"], "eps": "1/10"}}
+
+
+def _ham_toml(path, K=None, H=None, **values):
+    t = _ham_table(K, H, **values)
+    q = lambda s: '"' + s + '"'  # noqa: E731
+    lines = [f'name = "{t["name"]}"', "variables = [" + ", ".join(map(q, t["variables"])) + "]", "[parameters]"]
+    lines += [f"{n} = {q(v)}" for n, v in t["parameters"].items()]
+    lines += ["[hamiltonian]", "K = [" + ", ".join("[" + ", ".join(map(q, row)) + "]" for row in t["hamiltonian"]["K"])
+              + "]", f"H = {q(t['hamiltonian']['H'])}", "[integrals]"]
+    lines += [f"{n} = {q(v)}" for n, v in t["integrals"].items()]
+    lines += ["[defaults]", "x0 = [" + ", ".join(map(q, t["defaults"]["x0"])) + "]", f'eps = "{t["defaults"]["eps"]}"']
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _sympy_field(free=(), **values):
+    """{(i, exponents): coefficient} of K∇H, differentiated by SymPy, at the file's parameter
+    values overridden by ``values``; the parameters named in ``free`` stay symbolic."""
+    subs = {s: sympy.Rational(str(values.get(str(s), HAM_VALUES[str(s)]))) for s in (PA, PB, PK)
+            if str(s) not in free}
+    f = K_SYM * sympy.Matrix([sympy.diff(H_SYM, q) for q in Q])
+    out = {}
+    for i, fi in enumerate(f):
+        for m, c in sympy.Poly(sympy.expand(fi.subs(subs)), *Q).terms():
+            if c != 0:
+                out[(i, m)] = c
+    return out
+
+
+def _all_coefficients(fld):
+    """{(i, exponents): coefficient} over the quadratic, linear and constant terms."""
+    n, out = fld.dim, {}
+    for i in range(n):
+        for (j, k), c in fld.quad[i]:
+            out[(i, tuple((t == j) + (t == k) for t in range(n)))] = c
+        for j, c in fld.linear[i]:
+            out[(i, tuple(int(t == j) for t in range(n)))] = c
+        if not (isinstance(fld.const[i], Fraction) and fld.const[i] == 0):
+            out[(i, (0,) * n)] = fld.const[i]
+    return out
+
+
+def _q(c):
+    """A SymPy or Python rational as an fmpq."""
+    c = c if isinstance(c, Fraction) else Fraction(int(sympy.Rational(c).p), int(sympy.Rational(c).q))
+    return flint.fmpq(c.numerator, c.denominator)
+
+
+def _ham_real(*assignments, prec=128, **values):
+    return RealExpressionSystem.from_assignments(ExpressionSystem(_ham_table(**values)), list(assignments), prec)
+
+
+def test_hamiltonian_file_width_zero_parameters_give_the_rational_field():
+    """--param a=3/4 (dyadic: exact balls) and b=2/3, k=[5/7,5/7] (not dyadic: balls around the
+    value) give the field of the same file with those values in [parameters], and SymPy's K∇H."""
+    base = _ham_table()
+    assert "field" not in base
+    for assignments, values in ((["a=3/4"], {"a": Fraction(3, 4)}),
+                                (["a=[3/4,3/4]", "b=0.5"], {"a": Fraction(3, 4), "b": Fraction(1, 2)}),
+                                (["b=2/3", "k=[5/7,5/7]"], {"b": Fraction(2, 3), "k": Fraction(5, 7)})):
+        system = _ham_real(*assignments)
+        real = _all_coefficients(system.field("f"))
+        rational = _all_coefficients(ExpressionSystem(_ham_table(**values)).field("f"))
+        expected = _sympy_field(**values)
+        assert set(real) == set(rational) == set(expected), assignments
+        assert all(_q(Fraction(rational[key])) == _q(c) for key, c in expected.items())
+        dyadic = all(v.denominator & (v.denominator - 1) == 0 for v in values.values())
+        for key, c in expected.items():
+            ball = real[key]
+            assert ball.is_finite() and contains_exact(ball, _q(c)), (assignments, key)
+            if dyadic:
+                assert ball.rad() == 0 and arb_to_fmpq(ball.mid()) == _q(c), (assignments, key)
+        if dyadic:  # every parameter a point: no parameter coordinates
+            assert system.parameter_fields() is None
+
+
+@pytest.mark.parametrize("name,lo,hi", [("a", Fraction(1, 2), Fraction(3, 2)),
+                                         ("b", Fraction(3, 2), Fraction(5, 2)),
+                                         ("k", Fraction(9, 10), Fraction(11, 10))])
+def test_hamiltonian_file_interval_parameter_against_sympy(name, lo, hi):
+    """With name ∈ [lo, hi]: each coefficient ball contains SymPy's K∇H at lo, hi, the midpoint
+    and an interior point; parameter_fields' mid is K∇H at the midpoint exactly, and its unit
+    contains SymPy's ∂(K∇H)/∂name at those points."""
+    real = _ham_real(f"{name}=[{lo},{hi}]")
+    ball = _all_coefficients(real.field("f"))
+    pf = real.parameter_fields()
+    assert pf.names == (name,)
+    m = (lo + hi) / 2
+    assert {k: _q(Fraction(c)) for k, c in _all_coefficients(pf.mid).items()} == \
+        {k: _q(c) for k, c in _sympy_field(**{name: m}).items()}
+    unit = _all_coefficients(pf.units[0])
+    symbolic = _sympy_field(free=(name,))
+    derivative = {key: sympy.diff(c, sympy.Symbol(name)) for key, c in symbolic.items()}
+    assert {key for key, d in derivative.items() if d != 0} <= set(unit) <= set(ball)  # unit may hold zeros
+    for p in (lo, hi, m, lo + (hi - lo) / 3):
+        exact = _sympy_field(**{name: p})
+        assert set(exact) == set(ball), p
+        for key, c in exact.items():
+            assert ball[key].is_finite() and contains_exact(ball[key], _q(c)), (p, key)
+        at = {sympy.Symbol(name): sympy.Rational(p.numerator, p.denominator)}
+        for key, u in unit.items():
+            d = _q(sympy.S(derivative.get(key, 0)).subs(at))
+            assert (u.is_finite() and contains_exact(u, d)) if not isinstance(u, Fraction) else _q(u) == d, (p, key)
+
+
+def test_hamiltonian_file_enclosure_contains_the_exact_orbit(capsys, tmp_path):
+    """exact-khk enclose --system FILE --param a=[...] runs; the Lohner and naive enclosures over
+    the box contain the exact orbits of the file at rational a inside it (ends, centre,
+    interior), and miss the orbit of a value outside."""
+    path = _ham_toml(tmp_path / "ham.toml")
+    lo, hi = Fraction(1) - Fraction(1, 10 ** 6), Fraction(1) + Fraction(1, 10 ** 6)
+    code, out, err = _cli(capsys, "--system", str(path), "--param", f"a=[{lo},{hi}]", "--steps", "5")
+    assert code == 0, err
+    assert "real parameters" in out and "lohner   ok" in out and "naive    ok" in out
+    assert "integral H skipped" in out and "integrals kept: E" in out
+    steps = 5
+    real = RealExpressionSystem.from_assignments(load_system(path), [f"a=[{lo},{hi}]"], 128)
+    x0, eps = ["1/5", "-1/10", "1/4", "1/5"], "1/10"
+    runs = [enclosure.enclose(real, ",".join(x0), eps, steps, 128, m, keep_points=True) for m in enclosure.METHODS]
+    assert all(run.status == "ok" and run.steps_done == steps for run in runs)
+
+    def orbit(a):
+        fld = ExpressionSystem(_ham_table(a=a)).field("f")
+        pts, _, e = exact_prefix(fld, x0, eps, steps)
+        assert e is None and len(pts) == steps + 1
+        return pts
+
+    for a in (lo, hi, Fraction(1), lo + Fraction(1, 3 * 10 ** 6)):
+        for run in runs:
+            assert _contains(run.points, orbit(a)), (run.method, a)
+    assert not _contains(runs[1].points, orbit(hi + Fraction(1, 10 ** 4)))
+
+
+@pytest.mark.parametrize("K,H,param,says", [
+    # K depends on x: refused by the file's own reader (K is constant), before --param
+    ([["0", "0", "1 + (k - 1)*q1", "0"], ["0", "0", "0", "1"], ["-1", "0", "0", "0"], ["0", "-1", "0", "0"]],
+     None, "k=[0.9,1.1]", "q1 is a variable"),
+    # K skew at k = 1 only
+    ([["0", "0", "k", "0"], ["0", "0", "0", "1"], ["-1", "0", "0", "0"], ["0", "-1", "0", "0"]],
+     None, "k=[0.9,1.1]", "skew-symmetric"),
+    (None, None, "b=[-1,1]", "may be 0"),  # H's term q2**3/(3*b): b's box contains 0
+    (None, str(H_SYM) + " + (a - 1)/q1", "a=[0.9,1.1]", "depends on the variables"),  # 0 at a = 1 only
+    # the same, where ∂(numerator)/∂q1 / denominator would cancel to a polynomial (a wrong field)
+    (None, str(H_SYM) + " + (a - 1)*(q1**3 + 1)/q1", "a=[0.9,1.1]", "hamiltonian H: with real a, the denominator"),
+    (None, str(H_SYM) + " + (a - 1)*q1**4", "a=[0.9,1.1]", "degree 3"),
+    (None, str(H_SYM) + " + eps*q1", "a=[0.9,1.1]", "eps is not allowed"),  # also by the file's reader
+])
+def test_hamiltonian_file_refusals_are_one_line_exit_2(capsys, tmp_path, K, H, param, says):
+    path = _ham_toml(tmp_path / "bad.toml", K, H)
+    code, out, err = _cli(capsys, "--system", str(path), "--param", param, "--steps", "2")
+    assert code == 2, (out, err)
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err and says in err, err
+    if "q1 is a variable" not in says and "eps" not in says:  # the file itself is fine at its own values
+        assert main(["enclose", "--system", str(path), "--steps", "2", "--quiet"]) == 0
+        capsys.readouterr()
+
+
+def test_hamiltonian_reader_refuses_x_in_K():
+    """The K entries are re-read in the same ring as H (x allowed by the parser), and an entry
+    involving x is refused with one line (a file cannot reach this: its reader refuses first)."""
+    real = _ham_real("k=[0.9,1.1]")
+    spec = _ham_table()["hamiltonian"]
+    for entry, what in (("k*q1", "numerator"), ("1/(1 + q2 - q2 + p1)", "denominator")):
+        K = [row[:] for row in spec["K"]]
+        K[0][2] = entry
+        says = f"hamiltonian K\\[0\\]\\[2\\]: .*the {what} .* depends on the variables"
+        with pytest.raises(InputError, match=says) as exc:
+            real._read_hamiltonian({"K": K, "H": spec["H"]})
+        assert "\n" not in str(exc.value)
+    assert real._read_hamiltonian(spec) == real._rows  # the spec itself is accepted

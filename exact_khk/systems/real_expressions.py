@@ -11,6 +11,14 @@ above 2 in x for symbolic p, is refused).  Evaluated in arb over the parameter
 balls, each coefficient ball contains c_m(p)/den(p) for every p in the boxes; a
 denominator whose ball may be 0 is refused (InputError).
 
+The components come from the file's ``[field]``, or, for a file that gives its field by
+``[hamiltonian]`` only, from its K and H, re-read the same way: H = h(x, p)/d(p) and
+K_ij = k_ij(p)/e_ij(p), and f_i = Σ_j K_ij (∂h/∂x_j)/d (the numerator differentiated in
+the ring), one num/den per component.  Refused there too (one-line InputError): an entry
+of K or a denominator of H that involves x, and a K that is skew at the file's values
+only (K_ij + K_ji must vanish for every p).  From the components on, both sources take
+the same path.
+
 :meth:`~RealExpressionSystem.parameter_fields` gives the field at the midpoints
 (exact rationals: c(m)/den(m)) and ∂f/∂p_j, whose coefficients
 (∂c·den − c·∂den)/den² are evaluated in balls over the boxes (exact rationals
@@ -30,6 +38,9 @@ system serves ``enclose`` only.
 (((0, 1), [3e+0 +/- 0.101]),)
 >>> sorted(s.integrals()), sorted(s.skipped)
 (['H12'], ['H23', 'H31'])
+>>> s = RealExpressionSystem.from_assignments(resolve("cmoq-cubic"), ["a=[0.9,1.1]"], 64)  # [hamiltonian] only
+>>> s.field("f").terms()[3]  # p2' = -dH/dq2 = -q2 - a q1^2 - a q2^2
+(((0, 0), [-1e+0 +/- 0.101]), ((1, 1), [-1e+0 +/- 0.101]))
 """
 
 from __future__ import annotations
@@ -44,7 +55,7 @@ from sympy.polys.rings import ring
 from ..arith import check_precision, get_arith
 from ..errors import InputError
 from .base import System
-from .expression_parser import Parser, frac, text_of
+from .expression_parser import Parser, frac, short, text_of
 from .expressions import EPS, ExpressionSystem, quadratic_field_from_terms
 from .quadratic import ParameterFields
 
@@ -64,17 +75,15 @@ class RealExpressionSystem(System):
         self.name, self.variables, self.dim = base.name, base.variables, base.dim
         self.default_x0, self.default_eps = base.default_x0, base.default_eps
         self.default_steps = base.default_steps
-        texts = base.to_json().get("field")
-        if texts is None:
-            raise InputError(f"--param: {base.name} gives its field by [hamiltonian] only; real parameters need "
-                             f"a [field] section")
-        self._rows = self._read(texts)
+        spec = base.to_json()
+        self._ring_and_table()
+        self._rows = (self._read(spec["field"]) if "field" in spec else
+                      self._read_hamiltonian(spec["hamiltonian"]))
         with flint.ctx.workprec(self.prec):
             self._field = self._ball_field()
         self._integrals, self.skipped = {}, {}
-        spec = base.to_json().get("integrals", {})
         for name, fn in base.integrals().items():
-            used = sorted(set(_WORD.findall(spec.get(name, ""))) & set(values))
+            used = sorted(set(_WORD.findall(spec.get("integrals", {}).get(name, ""))) & set(values))
             if used:
                 self.skipped[name] = (f"mentions the real parameter{'s' * (len(used) > 1)} {', '.join(used)} "
                                       f"(claimed for the file's values only)")
@@ -107,30 +116,71 @@ class RealExpressionSystem(System):
 
     # --- the field, re-read with the overridden parameters as generators -------------
 
-    def _read(self, texts):
-        """Per component: ({x-exponents: coefficient c_m(p)}, den(p)) as ring polynomials in
-        the parameters (the ring's generators are x, ε, p)."""
-        names, N = list(self.values), self.dim
-        R, *gens = ring([sympy.Symbol(v) for v in (*self.variables, EPS, *names)], sympy.QQ)
+    def _ring_and_table(self):
+        """The ring Q[x, ε, p] of the re-read texts (the overridden parameters p as generators),
+        the names a text may use (x, p, and the other parameters at their rational values) and
+        the refused ones (ε)."""
+        N = self.dim
+        self._R, *gens = ring([sympy.Symbol(v) for v in (*self.variables, EPS, *self.values)], sympy.QQ)
         self._pgens = gens[N + 1:]
-        table = dict(zip(self.variables, gens[:N]), **dict(zip(names, self._pgens)))
-        table.update({p: R(sympy.QQ(q.numerator, q.denominator)) for p, q in self.base.parameters.items()
-                      if p not in self.values})
-        refused = {EPS: "eps is not allowed here: it is the step size, and a vector field does not depend on it"}
+        self._table = dict(zip(self.variables, gens[:N]), **dict(zip(self.values, self._pgens)))
+        self._table.update({p: self._R(sympy.QQ(q.numerator, q.denominator))
+                            for p, q in self.base.parameters.items() if p not in self.values})
+        self._refused = {EPS: "eps is not allowed here: it is the step size, and a vector field does not depend "
+                              "on it"}
+
+    def _parse(self, text, where):
+        """(num, den) of ``text`` in the ring, in lowest terms."""
+        return Parser(text, where, self._R, self._table, self._refused, "a name of the file").value
+
+    def _free_of_x(self, poly, where, what):
+        """Refuse a ring polynomial (a denominator, or an entry of K) that involves x."""
+        if any(any(m[:self.dim + 1]) for m in poly.monoms()):
+            raise InputError(f"{where}: with real {', '.join(self.values)}, {what} {text_of(poly)} depends on "
+                             f"the variables")
+
+    def _row(self, num, den, where):
+        """One component num(x, p)/den(p) as ({x-exponents: coefficient c_m(p)}, den(p))."""
+        N, R = self.dim, self._R
+        self._free_of_x(den, where, "the denominator")
+        coefs = {}
+        for m, c in num.items():
+            if sum(m[:N]) > 2:
+                raise InputError(f"{where}: with real {', '.join(self.values)}, the field has a term of degree "
+                                 f"{sum(m[:N])} in the variables (the file's values cancel it)")
+            coefs[m[:N]] = coefs.get(m[:N], R.zero) + R({(0,) * (N + 1) + m[N + 1:]: c})
+        return coefs, den
+
+    def _read(self, texts):
+        """Per component of a [field]: ({x-exponents: coefficient c_m(p)}, den(p)) as ring
+        polynomials in the parameters (the ring's generators are x, ε, p)."""
+        return [self._row(*self._parse(texts[v], f"{self.name}: field {v}"), f"{self.name}: field {v}")
+                for v in self.variables]
+
+    def _read_hamiltonian(self, spec):
+        """The rows of f = K∇H from a [hamiltonian] (``{"K": matrix of texts, "H": text}``):
+        H = h(x, p)/d(p) and K_ij = k_ij(p)/e_ij(p), so f_i = Σ_j K_ij (∂h/∂x_j)/d; the
+        denominators d and e_ij, and K, must not involve x, and K must be skew for every p."""
+        N, R, at = self.dim, self._R, f"{self.name}: hamiltonian"
+        h, d = self._parse(spec["H"], f"{at} H")
+        self._free_of_x(d, f"{at} H", "the denominator")
+        K = [[self._parse(e, f"{at} K[{i}][{j}]") for j, e in enumerate(row)] for i, row in enumerate(spec["K"])]
+        for i, row in enumerate(K):
+            for j, (k, e) in enumerate(row):
+                self._free_of_x(k, f"{at} K[{i}][{j}]", "the numerator")
+                self._free_of_x(e, f"{at} K[{i}][{j}]", "the denominator")
+                if j >= i and (k * K[j][i][1] + K[j][i][0] * e):
+                    raise InputError(f"{at} K: K[{j}][{i}] = {short(spec['K'][j][i])} is not minus K[{i}][{j}] = "
+                                     f"{short(spec['K'][i][j])} for every {', '.join(self.values)} (K must be "
+                                     f"skew-symmetric)")
+        grad = [h.diff(x) for x in R.gens[:N]]
         rows = []
-        for v in self.variables:
-            where = f"{self.name}: field {v}"
-            num, den = Parser(texts[v], where, R, table, refused, "a name of the file").value
-            if any(any(m[:N + 1]) for m in den.monoms()):
-                raise InputError(f"{where}: with real {', '.join(names)}, the denominator {text_of(den)} depends "
-                                 f"on the variables")
-            coefs = {}
-            for m, c in num.items():
-                if sum(m[:N]) > 2:
-                    raise InputError(f"{where}: with real {', '.join(names)}, the field has a term of degree "
-                                     f"{sum(m[:N])} in the variables (the file's values cancel it)")
-                coefs[m[:N]] = coefs.get(m[:N], R.zero) + R({(0,) * (N + 1) + m[N + 1:]: c})
-            rows.append((coefs, den))
+        for v, row in zip(self.variables, K):
+            num, den = R.zero, R.one  # Σ_j k_ij/e_ij ∂h/∂x_j over a common denominator
+            for (k, e), g in zip(row, grad):
+                if k and g:
+                    num, den = (num * e + k * g * den).cancel(den * e)
+            rows.append(self._row(*num.cancel(den * d), f"{self.name}: field {v} = (K grad H)_{v}"))
         return rows
 
     def _evaluate(self, poly, point, convert):
