@@ -24,7 +24,6 @@ from exact_khk.errors import InputError
 from exact_khk.studies import enclosure
 from exact_khk.studies.scaling import declared, exact_prefix
 from exact_khk.systems.lie_poisson import DEFAULT_X0, LiePoissonSystem
-from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.systems.expressions import ExpressionSystem, load_system, tomllib
 from exact_khk.systems.lie_poisson.real import RealLiePoissonSystem
 from exact_khk.systems.real_expressions import RealExpressionSystem
