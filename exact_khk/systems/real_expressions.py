@@ -57,7 +57,7 @@ from ..errors import InputError
 from .base import System
 from .expression_parser import Parser, frac, short, text_of
 from .expressions import EPS, ExpressionSystem, quadratic_field_from_terms
-from .quadratic import ParameterFields
+from .quadratic import ParameterFields, certainly_zero
 
 _WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
@@ -195,12 +195,13 @@ class RealExpressionSystem(System):
         return out
 
     def _fields(self, rule, label):
-        """The QuadraticField whose coefficient of x^m in component v is rule(v, den_v)(c_m):
-        ``rule`` does the work that depends on the component's denominator once."""
+        """The QuadraticField whose coefficient of x^m in component v is rule(v, den_v)(c_m),
+        without the exactly zero ones (e.g. ∂c/∂p_j of a c free of p_j): ``rule`` does the work
+        that depends on the component's denominator once."""
         rows = []
         for v, (coefs, den) in zip(self.variables, self._rows):
             coefficient = rule(v, den)
-            rows.append([(m, coefficient(c)) for m, c in coefs.items()])
+            rows.append([(m, t) for m, t in ((m, coefficient(c)) for m, c in coefs.items()) if not certainly_zero(t)])
         return quadratic_field_from_terms(rows, label)
 
     def _ball_field(self):
