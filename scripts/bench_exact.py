@@ -93,6 +93,7 @@ class IntegerSystems:
     every point's bare solution is checked against the library's step."""
 
     def __init__(self, fld, eps):
+        assert fld.homogeneous, "f'(x) = Σ x_k f'(e_k) needs a homogeneous quadratic field"
         ar, N = get_arith("fraction"), fld.dim
         J = [fld.jacobian(ar, [ar(int(i == k)) for i in range(N)]) for k in range(N)]
         dm = math.lcm(*(t.denominator for Jk in J for row in Jk for t in row))
