@@ -227,22 +227,8 @@ def float_solve(M, B):
     ``numpy.linalg.inv`` (see the module docstring); ``M`` N×N, ``B`` N×m (numpy).  Raises
     :class:`~exact_khk.linalg.dense.SingularMatrix` on an exactly zero pivot;
     non-finite data give non-finite X or κ."""
-    # the gufuncs of numpy.linalg.solve and inv, in their error state: an exactly zero
-    # pivot sets the invalid flag (and nothing else in them does)
-    try:
-        if _gesv is None:
-            X, Y = numpy.linalg.solve(M, B), numpy.linalg.inv(M)
-        else:
-            with numpy.errstate(invalid="raise", over="ignore", divide="ignore", under="ignore"):
-                X, Y = _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
-    except (FloatingPointError, numpy.linalg.LinAlgError):
-        raise SingularMatrix("Singular matrix") from None
-    # 1-norms by ufunc reductions; Python floats: inf·0 is nan without a warning
-    return X, float(_max(_add(numpy.abs(M), 0))) * float(_max(_add(numpy.abs(Y), 0)))
-
-
-_add, _max = numpy.add.reduce, numpy.maximum.reduce
-
+    X, Y = _lapack(M, B)
+    return X, _norm1(M) * _norm1(Y)
 
 
 def binary64_condition(M):
@@ -270,12 +256,33 @@ def binary64_condition(M):
             or numpy.count_nonzero(nonzero) != numpy.count_nonzero(A):
         return None
     try:
-        with numpy.errstate(invalid="raise", over="raise", divide="raise", under="ignore"):
-            Y = _inv(F, signature="d->d") if _inv is not None else numpy.linalg.inv(F)
-    except (FloatingPointError, numpy.linalg.LinAlgError):
+        _, Y = _lapack(F)
+    except SingularMatrix:
         return None
-    kappa = float(_max(_add(mag, 0))) * float(_max(_add(numpy.abs(Y), 0)))
+    kappa = _norm1(F) * _norm1(Y)  # an overflowing inverse: inf (or nan), refused below
     return kappa if kappa * len(F) <= BINARY64_CONDITION_MAX else None
+
+
+def _lapack(M, B=None):
+    """``(X, M⁻¹)`` in binary64 by the gufuncs of ``numpy.linalg.solve`` and ``inv``, in
+    their error state: an exactly zero pivot sets the invalid flag (and nothing else in
+    them does) and raises :class:`~exact_khk.linalg.dense.SingularMatrix`; X is None
+    without ``B``.  Without numpy's private module, the public functions."""
+    try:
+        if _gesv is None:
+            return None if B is None else numpy.linalg.solve(M, B), numpy.linalg.inv(M)
+        with numpy.errstate(invalid="raise", over="ignore", divide="ignore", under="ignore"):
+            return None if B is None else _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
+    except (FloatingPointError, numpy.linalg.LinAlgError):
+        raise SingularMatrix("Singular matrix") from None
+
+
+def _norm1(A) -> float:
+    """‖A‖₁ by ufunc reductions, as a Python float (inf·0 is then nan without a warning)."""
+    return float(_max(_add(numpy.abs(A), 0)))
+
+
+_add, _max = numpy.add.reduce, numpy.maximum.reduce
 try:  # numpy's private module (numpy 1.x and 2.x); without it, the public functions
     from numpy.linalg import _umath_linalg
 
