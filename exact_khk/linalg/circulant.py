@@ -294,9 +294,7 @@ class CirculantRing:
         self._check_unit(d)
         n, hd = self.n, max(d.height_bits(), 1)
         hr = max(max(r.height_bits() for r in rhs), 1)
-        # Cramer/Hadamard: δ ≤ |det C(d)| ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d)
-        # the n×n circulant of d)
-        if n * (hd + n.bit_length() / 2 + 1) + hr <= DIVISION_BY_INVERSE_MAX_BITS:
+        if _hadamard_bits(n, hd, hr) <= DIVISION_BY_INVERSE_MAX_BITS:
             return self._remember(self._solve_inverse(d, rhs), hd)
         inverse = _Reciprocal(self, d, hd)
         # a sharper bound from d's values at the roots of unity (det C(d) = Π_ω d(ω));
@@ -412,8 +410,7 @@ class _Reciprocal:
         Hadamard's bound when d is too ill-conditioned for it)."""
         while self.logs is None and not self._begin():
             if not self._widen(64 * START_BITS):
-                n = self.ring.n
-                return int(n * (self.hd + n.bit_length() / 2 + 1) + hr) + 1
+                return _hadamard_bits(self.ring.n, self.hd, hr)
         det_bits, inv_bits = self.logs
         return int(max(det_bits, det_bits + hr + self.ring.n.bit_length() + inv_bits)) + 2
 
@@ -441,6 +438,12 @@ class _Reciprocal:
                     return None, self.b
                 continue
             self.V, self.b = _shift(V, b2 - b) + _shift(R.fold(V * E), -b), b2
+
+
+def _hadamard_bits(n, hd, hr) -> int:
+    """Bits of Cramer's rule's answer to d·W = δ·r (heights hd, hr) by Hadamard: δ ≤ |det C(d)|
+    ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d) the n×n circulant of d, ‖d‖₂ ≤ √n·2^hd)."""
+    return int(n * (hd + n.bit_length() / 2 + 1) + hr) + 1
 
 
 def _log2(x) -> float:
