@@ -144,4 +144,3 @@ class System:
             x = tuple(Fraction(rng.randint(-bound, bound)) for _ in range(self.dim))
             if any(x):
                 return x
-

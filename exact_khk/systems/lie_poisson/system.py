@@ -311,10 +311,8 @@ class LiePoissonSystem(System):
         exact_khk.errors.InputError: field: expected f, g, b0, g[SIGNS], a sign pattern SIGNS or control \
 for the Lie–Poisson family, got 'g['
         """
-        if not isinstance(name, str):
-            raise InputError(f"field: expected a field name, got {name!r}")
-        if name in ("f", "g", "control"):
-            return self.field(name)
+        if not isinstance(name, str) or name in ("f", "g", "control"):
+            return super().named_field(name)  # the type check, or the field of that name
         if name == "b0":
             return self.field("g")
         if name.startswith("g[") and name.endswith("]"):
