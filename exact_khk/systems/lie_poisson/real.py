@@ -33,7 +33,7 @@ from exact_khk.arith import check_precision
 from exact_khk.errors import InputError
 from exact_khk.parsing import format_signs, parse_signs
 
-from .system import LiePoissonSystem, b0_signs, eye, is_rational_pattern, mat_add
+from .system import LiePoissonSystem, b0_signs, is_rational_pattern
 
 
 def _times(C, M, prec):
@@ -100,37 +100,24 @@ class RealLiePoissonSystem(LiePoissonSystem):
         with flint.ctx.workprec(self.prec):
             return tuple(tuple(r) for r in super().hessian)
 
-    def hamiltonian_hessian(self, i: int = 0):
-        M = self.hessian
-        for _ in range(i % self.n):
-            M = _times(self.shift, M, self.prec)
-        return M
+    def _times(self, C, M):
+        return _times(C, M, self.prec)
+
+    def _structure(self, kind, signs=None, power=0):
+        return None  # no structured (exact circulant) path for ball coefficients
 
     def field(self, kind: str = "f", signs=None, power: int = 0, cyclotomic: bool = False):
-        key = (kind, None if signs is None else format_signs(parse_signs(signs, self.n)), power)
-        if key in self._fields:
-            return self._fields[key]
-        s = None
-        if kind == "f":
-            M, label = self.hamiltonian_hessian(power), "f" if power == 0 else f"f_{power}"
-        elif kind == "g":
+        """:meth:`LiePoissonSystem.field` with ball coefficients (summed at P bits); rational
+        sign patterns only."""
+        if kind == "g":
             s = format_signs(parse_signs(signs if signs is not None else b0_signs(self.n), self.n))
             if not is_rational_pattern(self.n, s):
                 raise InputError(f"field: g[{s}] has an involution with entries in Q(zeta_{self.n}); real "
                                  f"blocks a, b, c are supported with rational involutions only")
-            M, label = _times(self.involution(s), self.hessian, self.prec), f"g[{s}]"
-        elif kind == "control":
-            C = self.shift if self.n >= 3 else mat_add(eye(self.dim), self.shift, 2, 1)
-            M, label = _times(C, self.hessian, self.prec), "control"
-        else:
-            raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
-        fld = self.field_from_hessian(M, label)
-        fld._cache["circulant"] = None  # no structured (exact circulant) path for ball coefficients
+        fld = super().field(kind, signs, power)
+        fld._cache["circulant"] = None  # not to be detected from the (ball) Hessian either
         with flint.ctx.workprec(self.prec):
             fld.terms()  # the coefficient sums, at P bits
-        if s is not None:
-            object.__setattr__(fld, "signs", s)
-        self._fields[key] = fld
         return fld
 
     def parameter_fields(self, kind: str = "f", signs=None, power: int = 0):

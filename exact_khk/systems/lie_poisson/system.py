@@ -270,8 +270,17 @@ class LiePoissonSystem(System):
         """Hessian A^i Hs of the commuting Hamiltonian H_i."""
         M = self.hessian
         for _ in range(i % self.n):
-            M = mat_mul(self.shift, M)
+            M = self._times(self.shift, M)
         return M
+
+    def _times(self, C, M):
+        """C·M for a rational matrix C and the Hessian-like M (a hook: ball entries for
+        :class:`~.real.RealLiePoissonSystem`)."""
+        return mat_mul(C, M)
+
+    def _structure(self, kind, signs=None, power=0):
+        """The field's circulant structure from a, b, c (a hook: none for ball entries)."""
+        return structure_from_system(self, kind, signs, power)
 
     def involution(self, signs, cyclotomic: bool = False):
         """B = Bc ⊕ Bc for a rational sign pattern (see :func:`involution_circulant`);
@@ -372,7 +381,7 @@ for the Lie–Poisson family, got 'g['
         if kind == "f":
             fld = self.field_from_hessian(LazyHessian(self.dim, lambda: self.hamiltonian_hessian(power)),
                                           "f" if power == 0 else f"f_{power}",
-                                          structure_from_system(self, "f", power=power))
+                                          self._structure("f", power=power))
         elif kind == "g":
             s = format_signs(parse_signs(signs if signs is not None else b0_signs(self.n), self.n))
             if cyc:
@@ -381,13 +390,13 @@ for the Lie–Poisson family, got 'g['
             else:
                 involution_circulant(self.n, s)  # a non-rational pattern raises here, at once
                 fld = self.field_from_hessian(
-                    LazyHessian(self.dim, lambda: mat_mul(self.involution(s), self.hessian)), f"g[{s}]",
-                    structure_from_system(self, "g", s))
+                    LazyHessian(self.dim, lambda: self._times(self.involution(s), self.hessian)), f"g[{s}]",
+                    self._structure("g", s))
             object.__setattr__(fld, "signs", s)
         elif kind == "control":
             C = (lambda: self.shift) if self.n >= 3 else (lambda: mat_add(eye(self.dim), self.shift, 2, 1))
-            fld = self.field_from_hessian(LazyHessian(self.dim, lambda: mat_mul(C(), self.hessian)), "control",
-                                          structure_from_system(self, "control"))
+            fld = self.field_from_hessian(LazyHessian(self.dim, lambda: self._times(C(), self.hessian)), "control",
+                                          self._structure("control"))
         else:
             raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
         self._fields[key] = fld
