@@ -71,6 +71,48 @@ def test_precision_search_does_not_depend_on_the_hint():
     assert answers[0] == answers[1] == answers[2] == answers[3]
 
 
+def test_fixed_point_division_with_hints_far_off(monkeypatch):
+    """The same on the fixed-point path (Cramer's bound above DIVISION_BY_INVERSE_MAX_BITS).
+    A hint that is too small fails its first attempt, which then asks d's values at the
+    roots of unity for a bound (``answer_bits``) and tries again.  Along an orbit the hint
+    holds and the bound is never asked for."""
+    from fractions import Fraction
+
+    from exact_khk import KahanMap, LiePoissonSystem
+    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson.system import random_point
+
+    rng = random.Random(11)
+    n = 16
+    d = _poly(rng, n, 300) + flint.fmpz_poly([2 ** 310])  # a unit: d(ω) ≈ 2^310 everywhere
+    rhs = [_poly(rng, n, 300), _poly(rng, n, 200)]
+    assert C._hadamard_bits(n, d.height_bits(), 300) > C.DIVISION_BY_INVERSE_MAX_BITS
+    bounds = []
+    answer_bits = C._Reciprocal.answer_bits
+    monkeypatch.setattr(C._Reciprocal, "answer_bits", lambda self, hr: bounds.append(hr) or answer_bits(self, hr))
+    inverse = C.CirculantRing._solve_inverse
+    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", None)  # the fallback is not taken
+    answers = []
+    for ratio in (0.0, 1.0, 1e9, None):
+        bounds.clear()
+        R = CirculantRing(n)
+        R.height_ratio = ratio
+        answers.append(_as_rational(*_check(R, d, rhs)))
+        assert bounds or ratio != 0.0
+    assert answers[0] == answers[1] == answers[2] == answers[3]
+
+    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", inverse)  # for the first step's small answer
+    phi = KahanMap(LiePoissonSystem.random(n, seed=1).field("f"), Fraction(1, 10), "flint", method="structured")
+    dense = KahanMap(phi.field, phi.eps, "flint", method="dense")
+    x = phi.step(random_point(n, 1))
+    bounds.clear()
+    for _ in range(2):
+        y = phi.step(x)
+        assert y == dense.step(x)
+        x = y
+    assert bounds == []
+
+
 @pytest.mark.parametrize("n", [2, 3, 4, 6])
 def test_non_units_raise(n):
     R = CirculantRing(n)
