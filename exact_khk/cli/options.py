@@ -159,15 +159,24 @@ def system_from_args(args, reals=None):
         if args.n not in (None, 3):
             raise InputError("--n other than 3 needs --a/--b/--c or --seed")
         system = LiePoissonSystem.from_vectors(*DEFAULT_VECTORS)
-    eps = DEFAULT_EPS if args.eps is None else None if reals is not None else parse_rational(args.eps, "--eps")
+    # a seeded point is off the degenerate sets (random_point), also those of this system and eps
+    return _point_and_eps(args, system, reals, DEFAULT_EPS, DEFAULT_X0,
+                          lambda eps: random_point(system.n, args.seed, system=system, eps=eps))
+
+
+def _point_and_eps(args, system, reals, default_eps, default_x0, seeded):
+    """(system, x0, eps) from ``--eps``, ``--x0``/``--seed`` (``seeded(eps)``: the seed's
+    point) and ``--steps``; ``--x0``/``--eps`` come back as None when ``reals`` is given
+    (the command reads them as reals itself)."""
+    eps = default_eps if args.eps is None else None if reals is not None else parse_rational(args.eps, "--eps")
     if eps == 0:
         raise InputError("--eps: the step size must be nonzero")
     if args.x0 is not None:
         x0 = None if reals is not None else parse_vector(args.x0, "--x0", system.dim)
-    elif args.seed is not None:  # off the degenerate sets (random_point), also those of this system and eps
-        x0 = random_point(system.n, args.seed, system=system, eps=eps)
+    elif args.seed is not None:
+        x0 = seeded(eps)
     else:
-        x0 = parse_vector(list(DEFAULT_X0), "--x0")
+        x0 = parse_vector(list(default_x0), "--x0", system.dim)
     if args.steps is not None:
         if args.steps < 0:
             raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
@@ -192,8 +201,6 @@ def check_output(target, what="--json"):
         from exact_khk.studies.output import check_writable
 
         check_writable(target, what)
-
-
 
 
 #: the largest system file read (bytes): a system file is a few lines of TOML
@@ -231,20 +238,8 @@ def _named_system(args, reals=None):
         raise InputError(f"--system: {clash[0]} describes the Lie–Poisson family; it cannot be combined with --system")
     _check_system_file(args.system)
     system = resolve(args.system)
-    if args.x0 is not None:
-        x0 = None if reals is not None else parse_vector(args.x0, "--x0", system.dim)
-    elif args.seed is not None:
-        x0 = system.random_point(args.seed)
-    else:
-        x0 = parse_vector(list(system.default_x0), "--x0", system.dim)
-    eps = system.default_eps if args.eps is None else None if reals is not None else parse_rational(args.eps, "--eps")
-    if eps == 0:
-        raise InputError("--eps: the step size must be nonzero")
-    if args.steps is not None:
-        if args.steps < 0:
-            raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
-        check_steps(args.steps)
-    return system, x0, eps
+    return _point_and_eps(args, system, reals, system.default_eps, system.default_x0,
+                          lambda eps: system.random_point(args.seed))
 
 
 # --- limits, estimated before the work ------------------------------------------
