@@ -183,32 +183,35 @@ class BallKahan:
                                  f"(a pivot contains 0: the box is too wide or the step is singular)") from None
 
     def step(self, x, eps):
-        """(Φ(x), I − ε f'(x) as an arb_mat, f(x)) for balls x, ε."""
+        """(Φ(x), at) for balls x, ε; ``at`` = (I − ε f'(x) as an arb_mat, f'(x), f(x) or None
+        for a homogeneous field), what :meth:`jacobian` needs of x."""
         fld, ar = self.fld, self.ar
-        M = self._matrix(fld.jacobian(ar, x), eps, 1)
+        Jf = fld.jacobian(ar, x)
+        M = self._matrix(Jf, eps, 1)
         if fld.homogeneous:
             sol = self._solve(M, flint.arb_mat([[t] for t in x]))
-            return [sol[i, 0] for i in range(self.dim)], M, None
+            return [sol[i, 0] for i in range(self.dim)], (M, Jf, None)
         fx = fld.evaluate(ar, x)
         sol = self._solve(M, flint.arb_mat([[t] for t in fx]))
-        return [x[i] + 2 * eps * sol[i, 0] for i in range(self.dim)], M, fx
+        return [x[i] + 2 * eps * sol[i, 0] for i in range(self.dim)], (M, Jf, fx)
 
-    def jacobian(self, x, eps, y, M, fx):
+    def jacobian(self, x, eps, y, at):
         """The d×N Jacobian [J_x | J_q] of (x, q) ↦ Φ(x; q), q = (ε, p), over the boxes (N = d + 1 +
-        the number of parameters), given y ∋ Φ(x, ε) and M = I − ε f'(x): columns dΦ/dx, ∂Φ/∂ε and
-        ∂Φ/∂p_j = M⁻¹ ε (f_j'(x)(Φ − x) + 2 f_j(x)) for the unit fields f_j (module docstring)."""
+        the number of parameters), given y ∋ Φ(x, ε) and ``at`` from :meth:`step` (M = I − ε f'(x)):
+        columns dΦ/dx, ∂Φ/∂ε and ∂Φ/∂p_j = M⁻¹ ε (f_j'(x)(Φ − x) + 2 f_j(x)) for the unit fields f_j
+        (module docstring)."""
         fld, ar, d = self.fld, self.ar, self.dim
+        M, Jf, fx = at
         units = self.params.units if self.params is not None else ()
         N = d + 1 + len(units)
         dx = [y[j] - x[j] for j in range(d)]
 
-        def rate(g, gx):  # g'(x)(Φ − x) + 2 g(x)
-            Jg = g.jacobian(ar, x)
+        def rate(Jg, gx):  # g'(x)(Φ − x) + 2 g(x)
             return [sum((Jg[i][j] * dx[j] for j in range(d)), flint.arb(0)) + 2 * gx[i] for i in range(d)]
 
         rhs = self._matrix(fld.jacobian(ar, y), eps, -1)
-        cols = [rate(fld, fld.evaluate(ar, x) if fx is None else fx)]
-        cols += [[eps * t for t in rate(u, u.evaluate(ar, x))] for u in units]
+        cols = [rate(Jf, fld.evaluate(ar, x) if fx is None else fx)]
+        cols += [[eps * t for t in rate(u.jacobian(ar, x), u.evaluate(ar, x))] for u in units]
         full = flint.arb_mat(d, N)
         for i in range(d):
             for j in range(d):
@@ -271,7 +274,7 @@ class EnclosureRun:
 
 def _naive_steps(K, x, eps):
     while True:
-        x, _, _ = K.step(x, eps)
+        x, _ = K.step(x, eps)
         yield x
 
 
@@ -291,11 +294,11 @@ def _lohner_steps(K, x, eps, prec):
         A[i, i] = 1
     box = list(x)
     while True:
-        y, _, _ = K.centre.step(c, e0)  # at the centre (mid(x), mid(ε), δ = 0): the point parameters m
+        y, _ = K.centre.step(c, e0)  # at the centre (mid(x), mid(ε), δ = 0): the point parameters m
         cn = [flint.arb(t.mid()) for t in y]
         z = flint.arb_mat([[y[i] - cn[i]] for i in range(d)])
-        Y, M, fx = K.step(box, eps)
-        J = K.jacobian(box, eps, Y, M, fx)
+        Y, at = K.step(box, eps)
+        J = K.jacobian(box, eps, Y, at)
         Jx = flint.arb_mat([[J[i, j] for j in range(d)] for i in range(d)])
         B = Jx * A
         G = Jx * C + flint.arb_mat([[J[i, d + j] for j in range(m)] for i in range(d)])
