@@ -48,13 +48,13 @@ def _plt():
     return plt
 
 
-def _save(fig, path, legend_ax=None, rect=None):
-    """Finish a figure: the legend of ``legend_ax`` outside the data on the right, the
-    layout (within ``rect``), the PNG written atomically, the figure closed."""
+def _save(fig, path, legend_axes=(), rect=None):
+    """Finish a figure: the legend of each of ``legend_axes`` outside its data on the right,
+    the layout (within ``rect``), the PNG written atomically, the figure closed."""
     from exact_khk.studies.output import write_atomic
 
-    if legend_ax is not None:
-        legend_ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+    for ax in legend_axes:
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     fig.tight_layout(**({"rect": rect} if rect else {}))
     write_atomic(path, lambda fh: fig.savefig(fh, format="png"), "--out")
     _plt().close(fig)
@@ -96,7 +96,7 @@ def work_precision(points, title, exact_seconds, path, styles=None):
     ax.set_ylabel("log10 relative error at step K (balls/Lohner: radius)")
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="major", alpha=0.3)
-    _save(fig, path, legend_ax=ax)
+    _save(fig, path, legend_axes=[ax])
 
 
 def bits_lost(series, title, path, styles=None):
@@ -122,9 +122,8 @@ def bits_lost(series, title, path, styles=None):
         ax.set_ylabel("bits lost = P + log2(relative error)")
         ax.set_title(head, fontsize=9)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     fig.suptitle(title, fontsize=10)
-    _save(fig, path)
+    _save(fig, path, legend_axes=axes[0])
 
 
 def drift(series, integrals, title, path, styles=None):
@@ -172,4 +171,4 @@ def enclosure_radius(series, title, path, target_bits=None, styles=None):
     ax.set_ylabel("log2(max radius / max |x_k|)  (−correct bits)")
     ax.set_title(title, fontsize=10)
     ax.grid(True, which="both", alpha=0.25)
-    _save(fig, path, legend_ax=ax)
+    _save(fig, path, legend_axes=[ax])
