@@ -187,7 +187,8 @@ def cramer(a, r, mul, divide):
 #: the prime of the exact unit test of a determinant d (a unit mod p is a unit over Q;
 #: otherwise gcd(d, tⁿ − 1) over Z decides)
 UNIT_PRIME = 4611686018427387847
-#: bits of the floating approximation of d⁻¹ (an acb DFT) that Newton's iteration refines
+#: least bits of the floating approximation of d⁻¹ (an acb DFT) that Newton's iteration refines
+#: (:func:`_newton_start` picks from START_BITS to 2·START_BITS − 1)
 START_BITS = 128
 #: Newton's steps are planned for log ‖d̂⁻¹‖ up to this many bits (a larger one costs one
 #: more, short, step)
@@ -226,7 +227,8 @@ class CirculantRing:
     :meth:`solve` divides by a unit d without forming d⁻¹ over Q (whose
     coefficients are far larger than the quotient's along Kahan orbits): the
     quotients r/d are approximated in fixed point — d⁻¹ from an acb DFT at
-    :data:`START_BITS` bits, refined by Newton's iteration V ← V(2 − dV), every
+    :data:`START_BITS` to twice as many bits (chosen so that the doublings end on the
+    precision needed), refined by Newton's iteration V ← V(2 − dV), every
     step two ``fmpz_poly`` products and shifts — to 2^−Q; the common
     denominator δ comes from rational reconstruction of one approximate
     coefficient (2×2 lattice reduction), and the candidate W = round(δ·r/d) is
