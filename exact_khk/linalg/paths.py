@@ -46,8 +46,9 @@ AUTO_SPLIT_BELOW = {7: 2048, 14: 1536, 15: 768}
 #: step's first call builds the field's (2n)³ Jacobian terms, about 1 s at n = 32) ...
 STRUCTURED_MIN_N = 16
 #: ... and for the remaining n = 11, 13 from this height (4 orbit steps: dense / structured
-#: = 1 near 550 bits for n = 11 and 450 bits for n = 13; dense is 1.5–1.9× faster at the
-#: first points)
+#: = 1 near 550 bits for n = 11 and 450 bits for n = 13; dense is 2.2–2.5× faster at the
+#: second orbit points, 113–137 bits; at the first, height-2 point structured is 1.1–1.5×
+#: faster since c24c63d, one step not worth a rule)
 STRUCTURED_MIN_BITS = 512
 #: dense orbit steps: Dixon from this height (crossover measured for N = 8..14) ...
 SMALL_ANSWER_MIN_BITS = 128
