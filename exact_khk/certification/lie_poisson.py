@@ -65,7 +65,7 @@ from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dense import SingularMatrix, matvec, solve
 from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
 from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
-                      involution_circulant_cyclotomic, is_rational_pattern,
+                      expresses_omega, is_rational_pattern,
                       nontrivial_sign_patterns, rational_sign_patterns)
 
 #: relative size of the perturbation of the last coordinate of x0 in the
@@ -113,17 +113,6 @@ def default_signs(n: int, arith=None) -> list[str]:
     if arith is not None and n >= 3 and expresses_omega(get_arith(arith), n):
         return nontrivial_sign_patterns(n)
     return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
-
-
-def expresses_omega(ar, n: int) -> bool:
-    """Whether ``ar`` can hold the entries of the non-rational involutions of size n."""
-    probe = "+-" + "+" * (n - 2)  # s_1 != s_{n-1}: not rational for n >= 3
-    try:
-        for t in involution_circulant_cyclotomic(n, probe):
-            ar.convert(t)
-    except (TypeError, ValueError, ArithmeticError):  # InputError is a ValueError
-        return False
-    return True
 
 
 def expressible_rank(n: int, signs) -> int:

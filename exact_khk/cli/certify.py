@@ -32,8 +32,7 @@ MAX_DEFAULT_SIGNS = 4096
 
 def _signs(args, n, ar):
     if not args.signs:
-        from exact_khk.certification.lie_poisson import expresses_omega
-        from exact_khk.systems.lie_poisson.system import divisor_classes
+        from exact_khk.systems.lie_poisson.system import divisor_classes, expresses_omega
 
         count = 2 ** (n if n >= 3 and expresses_omega(ar, n) else len(divisor_classes(n))) - 2
         if count > MAX_DEFAULT_SIGNS:

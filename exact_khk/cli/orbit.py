@@ -84,13 +84,10 @@ def _height_growth(ar, pts):
 
 def _field(system, args, ar):
     """The field to iterate (:meth:`~exact_khk.systems.base.System.named_field`); a non-rational
-    involution is built over Q(ω) when ``ar`` holds ω."""
-    def holds_omega():  # asked only when a sign pattern is named
-        from exact_khk.certification.lie_poisson import expresses_omega
+    involution is built over Q(ω) when ``ar`` holds ω (asked only when a pattern is named)."""
+    from exact_khk.systems.lie_poisson.system import expresses_omega
 
-        return expresses_omega(ar, system.n)
-
-    return system.named_field(field_name(system, args), cyclotomic=holds_omega)
+    return system.named_field(field_name(system, args), cyclotomic=lambda: expresses_omega(ar, system.n))
 
 
 def _display(ar, t) -> str:

@@ -265,14 +265,11 @@ def _orbit(inp: TaskInput) -> dict:
     from exact_khk.arith import get_arith, point_height
     from exact_khk.kahan.map import KahanMap
 
+    from exact_khk.systems.lie_poisson.system import expresses_omega
+
     ar = get_arith(inp.arith)
-
-    def holds_omega():  # asked only when a sign pattern is named
-        from exact_khk.certification.lie_poisson import expresses_omega
-
-        return expresses_omega(ar, inp.system.n)
-
-    fld = inp.system.named_field(inp.options.get("field", "f"), cyclotomic=holds_omega)
+    fld = inp.system.named_field(inp.options.get("field", "f"),  # ω asked for only when a pattern is named
+                                 cyclotomic=lambda: expresses_omega(ar, inp.system.n))
     phi = KahanMap(fld, inp.eps, ar, method=inp.options.get("method", "auto"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -165,6 +165,17 @@ def involution_circulant_cyclotomic(n: int, signs) -> tuple:
                  for k in range(n))
 
 
+def expresses_omega(ar, n: int) -> bool:
+    """Whether ``ar`` can hold the entries of the non-rational involutions of size n."""
+    probe = "+-" + "+" * (n - 2)  # s_1 != s_{n-1}: not rational for n >= 3
+    try:
+        for t in involution_circulant_cyclotomic(n, probe):
+            ar.convert(t)
+    except (TypeError, ValueError, ArithmeticError):  # InputError is a ValueError
+        return False
+    return True
+
+
 # --- the system -------------------------------------------------------------
 
 
