@@ -115,7 +115,6 @@ class RealLiePoissonSystem(LiePoissonSystem):
                 raise InputError(f"field: g[{s}] has an involution with entries in Q(zeta_{self.n}); real "
                                  f"blocks a, b, c are supported with rational involutions only")
         fld = super().field(kind, signs, power)
-        fld._cache["circulant"] = None  # not to be detected from the (ball) Hessian either
         with flint.ctx.workprec(self.prec):
             fld.terms()  # the coefficient sums, at P bits
         return fld

@@ -390,9 +390,8 @@ for the Lie–Poisson family, got 'g['
         if key in self._fields:
             return self._fields[key]
         if kind == "f":
-            fld = self.field_from_hessian(LazyHessian(self.dim, lambda: self.hamiltonian_hessian(power)),
-                                          "f" if power == 0 else f"f_{power}",
-                                          self._structure("f", power=power))
+            fld = self._declared_field(lambda: self.hamiltonian_hessian(power), "f" if power == 0 else f"f_{power}",
+                                       self._structure("f", power=power))
         elif kind == "g":
             s = format_signs(parse_signs(signs if signs is not None else b0_signs(self.n), self.n))
             if cyc:
@@ -400,17 +399,23 @@ for the Lie–Poisson family, got 'g['
                                               f"g[{s}]")
             else:
                 involution_circulant(self.n, s)  # a non-rational pattern raises here, at once
-                fld = self.field_from_hessian(
-                    LazyHessian(self.dim, lambda: self._times(self.involution(s), self.hessian)), f"g[{s}]",
-                    self._structure("g", s))
+                fld = self._declared_field(lambda: self._times(self.involution(s), self.hessian), f"g[{s}]",
+                                           self._structure("g", s))
             object.__setattr__(fld, "signs", s)
         elif kind == "control":
             C = (lambda: self.shift) if self.n >= 3 else (lambda: mat_add(eye(self.dim), self.shift, 2, 1))
-            fld = self.field_from_hessian(LazyHessian(self.dim, lambda: self._times(C(), self.hessian)), "control",
-                                          self._structure("control"))
+            fld = self._declared_field(lambda: self._times(C(), self.hessian), "control", self._structure("control"))
         else:
             raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
         self._fields[key] = fld
+        return fld
+
+    def _declared_field(self, hessian, label, structure):
+        """The field of the Hessian ``hessian()`` (built on first use) with the circulant
+        structure the system declares for it: a :class:`~exact_khk.linalg.circulant.CirculantStructure`,
+        or None for none (then it is not looked for in the Hessian either)."""
+        fld = self.field_from_hessian(LazyHessian(self.dim, hessian), label)
+        fld._cache["circulant"] = structure
         return fld
 
 
