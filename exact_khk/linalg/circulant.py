@@ -383,7 +383,7 @@ class _Reciprocal:
     def __init__(self, ring, d, hd):
         self.ring, self.d, self.hd = ring, d, hd
         self.V, self.b, self.start = None, 0, START_BITS
-        self.values = None  # (2^shift·d(ω) as acb balls, shift, start bits) from the first start
+        self.values = None  # (2^(b0 − hd)·d(ω) as acb balls, b0) from the first start at b0 bits
         self.logs = None  # (log2 |det C(d)|, log2 max 1/|d(ω)|), from those values
 
     def _widen(self, limit):
@@ -404,7 +404,7 @@ class _Reciprocal:
             self.V = flint.fmpz_poly([_arb_int(c.real, 2 * b0) for c in inv])
         self.b = b0
         if self.values is None:
-            self.values = (vals, b0 - self.hd, b0)
+            self.values = (vals, b0)
         return True
 
     def answer_bits(self, hr):
@@ -416,7 +416,8 @@ class _Reciprocal:
             if not self._widen(64 * START_BITS):
                 return _hadamard_bits(n, self.hd, hr)
         if self.logs is None:  # |d(ω)| within n (truncation) of the DFT's balls
-            vals, shift, b0 = self.values
+            vals, b0 = self.values
+            shift = b0 - self.hd
             with flint.ctx.workprec(b0 + 64):
                 absv = [abs(v) for v in vals]
                 self.logs = (sum(_log2(a.upper() + n) for a in absv) - n * shift,
