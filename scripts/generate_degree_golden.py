@@ -19,17 +19,21 @@ is the projective degree of Φ^k restricted to the line, which is deg Φ^k for
 a generic line (exact_khk's tests compare its modular and exact degrees with
 these numbers).
 
-Run:  python scripts/generate_degree_golden.py   (takes about a minute)
+Run:  python scripts/generate_degree_golden.py   (takes about a minute; ``--check`` compares
+with the file instead of writing it, ``--out`` writes elsewhere)
 """
 
 from __future__ import annotations
 
-import json
+import argparse
 import pathlib
+import sys
 import time
 
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
+
+from script_io import write_or_check
 
 OUT = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "golden_degrees.json"
 t = sp.Symbol("t")
@@ -102,7 +106,11 @@ CASES = [
 ]
 
 
-def main():
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=pathlib.Path, default=OUT, help=f"the JSON file (default {OUT})")
+    ap.add_argument("--check", action="store_true", help="compare with --out instead of writing it")
+    args = ap.parse_args(argv)
     cases = []
     for name, spec, eps, a, b, steps in CASES:
         t0 = time.time()
@@ -115,11 +123,10 @@ def main():
         degrees = line_degrees(xs, f, eps, a, b, steps)
         print(f"{name}: {degrees} ({time.time() - t0:.1f} s)", flush=True)
         cases.append({"name": name, **source, "eps": eps, "line": {"a": a, "b": b}, "degrees": degrees})
-    OUT.write_text(json.dumps({"generator": "scripts/generate_degree_golden.py (SymPy only)",
-                               "degree": "projective degree of Phi^k restricted to the line a + t b, over Q",
-                               "cases": cases}, indent=1) + "\n")
-    print(f"wrote {OUT}")
+    return write_or_check(args.out, {"generator": "scripts/generate_degree_golden.py (SymPy only)",
+                                     "degree": "projective degree of Phi^k restricted to the line a + t b, over Q",
+                                     "cases": cases}, args.check)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

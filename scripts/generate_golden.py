@@ -7,15 +7,19 @@ Jacobian f'(x) = J(x) M + [J(e_0) y, …, J(e_{n-1}) y, 0, …, 0] with y = M x 
 takes each Kahan step with SymPy's exact ``Matrix.LUsolve``.  The library's own
 tests then compare its orbits with ``==`` against these strings.
 
-Run:  python scripts/generate_golden.py   (takes a few seconds)
+Run:  python scripts/generate_golden.py   (takes a few seconds; ``--check`` compares with the
+file instead of writing it, ``--out`` writes elsewhere)
 """
 
 from __future__ import annotations
 
-import json
+import argparse
 import pathlib
+import sys
 
 import sympy as sp
+
+from script_io import write_or_check
 
 OUT = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "golden_orbits.json"
 
@@ -100,12 +104,15 @@ def run(case):
             "steps": steps, "orbit": [[str(t) for t in p] for p in orbit]}
 
 
-def main():
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=pathlib.Path, default=OUT, help=f"the JSON file (default {OUT})")
+    ap.add_argument("--check", action="store_true", help="compare with --out instead of writing it")
+    args = ap.parse_args(argv)
     data = {"generator": "scripts/generate_golden.py (SymPy Matrix.LUsolve, independent of exact_khk)",
             "sympy": sp.__version__, "cases": [run(c) for c in CASES]}
-    OUT.write_text(json.dumps(data, indent=1) + "\n")
-    print(f"wrote {len(data['cases'])} golden orbits to {OUT}")
+    return write_or_check(args.out, data, args.check)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

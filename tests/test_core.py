@@ -1,5 +1,8 @@
 """Core: systems, fields, Kahan steps and orbits over every arithmetic."""
 
+import pathlib
+import subprocess
+import sys
 from fractions import Fraction
 
 import numpy as np
@@ -17,6 +20,24 @@ from .conftest import EXACT
 def _case_map(case, arith):
     system = LiePoissonSystem.from_vectors(case["a"], case["b"], case["c"])
     return KahanMap(system.field(case["field"], signs=case["signs"]), case["eps"], arith)
+
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+
+@pytest.mark.parametrize("script", [
+    "generate_golden.py", pytest.param("generate_degree_golden.py", marks=pytest.mark.slow)])
+def test_golden_files_are_what_the_independent_route_gives(script, tmp_path):
+    """The committed golden data (tests/data) is what its SymPy-only generator gives now
+    (``--check``), and the check can fail: a tampered copy is reported (exit status 1)."""
+    run = [sys.executable, str(ROOT / "scripts" / script), "--check"]
+    res = subprocess.run(run, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0 and "agree" in res.stdout, res.stdout + res.stderr[-800:]
+    if script == "generate_golden.py":  # the negative control (the quick one)
+        bad = tmp_path / "golden.json"
+        bad.write_text((ROOT / "tests" / "data" / "golden_orbits.json").read_text().replace('"1/7"', '"1/8"', 1))
+        res = subprocess.run(run + ["--out", str(bad)], capture_output=True, text=True, timeout=600)
+        assert res.returncode == 1 and "DIFFER" in res.stdout, res.stdout + res.stderr[-800:]
 
 
 @pytest.mark.parametrize("arith", EXACT)
