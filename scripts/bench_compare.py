@@ -101,7 +101,8 @@ def main():
     text = "\n".join(lines) + "\n"
     print(text)
     if args.out:
-        args.out.write_text(text)
+        from exact_khk.studies.output import write_atomic
+        write_atomic(args.out, text)
     json.dump(best, sys.stderr)
 
 

@@ -28,6 +28,7 @@ from bench import EPS, fmt, height, integer_system, machine, orbit_timing, ratio
 import flint  # noqa: E402
 
 from exact_khk import KahanMap, LiePoissonSystem  # noqa: E402
+from exact_khk.studies.output import write_atomic  # noqa: E402
 from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
@@ -109,7 +110,7 @@ def write(path, info, args, rows, dixon, elapsed):
               "| n | 2n | " + " | ".join(f"≈ {h} bits" for h, _ in dixon[0][1]) + " |",
               "|---|---|" + "---|" * len(dixon[0][1])]
         L += [f"| {n} | {2 * n} | " + " | ".join(f"{q:.2f}" for _, q in cells) + " |" for n, cells in dixon]
-    Path(path).write_text("\n".join(L) + "\n")
+    write_atomic(path, "\n".join(L) + "\n")
 
 
 def main(argv=None):

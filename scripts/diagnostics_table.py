@@ -29,6 +29,7 @@ from exact_khk import LiePoissonSystem, get_arith
 from exact_khk.diagnostics import degree_sequence, find_integrals
 from exact_khk.systems.catalogue import load, names
 from exact_khk.systems.expressions import ExpressionSystem
+from exact_khk.studies.output import write_atomic
 from exact_khk.systems.lie_poisson.invariants import grad_Htilde
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -143,7 +144,7 @@ def main(argv=None):
     text = DOC
     for key, value in subs.items():
         text = text.replace(key, value)
-    pathlib.Path(args.out).write_text(text)
+    write_atomic(args.out, text)
     print(f"wrote {args.out} in {total:.0f} s", file=sys.stderr)
 
 

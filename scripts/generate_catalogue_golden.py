@@ -58,12 +58,18 @@ import re
 import signal
 import sys
 import time
-import tomllib
 from contextlib import contextmanager
+
+try:  # Python 3.11+; tomli (a dependency of the package before 3.11) otherwise
+    import tomllib
+except ImportError:  # pragma: no cover
+    import tomli as tomllib
 
 import sympy as sp
 from sympy.polys.domains import QQ
 from sympy.polys.rings import ring
+
+from script_io import write_atomic
 
 if hasattr(sys, "set_int_max_str_digits"):
     sys.set_int_max_str_digits(0)
@@ -808,8 +814,7 @@ def main(argv=None) -> int:
         return 1
     if not args.no_write and not args.only:
         text = json.dumps(out, indent=1)
-        OUT.parent.mkdir(parents=True, exist_ok=True)
-        OUT.write_text(text + "\n", encoding="utf-8")
+        write_atomic(OUT, text + "\n")
         print(f"wrote {OUT.relative_to(ROOT)} ({len(text) / 1e6:.2f} MB)")
     return 0
 

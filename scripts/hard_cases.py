@@ -9,6 +9,7 @@ Writes hard_cases.md (markdown table) and prints it.
 import argparse
 import pathlib
 
+from exact_khk.studies.output import write_atomic
 from exact_khk.studies.hard import DEFAULT_ARITHS, catalogue, markdown_table, run_catalogue
 
 
@@ -23,7 +24,7 @@ def main():
     table = markdown_table(results)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "hard_cases.md").write_text(table + "\n")
+    write_atomic(out / "hard_cases.md", table + "\n")
     print(table)
     silent = [(r.case.name, o.arith) for r in results for o in r.outcomes if o.silent_failure]
     print("silent failures:", silent or "none")
