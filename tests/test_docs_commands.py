@@ -19,9 +19,13 @@ fail, naming the file and line.
 
 from __future__ import annotations
 
+import os
 import pathlib
 import re
 import shlex
+import shutil
+import subprocess
+import sys
 
 import pytest
 
@@ -111,9 +115,9 @@ def _split_comment(line):
     return line, ""
 
 
-def commands_in(text):
-    """[(line, block line, command, expected exit status)] of the exact-khk commands in a text."""
-    out = []
+def segments(text):
+    """(line, block line, command, expected exit status) of every command of the shell blocks
+    of a text (chains split at &&, ||, ;, |; prompts and comments removed)."""
     for lineno, block in shell_blocks(text):
         for offset, raw in logical_lines(block):
             line = re.sub(r"^\s*(\$|>|%)\s+", "", raw)  # a prompt
@@ -121,10 +125,16 @@ def commands_in(text):
             m = EXIT_COMMENT.search(comment)
             expected = int(m.group(1)) if m else 0
             for segment in re.split(r"&&|\|\||;|\|", code):
-                seg = " ".join(segment.split())
-                seg = re.sub(r"^(python3?|\S*/python3?) -m exact_khk\b", "exact-khk", seg)
-                if re.match(r"^(\w+=\S*\s+)*exact-khk(\s|$)", seg):
-                    out.append((lineno + offset, lineno, seg, expected))
+                yield lineno + offset, lineno, " ".join(segment.split()), expected
+
+
+def commands_in(text):
+    """[(line, block line, command, expected exit status)] of the exact-khk commands in a text."""
+    out = []
+    for line, block, seg, expected in segments(text):
+        seg = re.sub(r"^(python3?|\S*/python3?) -m exact_khk\b", "exact-khk", seg)
+        if re.match(r"^(\w+=\S*\s+)*exact-khk(\s|$)", seg):
+            out.append((line, block, seg, expected))
     return out
 
 
@@ -208,3 +218,101 @@ def test_extraction_rules():
     assert found == [("exact-khk orbit --steps 2", 0), ("exact-khk certify --steps 2", 0),
                      ("exact-khk systems", 0), ("exact-khk --version", 0), ("exact-khk certify --eps 0", 2),
                      ("EXACT_KHK_MAX_MEMORY=8G exact-khk orbit", 0)]
+
+
+# --- documented scripts: ``python scripts/NAME.py ...`` --------------------------------
+
+#: a documented script command: optional VAR=value assignments, python, a script of scripts/
+SCRIPT = re.compile(r"^(?:\w+=\S*\s+)*python3?\s+scripts/\w+\.py\b")
+
+#: words in documented script commands that stand for a source tree: the test passes the
+#: copy of the repository it runs in (so the tree is compared with itself)
+TREE_PLACEHOLDER = "OLD_TREE"
+
+
+def script_commands_in(text):
+    """[(line, command)] of the ``python scripts/NAME.py ...`` commands in a text: in shell
+    blocks, and in inline code (which may run over a line break)."""
+    out = [(line, seg) for line, _, seg, _ in segments(text) if SCRIPT.match(seg)]
+    lines, fence = text.splitlines(), None
+    for k, line in enumerate(lines):  # the prose: fenced blocks blanked, line numbers kept
+        m = re.match(r"^\s*(```+|~~~+)", line)
+        if fence or m:
+            fence = None if fence and m and m.group(1).startswith(fence) else (fence or m.group(1))
+            lines[k] = ""
+    prose = "\n".join(lines)
+    for m in re.finditer(r"`([^`]+)`", prose):
+        code = " ".join(m.group(1).split())
+        if SCRIPT.match(code):
+            out.append((prose.count("\n", 0, m.start()) + 1, code))
+    return out
+
+
+def extract_scripts():
+    """[(file, line, command)] of every documented script command, each command once."""
+    seen, out = set(), []
+    for path in doc_files():
+        for line, command in script_commands_in(path.read_text(encoding="utf-8")):
+            if command not in seen:
+                seen.add(command)
+                out.append((path.relative_to(ROOT).as_posix(), line, command))
+    return out
+
+
+SCRIPT_COMMANDS = extract_scripts()
+
+
+def _script_argv(command, tree):
+    """(environment additions, argv) of a documented script command, run by this interpreter."""
+    words, env = shlex.split(command), {}
+    while re.match(r"^\w+=", words[0]):
+        name, _, value = words.pop(0).partition("=")
+        env[name] = value
+    return env, [sys.executable] + [str(tree) if w == TREE_PLACEHOLDER else w for w in words[1:]]
+
+
+def _script_param(item, *marks):
+    path, line, command = item
+    return pytest.param(command, path, line, marks=marks, id=f"{path}:{line}: {command[:70]}")
+
+
+def test_script_commands_were_found():
+    scripts = {shlex.split(c)[[w.startswith("scripts/") for w in shlex.split(c)].index(True)]
+               for _, _, c in SCRIPT_COMMANDS}
+    assert len(SCRIPT_COMMANDS) >= 10 and {"scripts/bench.py", "scripts/hard_cases.py"} <= scripts, scripts
+    assert all((ROOT / s).is_file() for s in scripts), scripts
+
+
+@pytest.mark.parametrize("command, path, line", [_script_param(c) for c in SCRIPT_COMMANDS])
+def test_documented_script_options(command, path, line):
+    """Quick check of every documented script command: the script starts and its argument
+    parser knows every option the command gives (``--help`` after the documented
+    arguments: argparse converts the values before it and prints the options)."""
+    env, argv = _script_argv(command, ROOT)
+    res = subprocess.run(argv + ["--help"], cwd=ROOT, env={**os.environ, **env}, capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 0 and "Traceback" not in res.stderr, f"{path}:{line}: {res.stderr[-800:]}"
+    unknown = [w.split("=")[0] for w in argv if w.startswith("--") and w.split("=")[0] not in res.stdout]
+    assert not unknown, f"{path}:{line}: {command!r}: options not in the script's --help: {unknown}"
+
+
+def _repo_copy(folder):
+    """A copy of the repository's sources (not its virtual environments or caches), so that a
+    script that writes into docs/ or tests/data/ writes into the copy."""
+    dst = folder / "repo"
+    shutil.copytree(ROOT, dst, ignore=shutil.ignore_patterns(".*", "__pycache__", "*.egg-info", "out",
+                                                              "build", "dist"))
+    return dst
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command, path, line", [_script_param(c) for c in SCRIPT_COMMANDS])
+def test_documented_script_runs(command, path, line, tmp_path):
+    """Every documented script command, as shown (benchmarks and studies: minutes to half an
+    hour each), in a copy of the repository; it must exit with status 0."""
+    tree = _repo_copy(tmp_path)
+    env, argv = _script_argv(command, tree)
+    res = subprocess.run(argv, cwd=tree, env={**os.environ, **env}, capture_output=True, text=True,
+                         timeout=3 * 3600)
+    assert res.returncode == 0, f"{path}:{line}: {command!r} exited {res.returncode}: {res.stderr[-1500:]}"
+    assert "Traceback" not in res.stderr
