@@ -27,6 +27,13 @@ _RATIONAL = re.compile(r"^[+-]?(\d+(/\d+)?|\d*\.\d+([eE][+-]?\d+)?|\d+[eE][+-]?\
 MAX_EXPONENT = 10_000
 #: the longest number text accepted (a million digits)
 MAX_DIGITS = 1_000_000
+#: the most steps of one orbit (API and command line; beyond, the orbit alone is more
+#: than 10⁷ points)
+MAX_STEPS = 10_000_000
+#: the largest n of the Lie–Poisson family (API and command line): beyond it even the O(n)
+#: set-up (drawing the system and x0, the circulant structure) takes minutes and one exact
+#: structured step hours
+MAX_N = 100_000
 
 
 @contextlib.contextmanager
@@ -103,17 +110,23 @@ def read_text_file(path, what: str, max_bytes: int) -> str:
     """The UTF-8 text of a user's input file (``what``: e.g. 'system file'); every
     problem (missing, a folder, too large, not UTF-8, unreadable) is an InputError
     naming the file."""
-    p = Path(path)
     try:
+        p = Path(path)
         if p.is_dir():
             raise InputError(f"{path}: is a folder, not a {what}")
-        if p.stat().st_size > max_bytes:
+        with open(p, "rb") as fh:  # at most max_bytes + 1: /dev/zero or a pipe has no size to check
+            data = fh.read(max_bytes + 1)
+        if len(data) > max_bytes:
             raise InputError(f"{path}: the file is larger than {max_bytes} bytes")
-        return p.read_text(encoding="utf-8")
+        return data.decode("utf-8")
+    except InputError:
+        raise
     except FileNotFoundError:
         raise InputError(f"{path}: no such {what}") from None
     except UnicodeDecodeError:
         raise InputError(f"{path}: not a UTF-8 text file") from None
+    except (TypeError, ValueError) as exc:  # not a path; a NUL byte in it
+        raise InputError(f"{_short(path)}: not a file name ({exc})") from None
     except OSError as exc:
         raise InputError(f"{path}: cannot read the {what} ({exc.strerror or exc})") from None
 
@@ -169,10 +182,16 @@ def parse_signs(value, n: int) -> tuple[int, ...]:
         if len(text) != n or any(ch not in "+-" for ch in text):
             raise InputError(f"signs: {value!r} must be {n} characters, each '+' or '-' (s_0 first)")
         return tuple(1 if ch == "+" else -1 for ch in text)
-    out = tuple(int(s) for s in value)
-    if len(out) != n or any(s not in (1, -1) for s in out):
-        raise InputError(f"signs: {value!r} must be {n} entries, each +1 or -1")
-    return out
+    try:
+        out = tuple(value)
+    except TypeError:
+        raise InputError(f"signs: expected a string such as '-++' or a sequence of +1/-1, "
+                         f"got {type(value).__name__}") from None
+    # integers ±1 only (numpy ints included): no bools, no floats truncated, no strings
+    if len(out) != n or any(isinstance(s, bool) or not hasattr(s, "__index__") or s not in (1, -1)
+                            for s in out):
+        raise InputError(f"signs: {value!r} must be {n} entries, each the integer +1 or -1")
+    return tuple(int(s) for s in out)
 
 
 def format_signs(signs) -> str:

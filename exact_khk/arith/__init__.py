@@ -576,11 +576,16 @@ def to_element(ar, value, name: str = "value"):
     :class:`~exact_khk.errors.InputError` naming ``name``.
     """
     if _is_element(ar, value):
+        if not ar.exact and not ar.is_finite(value):  # e.g. float('nan') handed to ``float``
+            raise InputError(f"{name}: expected a finite number, got {_short(value)}")
         return value
     if _is_binary_float(value):
         if ar.exact:
             raise InputError(f"{name}: {value!r} is a binary float, not an exact rational; "
                              f"write it as a string such as '1/10' or as a Fraction")
+        finite = getattr(value, "is_finite", None)  # gmpy2 mpfr (whose _mpf_ breaks on nan), mpf, numpy
+        if callable(finite) and not finite():
+            raise InputError(f"{name}: expected a finite number, got {_short(value)}")
         try:
             out = ar.convert(value if isinstance(value, float) or hasattr(value, "_mpf_") else float(value))
         except (TypeError, ValueError, OverflowError) as exc:

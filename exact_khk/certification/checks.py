@@ -9,10 +9,11 @@ conservation, commutation, reversibility and the Poisson-map property.
 
 from __future__ import annotations
 
+import math
 import time
 
 from exact_khk.certification.records import Check
-from exact_khk.errors import PoleError, SingularStepError, UndecidedError
+from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
 from exact_khk.arith.dual import jacobian
 from exact_khk.linalg.dense import matmul, matvec, transpose
 
@@ -58,11 +59,13 @@ def compare(ar, items, skip_undefined=True):
         left = list(_flatten(lhs))
         right = [ar.zero] * len(left) if rhs is None else list(_flatten(rhs))
         if len(left) != len(right):
-            raise ValueError(f"compare: shapes differ at x_{k}")
+            raise InputError(f"compare: the two sides have different shapes at x_{k} "
+                             f"({len(left)} against {len(right)} entries)")
         for a, b in zip(left, right):
             d = a - b
             if not decides:
-                worst = max(worst, ar.magnitude(d))
+                m = ar.magnitude(d)
+                worst = m if m > worst or math.isnan(m) else worst  # a NaN stays: never "small"
                 continue
             z = ar.is_zero(d)
             if z is False:

@@ -441,6 +441,11 @@ class _Mod:
         return str(self.v)
 
 
+#: the largest N of a ``cyclo:N`` certificate re-checked: the library's own limit
+#: (:data:`exact_khk.arith.cyclotomic.MAX_CYCLOTOMIC_N`, not imported: this module stands alone)
+MAX_CYCLOTOMIC_N = 10_000
+
+
 def exact_field(arith: str):
     """The field in which a certificate computed in ``arith`` is re-checked, or None
     for an inexact arithmetic (floating point, balls)."""
@@ -448,7 +453,12 @@ def exact_field(arith: str):
         return _Rationals()
     prefix, _, param = arith.partition(":")
     if prefix in ("cyclo", "gf") and param.isdigit() and len(param) <= 25 and int(param) >= 1:
-        return _Cyclotomic(int(param)) if prefix == "cyclo" else _PrimeField(int(param))
+        if prefix == "gf":
+            return _PrimeField(int(param))
+        if int(param) > MAX_CYCLOTOMIC_N:  # as get_arith: Φ_N has degree φ(N)
+            raise _Undefined(f"cyclo:{param}: N is above {MAX_CYCLOTOMIC_N}, the largest cyclo:N this "
+                             "library computes in (not checkable)")
+        return _Cyclotomic(int(param))
     return None
 
 

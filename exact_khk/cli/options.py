@@ -38,7 +38,7 @@ import sys
 from functools import lru_cache
 
 from exact_khk.errors import InputError, SingularStepError
-from exact_khk.parsing import parse_rational, parse_vector
+from exact_khk.parsing import MAX_N, MAX_STEPS, parse_rational, parse_vector  # noqa: F401 (limits: the CLI's too)
 
 # The rest of the library is imported inside the functions that use it: ``exact-khk
 # --help`` imports this module (for :class:`Parser`) and nothing else of the library.
@@ -244,8 +244,6 @@ def _named_system(args, reals=None):
 
 # --- limits, estimated before the work ------------------------------------------
 
-#: the largest ``--steps`` (beyond, the orbit alone is more than 10⁷ points)
-MAX_STEPS = 10_000_000
 #: the memory a command may plan to use, in bytes (``EXACT_KHK_MAX_MEMORY`` overrides)
 MAX_MEMORY_BYTES = 4 * 2 ** 30
 #: bytes per (2n)³ of the dense 2n×2n path (its coefficient and integer tensors)
@@ -278,12 +276,6 @@ def max_memory() -> int:
     if not value > 0 or not math.isfinite(value):
         raise InputError("EXACT_KHK_MAX_MEMORY: expected a positive size")
     return int(value)
-
-
-#: the largest n of the Lie–Poisson family on the command line: beyond it even the
-#: O(n) set-up (drawing the system and x0, the circulant structure) takes minutes
-#: and one exact structured step hours
-MAX_N = 100_000
 
 
 def check_n(n, option="--n"):

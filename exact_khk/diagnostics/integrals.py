@@ -62,6 +62,7 @@ from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, indepe
                                            trivial_dim)
 from exact_khk.diagnostics.pencils import pencil_integrals, ratio_integrals
 from exact_khk.errors import InputError, PoleError, SingularStepError
+from exact_khk.parsing import parse_vector
 
 MAX_MONOMIALS = 3000
 
@@ -237,11 +238,12 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     margin = check_count(margin if margin is not None else max(8, m // 10), "margin", 1, 10_000)
     steps = check_count(steps if steps is not None else m + 2 * margin, "steps", 1, 1_000_000)
     check_count(verify_steps, "verify_steps", 1, 1000)
+    check_count(max_primes, "max_primes", 1, 1000)
+    seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
     plist = list(check_primes(primes, seed=seed))
     rng = random.Random(f"integrals-{seed}")
-    if x0 is not None and len(x0) != N:
-        raise InputError(f"x0: expected {N} coordinates, got {len(x0)}")
-    starts = ([tuple(Fraction(t) for t in x0)] if x0 is not None else []) + [_point(rng, N) for _ in range(orbits)]
+    start = [] if x0 is None else [parse_vector(x0, "x0", N)]  # exact rationals only, as everywhere
+    starts = start + [_point(rng, N) for _ in range(orbits)]
     job = _Job(fld, eps, exps, steps, margin, variables, [], [])
     if steps + 1 < m + margin:
         job.warnings.append(f"orbit too short: {steps + 1} points for {m} candidates (+ margin {margin}); "

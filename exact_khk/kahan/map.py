@@ -79,10 +79,11 @@ from fractions import Fraction
 
 from exact_khk.linalg import circulant
 from exact_khk.arith import _is_element as _arith_is_element, as_point, get_arith, point_height as _height, to_element  # noqa: F401
-from exact_khk.errors import InputError, NearSingularWarning, SingularStepError
+from exact_khk.errors import InputError, NearSingularWarning, NumericalError, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
-from exact_khk.parsing import _short, parse_rational
+from exact_khk.parsing import MAX_STEPS, _short, parse_rational
 from exact_khk.linalg.split import split_system
+from exact_khk.systems.quadratic import QuadraticField
 from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
 
 METHODS = ("auto", "dense", "structured", "split")
@@ -97,6 +98,24 @@ def _floating():
 
 def _is_element(ar, t) -> bool:
     return _arith_is_element(ar, t)
+
+
+def _read_eps(ar, eps):
+    """``(ε as an element of ar, ε as a Fraction or None)``, read as every public function
+    reads numbers (:func:`~exact_khk.arith.to_element`; strings, ints and Fractions exactly);
+    InputError unless ε is a finite nonzero number of ``ar``."""
+    if _is_element(ar, eps) or not isinstance(eps, (str, int, Fraction)):
+        value = to_element(ar, eps, "eps")
+        exact = ar.to_fraction(value) if ar.rational else None
+    else:
+        exact = parse_rational(eps, "eps")
+        value = to_element(ar, exact, "eps")
+    if ar.is_zero(value) is True:
+        if exact:  # a nonzero rational rounded to 0 (e.g. 10^-5000 in float)
+            raise InputError(f"eps: {_short(str(exact), 40)} underflows to 0 in {ar.name} "
+                             f"(use mp:P or an exact arithmetic)")
+        raise InputError("eps: the step size must be nonzero")
+    return value, exact
 
 
 class KahanMap:
@@ -120,20 +139,13 @@ class KahanMap:
     _float_stepper = None
 
     def __init__(self, field, eps, arith=None, method="auto"):
+        if not isinstance(field, QuadraticField):
+            raise InputError(f"field: expected a quadratic field such as system.field('f'), "
+                             f"got {_short(field)} ({type(field).__name__})")
         self.field = field
         self.arith = ar = get_arith(arith)
         self.method = method
-        if _is_element(ar, eps) or not isinstance(eps, (str, int, Fraction)):
-            self.eps = to_element(ar, eps, "eps")
-            self.eps_exact = ar.to_fraction(self.eps) if ar.rational else None
-        else:
-            self.eps_exact = parse_rational(eps, "eps")
-            self.eps = to_element(ar, self.eps_exact, "eps")
-        if ar.is_zero(self.eps) is True:
-            if self.eps_exact:  # a nonzero rational rounded to 0 (e.g. 10^-5000 in float)
-                raise InputError(f"eps: {_short(str(self.eps_exact), 40)} underflows to 0 in {ar.name} "
-                                 f"(use mp:P or an exact arithmetic)")
-            raise InputError("eps: the step size must be nonzero")
+        self.eps, self.eps_exact = _read_eps(ar, eps)
         self.split, self.structure, self.switch_bits = _choose_path(field, ar, method, self.eps)
         if not ar.exact:
             _floating()  # numpy's import belongs to the set-up, not to the first step's time
@@ -157,17 +169,22 @@ class KahanMap:
     def with_eps(self, eps):
         """The same map with another step size (e.g. ``-eps`` for the inverse)."""
         out = KahanMap.__new__(KahanMap)
-        out.field, out.arith, out.eps = self.field, self.arith, eps
+        out.field, out.arith = self.field, self.arith
+        out.eps, out.eps_exact = _read_eps(self.arith, eps)
         # the split step's blocks are circulant for every ε ≠ 0 if for one (split.py)
         out.method, out.split, out.structure, out.switch_bits = (self.method, self.split, self.structure,
                                                                  self.switch_bits)
-        out.eps_exact = self.arith.to_fraction(eps) if self.arith.rational else None
         return out
 
     def system_matrix(self, x, sign=1):
-        """I − sign·ε f'(x) (a list of rows)."""
+        """I − sign·ε f'(x) (a list of rows); NumericalError if a floating entry overflows."""
+        ar, x = self.arith, self.point(x)
         M = self._matrix(x, sign)
-        return M.tolist() if hasattr(M, "tolist") else M
+        M = M.tolist() if hasattr(M, "tolist") else M
+        if not ar.exact and not all(ar.is_finite(t) for row in M for t in row):
+            raise NumericalError(f"I - eps*f'(x) overflows {ar.name} at x = ({', '.join(map(ar.format, x))})",
+                                 float("inf"))
+        return M
 
     def _matrix(self, x, sign=1):
         """I − sign·ε f'(x): a numpy array for ``float`` (binary64) and, as a list of
@@ -353,8 +370,13 @@ class KahanMap:
         ``progress``, if given, is called as ``progress(k)`` after step k (inside the
         arithmetic's working context, e.g. the precision of ``ball:P``).
         """
-        if not isinstance(steps, int) or steps < 0:
+        if not isinstance(steps, int) or isinstance(steps, bool) or steps < 0:
             raise InputError(f"steps: expected a non-negative integer, got {steps!r}")
+        if steps > MAX_STEPS:
+            raise InputError(f"steps: {steps} is beyond the limit of {MAX_STEPS:,} steps (MAX_STEPS; the orbit "
+                             f"alone would hold more than 10^7 points)")
+        if progress is not None and not callable(progress):
+            raise InputError(f"progress: expected a function of the step number, got {_short(progress)}")
         pts = [self.point(x0, "x0")]
         it = self._steps(pts[0])
         with self.arith.local():

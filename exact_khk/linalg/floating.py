@@ -163,7 +163,8 @@ def _matrix_builder(data, N, ar, eps, reuse=False):
     _, rows, ks, coefs, L = data
 
     def build(x):
-        M = numpy.bincount(rows, weights=coefs * x[ks], minlength=N * N)
+        # float64 also when f has no quadratic term (bincount of no weights is int64)
+        M = numpy.bincount(rows, weights=coefs * x[ks], minlength=N * N).astype(float, copy=False)
         M += L
         M *= -eps
         M = M.reshape(N, N)

@@ -38,7 +38,7 @@ from math import gcd, lcm
 
 from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
-from exact_khk.parsing import format_signs, parse_signs, parse_vector
+from exact_khk.parsing import MAX_N, format_signs, parse_signs, parse_vector
 from exact_khk.systems.base import System
 from exact_khk.systems.quadratic import QuadraticField, certainly_zero
 
@@ -88,9 +88,19 @@ def divisor_classes(n: int) -> dict[int, list[int]]:
     return dict(sorted(classes.items()))
 
 
+#: the most sign patterns :func:`rational_sign_patterns` lists (2^{#divisors of n}; n = 720720
+#: would have 2^240)
+MAX_SIGN_PATTERNS = 2 ** 16
+
+
 def rational_sign_patterns(n: int) -> list[str]:
     """All sign patterns whose involution has rational entries (2^{#divisors})."""
+    if not isinstance(n, int) or isinstance(n, bool) or not 2 <= n <= MAX_N:
+        raise InputError(f"n: expected an integer in [2, {MAX_N}], got {n!r}")
     classes = list(divisor_classes(n).values())
+    if 2 ** len(classes) > MAX_SIGN_PATTERNS:
+        raise InputError(f"n = {n}: {len(classes)} divisors give 2^{len(classes)} rational sign patterns, "
+                         f"beyond the limit of {MAX_SIGN_PATTERNS} (MAX_SIGN_PATTERNS)")
     out = []
     for mask in range(2 ** len(classes)):
         s = [0] * n
@@ -215,8 +225,11 @@ class LiePoissonSystem(System):
     @classmethod
     def random(cls, n: int, seed: int, bound: int = 3):
         """Small random integer Hessian blocks in [-bound, bound], reproducible from ``seed``."""
-        if not isinstance(n, int) or n < 2:
+        if not isinstance(n, int) or isinstance(n, bool) or n < 2:
             raise InputError(f"n: the family needs n >= 2, got {n!r}")
+        if n > MAX_N:
+            raise InputError(f"n: {n} is beyond the limit of {MAX_N:,} (MAX_N)")
+        _check_seed_bound(seed, bound)
         rng = random.Random(seed)
         draw = lambda: tuple(Fraction(rng.randint(-bound, bound)) for _ in range(n))  # noqa: E731
         return cls(draw(), draw(), draw())
@@ -384,6 +397,9 @@ for the Lie–Poisson family, got 'g['
         A non-rational pattern raises :class:`NotRationalError` unless
         ``cyclotomic=True``: then the field's coefficients lie in Q(ω) and it is
         usable in ``cyclo:N`` (n | N) and ``gf:P`` (P ≡ 1 mod n) only."""
+        if isinstance(power, bool) or not hasattr(power, "__index__"):
+            raise InputError(f"power: expected an integer (the power of the shift A), got {power!r}")
+        power = int(power)
         cyc = bool(cyclotomic) and kind == "g" and signs is not None \
             and not is_rational_pattern(self.n, signs)
         key = (kind, None if signs is None else format_signs(parse_signs(signs, self.n)), power, cyc)
@@ -465,6 +481,14 @@ RANDOM_POINT_SYSTEM_CHECK_MAX_N = 16
 _MAX_DRAWS = 200
 
 
+def _check_seed_bound(seed, bound):
+    """InputError unless ``seed`` is an int (or None) and ``bound`` a positive int."""
+    if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)):
+        raise InputError(f"seed: expected an integer, got {seed!r}")
+    if not isinstance(bound, int) or isinstance(bound, bool) or bound < 1:
+        raise InputError(f"bound: expected a positive integer, got {bound!r}")
+
+
 def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tuple:
     """A reproducible small-integer point of Q^{2n}, off the known degenerate sets.
 
@@ -489,8 +513,7 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
     """
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise InputError(f"n: expected a positive integer, got {n!r}")
-    if not isinstance(bound, int) or bound < 1:
-        raise InputError(f"bound: expected a positive integer, got {bound!r}")
+    _check_seed_bound(seed, bound)
     check_system = system is not None and n <= RANDOM_POINT_SYSTEM_CHECK_MAX_N
     rng = random.Random(f"x0-{seed}")
     draws = 0
@@ -524,6 +547,8 @@ def _degenerate_for(system, x, eps) -> bool:
 
 def b0_signs(n: int) -> str:
     """The sign pattern of B_0 = I - (2/n)(𝟙 ⊕ 𝟙): '-' then n-1 '+'."""
+    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
+        raise InputError(f"n: expected a positive integer, got {n!r}")
     return "-" + "+" * (n - 1)
 
 

@@ -1,0 +1,123 @@
+"""The API refuses hostile input with typed errors (exact_khk.errors), never a raw error
+from deep inside, and never passes a NaN on as a measured or exact value.
+
+Rows from a hostile sweep of the public API (each raised a raw TypeError, ValueError,
+AttributeError, ZeroDivisionError or MemoryError, hung, or gave a wrong answer before
+it was mended); each must now raise the typed error named.
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import gmpy2
+import pytest
+
+import exact_khk.testing as T
+from exact_khk import InputError, KahanMap, LiePoissonSystem, System, certify, rational_sign_patterns, verify
+from exact_khk.errors import NumericalError
+from exact_khk.diagnostics import find_integrals
+from exact_khk.systems.lie_poisson.system import b0_signs
+
+S3 = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
+F3 = S3.field("f")
+X3 = ["1", "2", "-1", "1/2", "0", "1"]
+TOP = "euler-top"
+
+ROWS = [
+    # fields: a non-integer power used to give the zero field (the identity map) silently
+    ("power 1.5", lambda: S3.field("f", power=1.5)),
+    ("power nan", lambda: S3.field("f", power=float("nan"))),
+    ("power None", lambda: S3.field("f", power=None)),
+    ("power True", lambda: S3.field("f", power=True)),
+    # sign patterns: floats were truncated (1.9 -> +1), strings and None raised raw errors
+    ("signs None", lambda: S3.field("g", signs=5)),
+    ("signs chars", lambda: S3.field("g", signs=["+", "-", "+"])),
+    ("signs float", lambda: S3.field("g", signs=[1.9, 1, 1])),
+    ("signs nan", lambda: S3.field("g", signs=[1, -1, float("nan")])),
+    ("signs str ints", lambda: S3.field("g", signs=["-1", "1", "1"])),
+    ("involution None", lambda: S3.involution(None)),
+    # a system or nothing where a field is expected
+    ("map of a system", lambda: KahanMap(S3, "1/10")),
+    ("map of None", lambda: KahanMap(None, "1/10")),
+    ("certify an int", lambda: certify(5)),
+    ("certify a field", lambda: certify(F3, steps=2)),
+    ("LP option, other system", lambda: certify(System.load(TOP), steps=2, signs="-++")),
+    # eps: non-finite elements of the arithmetic, and with_eps reads like the constructor
+    ("eps nan float", lambda: KahanMap(F3, float("nan"), "float")),
+    ("eps inf float", lambda: KahanMap(F3, float("inf"), "float")),
+    ("eps mpfr nan", lambda: KahanMap(F3, gmpy2.mpfr("nan"), "mp:64")),
+    ("eps mpfr inf", lambda: KahanMap(F3, gmpy2.mpfr("inf"), "mp:64")),
+    ("with_eps 0", lambda: KahanMap(F3, "1/10", "fraction").with_eps(0)),
+    ("with_eps None", lambda: KahanMap(F3, "1/10").with_eps(None)),
+    ("with_eps nan", lambda: KahanMap(F3, "1/10", "float").with_eps(float("nan"))),
+    ("system_matrix short", lambda: KahanMap(F3, "1/10").system_matrix([1, 2])),
+    # sizes beyond the limits the command line has: refused at once
+    ("orbit 10^12 steps", lambda: KahanMap(F3, "1/10").orbit([0] * 6, 10 ** 12)),
+    ("orbit progress 5", lambda: KahanMap(F3, "1/10").orbit(X3, 2, progress=5)),
+    ("orbit True steps", lambda: KahanMap(F3, "1/10").orbit(X3, True)),
+    ("certify 10^12 steps", lambda: certify(steps=10 ** 12)),
+    ("random n 10^9", lambda: LiePoissonSystem.random(10 ** 9, 1)),
+    ("random bound -1", lambda: LiePoissonSystem.random(3, 1, bound=-1)),
+    ("random bound None", lambda: LiePoissonSystem.random(3, 1, bound=None)),
+    ("random seed list", lambda: LiePoissonSystem.random(3, [1])),
+    ("sign patterns 720720", lambda: rational_sign_patterns(720720)),
+    ("sign patterns 0", lambda: rational_sign_patterns(0)),
+    ("b0 signs 0", lambda: b0_signs(0)),
+    # find_integrals reads x0 like every other entry point (floats refused, not taken as exact)
+    ("integrals x0 nan", lambda: find_integrals(System.load(TOP), degree=2, x0=[float("nan"), 1, 2])),
+    ("integrals x0 1/0", lambda: find_integrals(System.load(TOP), degree=2, x0=["1/0", 1, 2])),
+    ("integrals x0 0.5", lambda: find_integrals(System.load(TOP), degree=2, x0=[0.5, 1, 2])),
+    ("integrals seed list", lambda: find_integrals(System.load(TOP), degree=2, seed=[1])),
+    ("integrals max_primes 0", lambda: find_integrals(System.load(TOP), degree=2, max_primes=0)),
+    # files that are not regular text files
+    ("load /dev/zero", lambda: System.load("/dev/zero")),
+    ("load NUL byte", lambda: System.load("/tmp/x\x00y.toml")),
+    # a comparison of differently shaped sides
+    ("poisson shapes", lambda: T.assert_poisson_map(KahanMap(F3, "1/10"), lambda x: [[0]], X3, 2)),
+]
+
+
+@pytest.mark.parametrize("name, call", ROWS, ids=[r[0] for r in ROWS])
+def test_hostile_api_row(name, call):
+    with pytest.raises(InputError):
+        call()
+
+
+def test_verify_refuses_eps_zero_and_unsupported_cyclotomic_fields():
+    d = certify(steps=2).to_json()
+    with pytest.raises(InputError, match="eps"):
+        verify(dict(d, eps="0"))
+    for N in ("100000", "1000000000"):  # beyond cyclo:N's limit: "not checkable", at once
+        report = verify(dict(d, arith=f"cyclo:{N}"))
+        assert not report.ok and not report.checkable
+    assert verify(d).ok  # the control: the untampered certificate verifies
+
+
+def test_float_step_of_a_field_without_quadratic_terms():
+    """An affine field (x' = y, y' = -x) in binary64: numpy's bincount of no terms is int64;
+    the step must still be the binary64 solve, within a few ulps of the exact step."""
+    f = System.from_expressions(["x", "y"], field=["y", "-x"]).field("f")
+    exact = KahanMap(f, "1/10", "fraction").step([1, 1])
+    assert exact == (Fraction(119, 101), Fraction(79, 101))  # (I - εL)⁻¹(I + εL) x by hand
+    z = KahanMap(f, "1/10", "float").step([1, 1])
+    # a 2×2 solve of a matrix with κ ≈ 1: each coordinate within 8 ulp of the exact value
+    assert all(abs(Fraction(a) - b) <= 8 * math.ulp(float(b)) for a, b in zip(z, exact))
+
+
+def test_a_nan_residual_is_never_conserved():
+    phi = KahanMap(F3, "1/10", "float")
+    with pytest.raises(AssertionError, match="nan"):
+        T.assert_conserved(phi, lambda x: float("nan"), X3, 3, tol=1e-9)
+    T.assert_conserved(phi, lambda x: 0.0, X3, 3, tol=1e-9)  # the control: a constant is conserved
+
+
+def test_system_matrix_overflow_is_a_numerical_error():
+    with pytest.raises(NumericalError):
+        KahanMap(F3, "1/10", "float").system_matrix([1, 2, 3, 4, 5, 1e308])
+    assert KahanMap(F3, "1/10", "float").system_matrix([1, 2, 3, 4, 5, 1])[0][0] == pytest.approx(-1.2)
+
+
+def test_certify_takes_a_catalogue_name():
+    assert certify(TOP, steps=2).status == certify(System.load(TOP), steps=2).status == "VALID"
