@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import contextlib
 import re
+import stat
 import sys
 from fractions import Fraction
 from pathlib import Path
 
 from exact_khk.errors import InputError
 
-_RATIONAL = re.compile(r"^[+-]?(\d+(/\d+)?|\d*\.\d+([eE][+-]?\d+)?|\d+[eE][+-]?\d+)$")
+#: ASCII digits only (re.ASCII: Python's \d and int() also take Arabic-Indic or full-width digits)
+_RATIONAL = re.compile(r"^[+-]?(\d+(/\d+)?|\d*\.\d+([eE][+-]?\d+)?|\d+[eE][+-]?\d+)$", re.ASCII)
 
 #: the largest |exponent| of a decimal such as '1e-300' (10^10000 has 10 001 digits;
 #: beyond, merely writing the number down costs more than any computation here)
@@ -80,7 +82,7 @@ def parse_rational(value, name: str) -> Fraction:
         raise InputError(f"{name}: {value!r} is a binary float, not an exact rational; "
                          f"write it as a string such as '1/10' or as a Fraction")
     if isinstance(value, str):
-        text = value.strip().replace(" ", "")
+        text = re.sub(r"\s*/\s*", "/", value.strip())  # '1 / 10' is 1/10; '1 0' is no number
         if len(text) > MAX_DIGITS:
             raise InputError(f"{name}: a number of {len(text)} characters is beyond the limit of {MAX_DIGITS}")
         if not _RATIONAL.match(text):
@@ -114,7 +116,9 @@ def read_text_file(path, what: str, max_bytes: int) -> str:
         p = Path(path)
         if p.is_dir():
             raise InputError(f"{path}: is a folder, not a {what}")
-        with open(p, "rb") as fh:  # at most max_bytes + 1: /dev/zero or a pipe has no size to check
+        if not stat.S_ISREG(p.stat().st_mode):  # /dev/zero would never end, a FIFO would block
+            raise InputError(f"{path}: not a regular file (a device or a pipe), not a {what}")
+        with open(p, "rb") as fh:  # at most max_bytes + 1 (a file may grow while it is read)
             data = fh.read(max_bytes + 1)
         if len(data) > max_bytes:
             raise InputError(f"{path}: the file is larger than {max_bytes} bytes")

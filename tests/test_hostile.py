@@ -161,6 +161,25 @@ ROWS += [
     row(["orbit", "--system", "no-such-system"], 2),
     row(["orbit", "--system", "euler-top", "--n", "3"], 2),
 ]
+# from a hostile sweep of the command line (each was a hang, a memory blow-up, an internal
+# error, a late failure or a silent misreading before it was mended)
+ROWS += [
+    row(["verify", "/dev/zero"], 2), row(["sweep", "/dev/zero", "--out", "{tmp}/o", "--dry-run"], 2),
+    row(["hard", "--system", "/dev/zero"], 2),
+    row(["liouville", "--system", "euler-top", "--steps", "1"], 2), row(["prove", "--system", "euler-top"], 2),
+    row(["certify", "--system", "euler-top", "--claims", "", "--steps", "2"], 2, id="certify --claims ''"),
+    row(["certify", "--steps", "2", "--json", "/proc/x.json"], 5, id="certify --json /proc/x.json"),
+    row(["degrees", "--steps", "3", "--plot", "{tmp}/out.txt"], 2, id="degrees --plot out.txt"),
+    row(["degrees", "--steps", "6", "--max-bits", "-1"], 2), row(["degrees", "--steps", "6", "--max-bits", "5"], 2),
+    row(["find-integrals", "--system", "euler-top", "--monomials", "x1^99999999"], 2),
+    row(["find-integrals", "--system", "euler-top", "--monomials", "x1^45,x2"], 2, id="find-integrals degree 45"),
+    row(["find-integrals", "--system", "euler-top", "--monomials", "x1^" + BIG], 2),
+    row(["orbit", "--eps", "1 0", "--steps", "1"], 2, id="orbit --eps '1 0'"),
+    row(["orbit", "--eps", "\u0661/\u0661\u0660".encode().decode("unicode_escape"), "--steps", "1"], 2,
+        id="orbit --eps in Arabic-Indic digits"),
+    row(["orbit", "--eps", "1 / 10", "--steps", "1"], 0, id="orbit --eps '1 / 10'"),
+    row(["certify", "--steps", "1", "--arith", "cyclo:3", "--signs", "--+"], 0, id="certify --signs --+"),
+]
 # malformed system files
 for name in TOMLS:
     if name != "ok":

@@ -322,6 +322,25 @@ def test_resume_after_interruption(tmp_path, capsys, how):
     assert code == 0 and "30 already done; 0 to run" in text and len(lines(out)) == 30
 
 
+def test_ctrl_c_on_a_local_dask_cluster_is_one_line_per_message(tmp_path):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during a sweep on
+    ``--dask local``: status 130, the two lines of the local engine, no traceback from the
+    worker processes (they start with SIGINT ignored), finished tasks kept."""
+    spec = tmp_path / "probe.toml"
+    spec.write_text('task = "probe"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = "0-29"\n'
+                    '[options]\nsleep = 0.3\n')
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "exact_khk", "sweep", str(spec), "--out", str(out), "--dask",
+                             "local", "--workers", "2", "--no-plots"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    _wait_for_lines(out, 2, proc, limit=120)
+    os.killpg(proc.pid, signal.SIGINT)
+    assert proc.wait(60) == 130
+    err = proc.stderr.read().decode()
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 2, err[-2000:]
+    assert 2 <= len(ResultStore(out).read()) < 30
+
+
 def test_one_sweep_per_folder(tmp_path):
     spec = probe_spec("0-1")
     from exact_khk.sweep.run import _Lock

@@ -508,7 +508,7 @@ def test_cli_inexact_certificate_exits_1(capsys, tmp_path):
 
 
 @pytest.mark.parametrize("content, message", [
-    (None, "no such file"),
+    (None, "no such certificate file"),
     ("{not json", "not valid JSON"),
     ("[1, 2]", "expected a JSON object"),
     ('{"schema_version": 2}', "missing key 'system'"),
@@ -533,7 +533,7 @@ def test_cli_too_large_file_exits_2(capsys, tmp_path, monkeypatch):
     path.write_text(json.dumps(roundtrip(certify(steps=1, signs=["-++"]))))
     monkeypatch.setattr(cli_verify, "MAX_CERTIFICATE", 100)
     code, _, err = run(capsys, "verify", str(path))
-    assert code == 2 and "more than the limit" in err and len(err.strip().splitlines()) == 1
+    assert code == 2 and "larger than 100 bytes" in err and len(err.strip().splitlines()) == 1
 
 
 def test_cli_tampered_structure_exits_2(capsys, tmp_path, lp_cert):

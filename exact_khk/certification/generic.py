@@ -85,7 +85,11 @@ def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claim
     if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
         raise InputError(f"steps: expected a positive integer, got {steps!r}")
     known = applicable_claims(system)
+    if isinstance(claims, str):  # 'integrals,reversibility', as on the command line
+        claims = [c.strip() for c in claims.split(",") if c.strip()]
     wanted = tuple(claims) if claims is not None else (getattr(system, "claims", None) or known)
+    if not wanted:  # a certificate of nothing would be VALID: refused
+        raise InputError(f"claims: the list is empty; name some of {', '.join(known) or 'the claims'}")
     for c in wanted:
         if c not in CLAIMS:
             raise InputError(f"claims: unknown claim {c!r}; expected some of {', '.join(CLAIMS)}")

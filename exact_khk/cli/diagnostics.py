@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import re
+
 from exact_khk.cli.options import (add_field_options, add_system_options, check_output, field_name,
                                    system_from_args, write_json)
 from exact_khk.errors import InputError
@@ -61,6 +63,9 @@ def cmd_degrees(args):
     from exact_khk.diagnostics import degree_sequence, plot_growth
 
     if args.plot:
+        from exact_khk.diagnostics.heights import plot_format
+
+        plot_format(args.plot)
         check_output(args.plot, "--plot")
     system, x0, eps = system_from_args(args)
     try:
@@ -68,8 +73,8 @@ def cmd_degrees(args):
                               primes=_primes(args.primes), lines=args.lines, seed=args.line_seed, exact=args.exact,
                               confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits)
     except InputError as exc:  # name the command-line options
-        raise InputError(str(exc).replace("steps:", "--steps:").replace("primes:", "--primes:")
-                         .replace("lines:", "--lines:").replace("exact:", "--exact:")) from None
+        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits):",
+                                lambda m: "--" + m.group(1).replace("_", "-") + ":", str(exc))) from None
     if args.plot:
         plot_growth(args.plot, degrees=res, heights=res.heights,
                     title=f"{res.label}, ε = {eps}, x0 = ({', '.join(map(str, x0))})")

@@ -25,7 +25,7 @@ def register(sub):
                        "commutation, involutivity and rank n: exactly at orbit points "
                        "(--arith cyclo:N, flint, ...; default cyclo:n for n >= 3, where the involutions "
                        "need Q(omega)) or as identities over gf:P (Schwartz–Zippel).")
-    add_system_options(p, steps_default=2)
+    add_system_options(p, steps_default=2, lie_poisson_only=True)
     p.add_argument("--involutions", default="all",
                    help="'all' (2^n - 2 sign patterns), 'basis' (B_0..B_{n-1}) or a comma list "
                         "such as '+-+,++-'")
@@ -40,7 +40,7 @@ def register(sub):
     q = sub.add_parser("prove", help="symbolic proofs for small n (n = 2 in seconds)",
                        description="Prove H~ o Phi_f = H~, Phi_f o Phi_g = Phi_g o Phi_f and the Jacobi "
                        "identity of Pi as identities of rational functions in x and eps.")
-    add_system_options(q, steps_default=0)
+    add_system_options(q, steps_default=0, lie_poisson_only=True)
     q.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH")
     q.set_defaults(func=cmd_prove)
 

@@ -18,6 +18,7 @@ matplotlib or the certification code of commands that do not run.
 from __future__ import annotations
 
 import argparse
+import re
 import importlib
 import sys
 import warnings
@@ -77,6 +78,10 @@ def _command(argv):
     return next((tok for tok in argv if not tok.startswith("-")), None)
 
 
+#: a value made of signs and commas only (sign patterns such as '--+' or '--+,-++'): never an option
+_SIGNS = re.compile(r"[+\-,]+")
+
+
 def _join_values(argv, parser):
     """Turn ``--opt -1/10`` into ``--opt=-1/10`` for options that take a value.
 
@@ -92,8 +97,9 @@ def _join_values(argv, parser):
     out, i = [], 0
     while i < len(argv):
         tok = argv[i]
-        if tok in takes_value and i + 1 < len(argv) and argv[i + 1].startswith("-") \
-                and argv[i + 1] not in takes_value and not argv[i + 1].startswith("--"):
+        nxt = argv[i + 1] if i + 1 < len(argv) else ""
+        if tok in takes_value and nxt.startswith("-") and nxt not in takes_value \
+                and (not nxt.startswith("--") or _SIGNS.fullmatch(nxt) and nxt != "--"):
             out.append(f"{tok}={argv[i + 1]}")
             i += 2
         else:
@@ -181,11 +187,14 @@ def _fail(kind, exc, status) -> int:
 def entry_point():  # console script
     try:
         code = main()
-        sys.stdout.flush()
+        if sys.stdout is not None:  # None when the shell closed it (>&-): print() wrote nothing
+            sys.stdout.flush()
     except KeyboardInterrupt:  # Ctrl-C between the boundary and the exit
         code = EXIT["interrupted"]
     except BrokenPipeError:
         code = EXIT["ok"]
+    except OSError as exc:  # the last buffered output cannot be written (e.g. a full disk)
+        code = _fail("output", exc, "output")
     sys.exit(code)
 
 

@@ -60,13 +60,18 @@ class Parser(argparse.ArgumentParser):
 # --- shared options -----------------------------------------------------------
 
 
-def add_system_options(p, steps_default=20):
+def add_system_options(p, steps_default=20, lie_poisson_only=False):
+    """The options that choose the system, x0, ε, steps and arithmetic (``lie_poisson_only``:
+    no ``--system``, for commands about the Lie–Poisson family's theorems)."""
     from exact_khk.systems.lie_poisson.system import DEFAULT_EPS
 
     g = p.add_argument_group("system (default: the built-in n = 3 Lie–Poisson system, see README)")
-    g.add_argument("--system", metavar="NAME|FILE",
-                   help="a catalogue system (see 'exact-khk systems') or a system file (.toml, see "
-                        "docs/system-files.md) instead of the Lie–Poisson family")
+    if lie_poisson_only:
+        p.set_defaults(system=None)
+    else:
+        g.add_argument("--system", metavar="NAME|FILE",
+                       help="a catalogue system (see 'exact-khk systems') or a system file (.toml, see "
+                            "docs/system-files.md) instead of the Lie–Poisson family")
     g.add_argument("--n", type=int, help="half the phase-space dimension (n >= 2)")
     g.add_argument("--a", help="first Hessian block vector, e.g. '1/2,-3,0' (enclose: also reals such as "
                                "'sqrt(2),[1.9,2.1],0')")

@@ -246,6 +246,8 @@ def cmd_hard(args):
 
     ariths = _ariths(args.ariths)
     _check_digits(args.digits)
+    if args.out:
+        prepare_folder(args.out)  # before the work, as scale and enclose
     if not 1 <= args.long_steps <= MAX_LONG_STEPS:
         raise InputError(f"--long-steps: expected 1 <= K <= {MAX_LONG_STEPS:,} (MAX_LONG_STEPS), got {args.long_steps}")
     title = ""
@@ -292,7 +294,6 @@ def cmd_hard(args):
         print(legend)
     if args.out:
         out = pathlib.Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
         doc = {"cases": [hard.result_json(r) for r in results], "legend": legend,
                "versions": library_versions()}
         write_atomic(out / "hard_cases.json", json.dumps(doc, indent=1) + "\n", "--out")

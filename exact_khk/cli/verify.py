@@ -10,11 +10,11 @@ exactly); 2 an unreadable or malformed file (one line on stderr).
 from __future__ import annotations
 
 import json
-import os
 
 from exact_khk.certification.verify import verify
 from exact_khk.cli.options import write_json
 from exact_khk.errors import InputError
+from exact_khk.parsing import read_text_file
 
 #: the largest certificate file read (bytes)
 MAX_CERTIFICATE = 200_000_000
@@ -35,28 +35,15 @@ def register(sub):
 
 
 def read_certificate(path) -> dict:
-    """The JSON object in ``path``; InputError (one line, naming the file) if it cannot be read."""
+    """The JSON object in ``path``; InputError (one line, naming the file) if it cannot be read
+    (missing, a folder, a device or a pipe, beyond :data:`MAX_CERTIFICATE` bytes, not UTF-8 JSON)."""
+    text = read_text_file(path, "certificate file", MAX_CERTIFICATE)
     try:
-        size = os.stat(path).st_size
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a folder, not a certificate file")
-    if size > MAX_CERTIFICATE:
-        raise InputError(f"{path}: the file has {size} bytes, more than the limit of {MAX_CERTIFICATE}")
-    try:
-        with open(path, encoding="utf-8") as fh:
-            data = json.load(fh)
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not a UTF-8 text file") from None
+        data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise InputError(f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})") from None
     except (ValueError, RecursionError) as exc:  # e.g. an integer beyond a digit limit, nesting too deep
         raise InputError(f"{path}: not a readable JSON certificate ({type(exc).__name__}: {exc})") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     if not isinstance(data, dict):
         raise InputError(f"{path}: expected a JSON object (a certificate), got a {type(data).__name__}")
     return data

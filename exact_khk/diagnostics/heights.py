@@ -133,6 +133,8 @@ def height_growth(field, x0, eps, steps=30, max_bits=200_000, arith="flint") -> 
         raise InputError(f"steps: expected an integer in [4, 100000] for the height fit, got {steps!r}")
     if x0 is None:
         raise InputError("x0: a starting point is needed for the height growth")
+    if isinstance(max_bits, bool) or not isinstance(max_bits, int) or max_bits < 1:
+        raise InputError(f"max_bits: expected a positive integer, got {max_bits!r}")
     ar = get_arith(arith)
     phi = KahanMap(field, parse_rational(eps, "eps"), ar)
     x = phi.point(x0, "x0")
@@ -143,11 +145,14 @@ def height_growth(field, x0, eps, steps=30, max_bits=200_000, arith="flint") -> 
         if hs[-1] > max_bits:
             truncated = True
             break
+    if truncated and len(hs) < 5:
+        raise InputError(f"max_bits: the orbit passed {max_bits} bits after {len(hs) - 1} steps; at least 4 are "
+                         f"needed to fit a height growth (raise max_bits)")
     return classify_heights(hs, truncated)
 
 
 def plot_growth(path, degrees=None, heights=None, title=""):
-    """Write a PNG: degree against step and log2(height) against step, with the
+    """Write an image (PNG, PDF or SVG by the suffix, atomically): degree against step and log2(height) against step, with the
     fitted curves and the classification in the legends (needs matplotlib)."""
     try:
         import matplotlib
@@ -199,6 +204,22 @@ def plot_growth(path, degrees=None, heights=None, title=""):
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    from exact_khk.studies.output import write_atomic
+
+    write_atomic(path, lambda fh: fig.savefig(fh, format=plot_format(path), dpi=110), "--plot")
     plt.close(fig)
     return path
+
+
+#: the image formats :func:`plot_growth` writes, by the file's suffix
+PLOT_FORMATS = ("png", "pdf", "svg")
+
+
+def plot_format(path) -> str:
+    """The image format of ``path`` from its suffix (checked before any work: InputError
+    unless one of :data:`PLOT_FORMATS`)."""
+    suffix = str(path).rpartition(".")[2].lower() if "." in str(path).rpartition("/")[2] else ""
+    if suffix not in PLOT_FORMATS:
+        raise InputError(f"--plot: {str(path)!r}: expected a file name ending in "
+                         f"{', '.join('.' + f for f in PLOT_FORMATS)}")
+    return suffix

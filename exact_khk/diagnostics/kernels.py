@@ -17,6 +17,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
+from exact_khk.parsing import _short
 
 
 # --- candidate monomials --------------------------------------------------------------
@@ -41,6 +42,10 @@ def _of_degree(dim, d):
     return [(i,) + rest for i in range(d + 1) for rest in _of_degree(dim - 1, d - i)]
 
 
+#: the highest degree of a listed candidate monomial (the bound of ``degree``)
+MAX_MONOMIAL_DEGREE = 40
+
+
 def parse_monomials(spec, variables) -> list:
     """Exponent tuples from a list of monomials such as ``["1", "x*y", "z^2", "x**2*y"]``
     (or exponent tuples), in the given variables.
@@ -53,24 +58,33 @@ def parse_monomials(spec, variables) -> list:
     out = []
     for item in spec:
         if isinstance(item, (tuple, list)):
-            if len(item) != N or any(not isinstance(e, int) or e < 0 for e in item):
-                raise InputError(f"monomials: {item!r} is not a tuple of {N} nonnegative exponents")
-            out.append(tuple(item))
-            continue
-        exps = [0] * N
-        text = str(item).replace(" ", "").replace("**", "^")
-        if text != "1":
-            for factor in text.split("*"):
-                name, _, power = factor.partition("^")
-                if name not in index or (power and not power.isdigit()):
-                    raise InputError(f"monomials: cannot read {item!r} (variables: {', '.join(variables)})")
-                exps[index[name]] += int(power or 1)
+            if len(item) != N or any(not isinstance(e, int) or isinstance(e, bool) or e < 0 for e in item):
+                raise InputError(f"monomials: {_short(item)} is not a tuple of {N} nonnegative exponents")
+            exps = list(item)
+        else:
+            exps = _exponents(item, index, variables)
         out.append(tuple(exps))
+        if sum(exps) > MAX_MONOMIAL_DEGREE:
+            raise InputError(f"monomials: {_short(item)} has degree {sum(exps)}, beyond the limit of "
+                             f"{MAX_MONOMIAL_DEGREE} (MAX_MONOMIAL_DEGREE, as for --degree)")
     if len(set(out)) != len(out):
         raise InputError("monomials: the list repeats a monomial")
     if not out:
         raise InputError("monomials: the list is empty")
     return out
+
+
+def _exponents(item, index, variables) -> list:
+    """The exponents of one monomial's text such as 'x*y^2' or 'x**2*y'."""
+    exps = [0] * len(variables)
+    text = str(item).replace(" ", "").replace("**", "^")
+    if text != "1":
+        for factor in text.split("*"):
+            name, _, power = factor.partition("^")
+            if name not in index or (power and not (power.isascii() and power.isdigit())) or len(power) > 6:
+                raise InputError(f"monomials: cannot read {_short(item)} (variables: {', '.join(variables)})")
+            exps[index[name]] += int(power or 1)
+    return exps
 
 
 def monomial_text(e, variables) -> str:

@@ -27,7 +27,24 @@ def check_writable(path, what: str = "output") -> str:
         raise OutputError(f"{what}: no permission to write in {folder!r}")
     if os.path.exists(path) and not os.access(path, os.W_OK):
         raise OutputError(f"{what}: no permission to overwrite {path!r}")
+    if not os.path.exists(path) or os.path.isfile(path):  # what write_atomic will do, tried now:
+        _try_temporary(path, folder, what)  # /proc, /sys, a read-only file system pass access()
     return path
+
+
+def _temporary(path, folder, what):
+    """``(fd, name)`` of a new temporary file beside ``path`` (OutputError naming ``path``)."""
+    try:
+        return tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
+    except OSError as exc:
+        raise OutputError(f"{what}: cannot write {path!r} (a file cannot be created in {folder!r}: "
+                          f"{exc.strerror or exc})") from None
+
+
+def _try_temporary(path, folder, what):
+    fd, tmp = _temporary(path, folder, what)
+    os.close(fd)
+    os.unlink(tmp)
 
 
 def prepare_folder(path, what: str = "--out"):
@@ -67,7 +84,7 @@ def write_atomic(path, data, what: str = "output") -> None:
             raise OutputError(f"{what}: cannot write {path!r}: {exc.strerror or exc}") from None
         return
     folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=os.path.basename(path), dir=folder)
+    fd, tmp = _temporary(path, folder, what)
     try:
         with os.fdopen(fd, "wb") as fh:
             fill(fh)

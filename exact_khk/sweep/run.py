@@ -389,14 +389,21 @@ class DaskEngine:
             try:
                 if self.address == "local":
                     import logging
+                    import signal
 
-                    self._cluster = distributed.LocalCluster(
-                        n_workers=self.workers or default_workers(), threads_per_worker=1, processes=True,
-                        dashboard_address=None, silence_logs=logging.ERROR)
+                    # the worker processes start with Ctrl-C ignored (an ignored signal stays ignored in a
+                    # child): Ctrl-C stops the sweep in this process, not with a traceback from each worker
+                    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+                    try:
+                        self._cluster = distributed.LocalCluster(
+                            n_workers=self.workers or default_workers(), threads_per_worker=1, processes=True,
+                            dashboard_address=None, silence_logs=logging.ERROR)
+                    finally:
+                        signal.signal(signal.SIGINT, old)
                     self.client = distributed.Client(self._cluster)
                 else:
                     self.client = distributed.Client(self.address, timeout="15s")
-            except (OSError, TimeoutError) as exc:
+            except (OSError, TimeoutError, ValueError) as exc:  # ValueError: not an address ('bogus')
                 self._close()
                 raise InputError(f"--dask: cannot connect to the scheduler at {self.address}: "
                                  f"{' '.join(str(exc).split()) or type(exc).__name__}") from None

@@ -47,7 +47,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import read_text_file
+from exact_khk.parsing import MAX_STEPS, _short, read_text_file
 from exact_khk.sweep.tasks import TASKS
 
 try:
@@ -256,9 +256,9 @@ def _timeout(value, err):
     return value or None
 
 
-def int_range(value, where, err, minimum=0, limit=1_000_000) -> list:
+def int_range(value, where, err, minimum=0, limit=1_000_000, maximum=None) -> list:
     """Integers from ``3``, ``[2, 3, 5]`` or ``"0-199"`` / ``"2-4,7"`` (in that order,
-    without repeats)."""
+    without repeats); at most ``limit`` of them, each in [minimum, maximum]."""
     if isinstance(value, bool):
         raise err(where, f"expected an integer, a list of integers or a range such as '0-9', got {value!r}")
     if isinstance(value, int):
@@ -287,6 +287,9 @@ def int_range(value, where, err, minimum=0, limit=1_000_000) -> list:
     low = [v for v in out if v < minimum]
     if low:
         raise err(where, f"values must be >= {minimum}, got {low[0]}")
+    high = [v for v in out if maximum is not None and v > maximum]
+    if high:
+        raise err(where, f"values must be <= {maximum:,}, got {_short(high[0])}")
     return list(dict.fromkeys(out))
 
 
@@ -462,7 +465,7 @@ def _ariths(value, kind, err) -> list:
 
 
 def _steps(value, kind, err) -> list:
-    vals = int_range(value, "grid.steps", err, minimum=kind.min_steps, limit=100_000)
+    vals = int_range(value, "grid.steps", err, minimum=kind.min_steps, limit=100_000, maximum=MAX_STEPS)
     return vals
 
 
