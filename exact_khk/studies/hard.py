@@ -165,6 +165,22 @@ def _near_undefined_case(s2, y_a, root, back=3, delta=Fraction(1, 10 ** 12)):
                     s2, x0, eps, back + 2)
 
 
+def _sci(q: Fraction, digits: int) -> str:
+    """A rational in scientific notation to ``digits`` significant digits, at any magnitude
+    (float() overflows beyond 1e308 and underflows below 1e-308; x0 may hold huge numbers).
+
+    >>> _sci(Fraction(1, 3), 6), _sci(Fraction(10 ** 900, 7), 6), _sci(Fraction(1, 10 ** 900), 1)
+    ('0.333333', '1.42857e+899', '1e-900')
+    """
+    try:
+        f = float(q)
+        if f or not q:  # in binary64's range: as before, e.g. '0.333333', '1e-12'
+            return f"{f:.{digits}g}"
+    except OverflowError:
+        pass
+    return flint.arb(flint.fmpq(q.numerator, q.denominator)).str(digits, radius=False)
+
+
 def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DISTANCES) -> list[HardCase]:
     """The hard cases of any system at x0 and ε (default: the system's own):
 
@@ -189,8 +205,8 @@ def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DI
     cases = []
     if roots:
         root = min(roots, key=lambda r: abs(r.mid))
-        how = "rational, exact" if root.exact else f"certified to {float(root.hi - root.lo):.0e}"
-        cases += [HardCase(f"near-root 1e-{d}", f"eps = eps* + 1e-{d}, eps* ~ {float(root.mid):.6g} the real root of "
+        how = "rational, exact" if root.exact else f"certified to {_sci(root.hi - root.lo, 1)}"
+        cases += [HardCase(f"near-root 1e-{d}", f"eps = eps* + 1e-{d}, eps* ~ {_sci(root.mid, 6)} the real root of "
                            f"det(I - eps f'(x0)) nearest 0 ({how})", system, x0, root.mid + Fraction(1, 10 ** d), 2)
                   for d in distances]
     cases += [HardCase(f"singular (eps={r.lo})", "det(I - eps f'(x0)) = 0 exactly at step 1 (a rational root)",
