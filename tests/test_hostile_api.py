@@ -17,7 +17,8 @@ import pytest
 import exact_khk.testing as T
 from exact_khk import InputError, KahanMap, LiePoissonSystem, System, certify, rational_sign_patterns, verify
 from exact_khk.errors import NumericalError
-from exact_khk.diagnostics import find_integrals
+from exact_khk.certification.records import Check
+from exact_khk.diagnostics import degree_sequence, find_integrals, height_growth
 from exact_khk.systems.lie_poisson.system import b0_signs
 
 S3 = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
@@ -76,6 +77,22 @@ ROWS = [
     ("load NUL byte", lambda: System.load("/tmp/x\x00y.toml")),
     # a comparison of differently shaped sides
     ("poisson shapes", lambda: T.assert_poisson_map(KahanMap(F3, "1/10"), lambda x: [[0]], X3, 2)),
+    # the testing helpers and the records name what is wrong
+    ("helper without tol", lambda: T.assert_reversible(KahanMap(F3, "1/10", "float"), X3, 3)),
+    ("helper tol 'x'", lambda: T.assert_reversible(KahanMap(F3, "1/10", "float"), X3, 3, tol="x")),
+    ("helper of a field", lambda: T.assert_reversible(F3, X3, 3)),
+    ("helper float integral", lambda: T.assert_conserved(KahanMap(F3, "1/10"), lambda x: 0.5, X3, 3)),
+    ("helper None integral", lambda: T.assert_conserved(KahanMap(F3, "1/10"), lambda x: None, X3, 3)),
+    ("helper no certificate", lambda: T.assert_certificate_valid(None)),
+    ("check of no name", lambda: certify(steps=2).check("nope")),
+    ("Check.from_json None", lambda: Check.from_json(None)),
+    ("Check.from_json {}", lambda: Check.from_json({})),
+    # diagnostics' parameters
+    ("heights in gf:101", lambda: height_growth(F3, X3, "1/10", arith="gf:101")),
+    ("heights in float", lambda: height_growth(F3, X3, "1/10", arith="float")),
+    ("heights max_bits None", lambda: height_growth(F3, X3, "1/10", max_bits=None)),
+    ("degrees confirm -1", lambda: degree_sequence(S3, steps=5, confirm=-1)),
+    ("degrees exact_terms -1", lambda: degree_sequence(S3, steps=5, exact_terms=-1)),
 ]
 
 

@@ -82,7 +82,8 @@ class Check:
 
     @classmethod
     def from_json(cls, d: dict) -> "Check":
-        return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
+        """The check of :meth:`to_json`; malformed input raises InputError naming the key."""
+        return _check_from_json(d, "check")
 
 
 @dataclass(frozen=True)
@@ -127,7 +128,8 @@ class Certificate:
         for c in self.checks:
             if c.name == name:
                 return c
-        raise KeyError(name)
+        raise InputError(f"check: no check named {abbreviate(repr(name), 60)} in this certificate "
+                         f"({len(self.checks)} checks; see Certificate.checks)")
 
     def __repr__(self):
         return (f"<Certificate {self.status}: {getattr(self.system, 'name', '?')}, {len(self.checks)} checks, "
@@ -294,7 +296,7 @@ def _check_from_json(d, where: str) -> Check:
         v = d[key]
         if not isinstance(v, types) or (isinstance(v, bool) and bool not in _as_tuple(types)):
             raise InputError(f"{where}.{key}: expected {_type_names(types)}, got {_kind(v)}")
-    return Check.from_json(d)
+    return Check(**{k: d[k] for k in Check.__dataclass_fields__ if k in d})
 
 
 def _json_object(d, where: str) -> dict:

@@ -360,6 +360,8 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     check_count(lines, "lines", 1, 64)
     check_count(exact, "exact", 0, 50)
     check_count(max_degree, "max_degree", 1, 10 ** 7)
+    check_count(confirm, "confirm", 1, 1000)
+    check_count(exact_terms, "exact_terms", 0, 10 ** 8)
     if fld.dim > MAX_DIM:
         raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")
     primes = check_primes(primes, seed=seed)

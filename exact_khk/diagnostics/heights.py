@@ -136,6 +136,9 @@ def height_growth(field, x0, eps, steps=30, max_bits=200_000, arith="flint") -> 
     if isinstance(max_bits, bool) or not isinstance(max_bits, int) or max_bits < 1:
         raise InputError(f"max_bits: expected a positive integer, got {max_bits!r}")
     ar = get_arith(arith)
+    if not ar.rational:  # heights are bits of exact rationals
+        raise InputError(f"arith: height growth needs an exact rational arithmetic (flint, gmpy2, fraction), "
+                         f"got {ar.name}")
     phi = KahanMap(field, parse_rational(eps, "eps"), ar)
     x = phi.point(x0, "x0")
     hs, truncated = [point_height(ar, x)], False
