@@ -678,7 +678,8 @@ def as_point(ar, x, dim: int, name: str = "x"):
             ar.rational and all(type(t) is type(ar.zero) for t in x)
             or ar.lapack and all(type(t) is float for t in x) and all(map(math.isfinite, x))):
         return x  # already a point of ar (e.g. a previous step's result)
-    if isinstance(x, (str, bytes)) or not hasattr(x, "__len__") and not hasattr(x, "__iter__"):
+    if isinstance(x, (str, bytes, dict, set, frozenset)) or not hasattr(x, "__len__") and not hasattr(x, "__iter__"):
+        # (a dict would give its keys, a set no order)
         raise InputError(f"{name}: expected a sequence of {dim} numbers, got {_short(x)}")
     try:
         coords = list(x)

@@ -249,7 +249,14 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
         raise InputError(f"pairs: expected 'all' or 'f', got {pairs!r}")
     t0 = time.perf_counter()
     pts = KahanMap(system.field("f"), eps, ar).orbit(x0, steps)
-    per_point = [residuals_at(system, x, eps, ar, patterns, pairs) for x in pts]
+    per_point = []
+    for k, x in enumerate(pts):
+        try:
+            per_point.append(residuals_at(system, x, eps, ar, patterns, pairs))
+        except SingularStepError as exc:  # a map Φ_g (or Φ_c) undefined at the orbit point x_k
+            raise SingularStepError(exc.x, exc.eps, condition=exc.condition,
+                                    detail=f"at the orbit point x_{k} of Phi_f (an associated map's step)"
+                                    + (f"; {exc.detail}" if exc.detail else "")) from None
     where = f"exact in {_field_name(ar)} at {len(pts)} orbit points"
     if isinstance(ar, GFArith):
         where += " (mod P: a nonzero residual refutes, zero residuals do not prove)"

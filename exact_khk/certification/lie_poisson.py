@@ -322,7 +322,7 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     eps = parse_rational(DEFAULT_EPS if eps is None else eps, "eps")
     if eps == 0:
         raise InputError("eps: the step size must be nonzero")
-    if not isinstance(steps, int) or steps < 1:
+    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
         raise InputError(f"steps: expected a positive integer, got {steps!r}")
     if poisson_points is not None and (not isinstance(poisson_points, int) or poisson_points < 1):
         raise InputError(f"poisson_points: expected a positive integer, got {poisson_points!r}")
