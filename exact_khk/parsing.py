@@ -103,8 +103,13 @@ def parse_rational(value, name: str) -> Fraction:
 
 
 def _short(value, width: int = 60) -> str:
-    """repr of ``value``, cut to ``width`` characters for a one-line message."""
-    text = repr(value)
+    """repr of ``value``, cut to ``width`` characters for a one-line message (an integer
+    beyond Python's int-to-str limit by its size)."""
+    try:
+        text = repr(value)
+    except ValueError:  # e.g. a 5000-digit int: "Exceeds the limit (4300 digits)"
+        bits = value.bit_length() if isinstance(value, int) else None
+        return f"<an integer of about {int(bits * 0.30103) + 1} digits>" if bits else f"<a {type(value).__name__}>"
     return text if len(text) <= width else text[:width - 12] + f"...({len(text)} ch)"
 
 

@@ -373,7 +373,7 @@ class KahanMap:
         if not isinstance(steps, int) or isinstance(steps, bool) or steps < 0:
             raise InputError(f"steps: expected a non-negative integer, got {steps!r}")
         if steps > MAX_STEPS:
-            raise InputError(f"steps: {steps} is beyond the limit of {MAX_STEPS:,} steps (MAX_STEPS; the orbit "
+            raise InputError(f"steps: {_short(steps)} is beyond the limit of {MAX_STEPS:,} steps (MAX_STEPS; the orbit "
                              f"alone would hold more than 10^7 points)")
         if progress is not None and not callable(progress):
             raise InputError(f"progress: expected a function of the step number, got {_short(progress)}")

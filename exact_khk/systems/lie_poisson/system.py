@@ -38,7 +38,7 @@ from math import gcd, lcm
 
 from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
-from exact_khk.parsing import MAX_N, format_signs, parse_signs, parse_vector
+from exact_khk.parsing import MAX_N, _short, format_signs, parse_signs, parse_vector
 from exact_khk.systems.base import System
 from exact_khk.systems.quadratic import QuadraticField, certainly_zero
 
@@ -96,7 +96,7 @@ MAX_SIGN_PATTERNS = 2 ** 16
 def rational_sign_patterns(n: int) -> list[str]:
     """All sign patterns whose involution has rational entries (2^{#divisors})."""
     if not isinstance(n, int) or isinstance(n, bool) or not 2 <= n <= MAX_N:
-        raise InputError(f"n: expected an integer in [2, {MAX_N}], got {n!r}")
+        raise InputError(f"n: expected an integer in [2, {MAX_N}], got {_short(n)}")
     classes = list(divisor_classes(n).values())
     if 2 ** len(classes) > MAX_SIGN_PATTERNS:
         raise InputError(f"n = {n}: {len(classes)} divisors give 2^{len(classes)} rational sign patterns, "
@@ -228,7 +228,7 @@ class LiePoissonSystem(System):
         if not isinstance(n, int) or isinstance(n, bool) or n < 2:
             raise InputError(f"n: the family needs n >= 2, got {n!r}")
         if n > MAX_N:
-            raise InputError(f"n: {n} is beyond the limit of {MAX_N:,} (MAX_N)")
+            raise InputError(f"n: {_short(n)} is beyond the limit of {MAX_N:,} (MAX_N)")
         _check_seed_bound(seed, bound)
         rng = random.Random(seed)
         draw = lambda: tuple(Fraction(rng.randint(-bound, bound)) for _ in range(n))  # noqa: E731
@@ -400,6 +400,8 @@ for the Lie–Poisson family, got 'g['
         if isinstance(power, bool) or not hasattr(power, "__index__"):
             raise InputError(f"power: expected an integer (the power of the shift A), got {power!r}")
         power = int(power)
+        if abs(power) > 2 ** 63:  # A^n = I: a power is only named by its size here
+            raise InputError(f"power: expected an integer of at most 2^63 in size (A^n = I), got {_short(power)}")
         cyc = bool(cyclotomic) and kind == "g" and signs is not None \
             and not is_rational_pattern(self.n, signs)
         key = (kind, None if signs is None else format_signs(parse_signs(signs, self.n)), power, cyc)
