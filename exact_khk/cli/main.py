@@ -18,8 +18,8 @@ matplotlib or the certification code of commands that do not run.
 from __future__ import annotations
 
 import argparse
-import re
 import importlib
+import re
 import sys
 import warnings
 
