@@ -170,6 +170,8 @@ ROWS += [
     row(["certify", "--system", "euler-top", "--claims", "", "--steps", "2"], 2, id="certify --claims ''"),
     row(["certify", "--steps", "2", "--json", "/proc/x.json"], 5, id="certify --json /proc/x.json"),
     row(["degrees", "--steps", "3", "--plot", "{tmp}/out.txt"], 2, id="degrees --plot out.txt"),
+    row(["degrees", "--steps", "3", "--arith", "float"], 2), row(["find-integrals", "--arith", "float"], 2),
+    row(["prove", "--arith", "gf:7"], 2), row(["prove", "--n", "2", "--seed", "1", "--steps", "5"], 2),
     row(["degrees", "--steps", "6", "--max-bits", "-1"], 2), row(["degrees", "--steps", "6", "--max-bits", "5"], 2),
     row(["find-integrals", "--system", "euler-top", "--monomials", "x1^99999999"], 2),
     row(["find-integrals", "--system", "euler-top", "--monomials", "x1^45,x2"], 2, id="find-integrals degree 45"),

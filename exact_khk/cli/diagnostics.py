@@ -16,7 +16,7 @@ def register(sub):
                        description="Degrees d_k of the iterates Phi^k (projective degree: numerators and common "
                        "denominator in lowest terms), computed on random lines over F_p; the shortest integer "
                        "recurrence, the dynamical degree and the growth class; heights of the exact orbit of x0.")
-    add_system_options(p, steps_default=20)
+    add_system_options(p, steps_default=20, arith=False)
     add_field_options(p)
     p.add_argument("--primes", default="2", help="number of random 62-bit primes, or a comma-separated list (default 2)")
     p.add_argument("--lines", type=int, default=1, help="random lines per prime (default 1)")
@@ -35,7 +35,7 @@ def register(sub):
                        description="Evaluate candidate monomials on orbits, compute the kernels modulo primes, "
                        "lift them to Q and report conserved ratios of kernel polynomials, each checked exactly on "
                        "a fresh orbit (docs/diagnostics.md).")
-    add_system_options(q, steps_default=0)
+    add_system_options(q, steps_default=0, arith=False)
     add_field_options(q)
     g = q.add_mutually_exclusive_group()
     g.add_argument("--degree", type=int, help="candidates: all monomials of degree <= D (default 2)")

@@ -40,7 +40,7 @@ def register(sub):
     q = sub.add_parser("prove", help="symbolic proofs for small n (n = 2 in seconds)",
                        description="Prove H~ o Phi_f = H~, Phi_f o Phi_g = Phi_g o Phi_f and the Jacobi "
                        "identity of Pi as identities of rational functions in x and eps.")
-    add_system_options(q, steps_default=0, lie_poisson_only=True)
+    add_system_options(q, steps_default=0, lie_poisson_only=True, arith=False)
     q.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH")
     q.set_defaults(func=cmd_prove)
 
@@ -113,5 +113,7 @@ def cmd_prove(args):
     from exact_khk.certification.proofs import prove_all
 
     check_output(args.json)
+    if args.steps:
+        raise InputError("--steps: prove works with rational functions of x and eps, not along an orbit")
     system, _, _ = system_from_args(args)
     return _report(args, system, prove_all(system), {})

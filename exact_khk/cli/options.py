@@ -60,9 +60,10 @@ class Parser(argparse.ArgumentParser):
 # --- shared options -----------------------------------------------------------
 
 
-def add_system_options(p, steps_default=20, lie_poisson_only=False):
+def add_system_options(p, steps_default=20, lie_poisson_only=False, arith=True):
     """The options that choose the system, x0, ε, steps and arithmetic (``lie_poisson_only``:
-    no ``--system``, for commands about the Lie–Poisson family's theorems)."""
+    no ``--system``, for commands about the Lie–Poisson family's theorems; ``arith=False``: no
+    ``--arith``, for commands that choose their own arithmetic)."""
     from exact_khk.systems.lie_poisson.system import DEFAULT_EPS
 
     g = p.add_argument_group("system (default: the built-in n = 3 Lie–Poisson system, see README)")
@@ -83,7 +84,10 @@ def add_system_options(p, steps_default=20, lie_poisson_only=False):
     g.add_argument("--steps", type=int, default=steps_default,
                    help=f"number of steps K (default {steps_default})" if steps_default is not None else
                    "number of steps K (default 20, or the system file's [defaults] steps)")
-    g.add_argument("--arith", default=None, help=arith_help())
+    if arith:
+        g.add_argument("--arith", default=None, help=arith_help())
+    else:
+        p.set_defaults(arith=None)
     p.add_argument("--quiet", action="store_true",
                    help="no progress display on stderr (shown only for runs longer than about 2 s, and only "
                         "when stderr is a terminal)")
