@@ -15,6 +15,11 @@ with the reason (it is then reported as skipped), one that runs for long in
 :data:`SLOW` (it runs under ``-m slow``), and a command with a placeholder
 (``FILE``, ``NAME``, ``<path>``, ``...``) that is in neither makes the test
 fail, naming the file and line.
+
+Every ``python scripts/NAME.py ...`` command shown (in shell blocks or inline code) is
+checked too: quickly in the default suite (the script starts and its ``--help`` lists
+every option the command gives), and run as shown, in a copy of the repository, under
+``-m slow`` (benchmarks and studies: minutes to tens of minutes each).
 """
 
 from __future__ import annotations
