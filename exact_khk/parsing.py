@@ -102,6 +102,13 @@ def parse_rational(value, name: str) -> Fraction:
     raise InputError(f"{name}: cannot read {value!r} ({type(value).__name__}) as a rational number")
 
 
+def check_count(value, name: str, low: int, high: int) -> int:
+    """``value`` if it is an int (not a bool) in [low, high], else InputError naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise InputError(f"{name}: expected an integer in [{low}, {high}], got {_short(value)}")
+    return value
+
+
 def _short(value, width: int = 60) -> str:
     """repr of ``value``, cut to ``width`` characters for a one-line message (an integer
     beyond Python's int-to-str limit by its size)."""

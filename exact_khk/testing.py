@@ -43,7 +43,7 @@ def _assert(phi, items, what, tol):
 
 
 def _inverse(phi):
-    return _map(phi).with_eps(-phi.eps)
+    return phi.with_eps(-phi.eps)
 
 
 def _map(phi):

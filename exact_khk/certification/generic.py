@@ -71,7 +71,7 @@ def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claim
     """Certify what ``system`` declares on the orbit of ``x0`` (default: the system's
     own x0 and ε) in ``arith`` (default: the fastest exact arithmetic).
 
-    ``claims``: a subset of :data:`CLAIMS` (default: the system's own list, else
+    ``claims``: a subset of :data:`CLAIMS`, or its names comma-separated (default: the system's own list, else
     every claim it declares something for).  ``progress(name)`` is called before
     each check.  A singular step of Φ_f or of a commuting map raises
     :class:`~exact_khk.errors.SingularStepError`.

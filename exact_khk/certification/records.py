@@ -204,7 +204,7 @@ class Certificate:
         x0 = parse_vector(_json_key(d, "x0", list), "x0", system.dim)
         eps = parse_rational(_json_key(d, "eps", str), "eps")
         if eps == 0:
-            raise InputError("eps: the step size is 0 (a Kahan map needs eps != 0)")
+            raise InputError("eps: the step size must be nonzero")
         steps = _json_key(d, "steps", int)
         if steps < 1:
             raise InputError(f"steps: expected a positive integer, got {steps}")

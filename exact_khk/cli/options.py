@@ -212,25 +212,6 @@ def check_output(target, what="--json"):
         check_writable(target, what)
 
 
-#: the largest system file read (bytes): a system file is a few lines of TOML
-MAX_SYSTEM_FILE_BYTES = 10_000_000
-
-
-def _check_system_file(spec):
-    """A --system path must be a regular file of at most :data:`MAX_SYSTEM_FILE_BYTES`
-    (a device such as /dev/zero would never end, a FIFO would block)."""
-    if not os.path.exists(spec):
-        return  # a catalogue name, or a missing file: resolve() says which
-    if os.path.isdir(spec):
-        raise InputError(f"--system: {spec!r} is a folder, not a system file")
-    if not os.path.isfile(spec):
-        raise InputError(f"--system: {spec!r} is not a regular file (a device or a pipe)")
-    size = os.path.getsize(spec)
-    if size > MAX_SYSTEM_FILE_BYTES:
-        raise InputError(f"--system: {spec!r} has {size:,} bytes, beyond the limit of {MAX_SYSTEM_FILE_BYTES:,} "
-                         f"for a system file (MAX_SYSTEM_FILE_BYTES)")
-
-
 def _rational_vector(text) -> bool:
     """Whether every entry of a comma-separated vector is a plain rational."""
     from exact_khk.arith.reals import is_rational_text
@@ -245,7 +226,6 @@ def _named_system(args, reals=None):
     clash = [o for o, v in (("--n", args.n), ("--a", args.a), ("--b", args.b), ("--c", args.c)) if v is not None]
     if clash:
         raise InputError(f"--system: {clash[0]} describes the Lie–Poisson family; it cannot be combined with --system")
-    _check_system_file(args.system)
     system = resolve(args.system)
     return _point_and_eps(args, system, reals, system.default_eps, system.default_x0,
                           lambda eps: system.random_point(args.seed))

@@ -66,7 +66,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import parse_rational
+from exact_khk.parsing import check_count, parse_rational
 from exact_khk.systems.quadratic import QuadraticField
 
 MAX_STEPS = 100_000
@@ -126,12 +126,6 @@ def resolve_field(system, field="f") -> tuple:
     if isinstance(field, QuadraticField):
         return system, field
     return system, system.named_field(field)
-
-
-def check_count(value, name, low, high):
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise InputError(f"{name}: expected an integer in [{low}, {high}], got {value!r}")
-    return value
 
 
 def eps_of(system, eps):

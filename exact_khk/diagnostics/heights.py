@@ -24,11 +24,12 @@ cannot be followed for long).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 from exact_khk.arith import get_arith, point_height
 from exact_khk.errors import InputError
-from exact_khk.parsing import parse_rational
+from exact_khk.parsing import check_count, parse_rational
 
 MODELS = ("linear", "quadratic", "exponential")
 
@@ -133,8 +134,7 @@ def height_growth(field, x0, eps, steps=30, max_bits=200_000, arith="flint") -> 
         raise InputError(f"steps: expected an integer in [4, 100000] for the height fit, got {steps!r}")
     if x0 is None:
         raise InputError("x0: a starting point is needed for the height growth")
-    if isinstance(max_bits, bool) or not isinstance(max_bits, int) or max_bits < 1:
-        raise InputError(f"max_bits: expected a positive integer, got {max_bits!r}")
+    check_count(max_bits, "max_bits", 1, 10 ** 9)
     ar = get_arith(arith)
     if not ar.rational:  # heights are bits of exact rationals
         raise InputError(f"arith: height growth needs an exact rational arithmetic (flint, gmpy2, fraction), "
@@ -221,7 +221,7 @@ PLOT_FORMATS = ("png", "pdf", "svg")
 def plot_format(path) -> str:
     """The image format of ``path`` from its suffix (checked before any work: InputError
     unless one of :data:`PLOT_FORMATS`)."""
-    suffix = str(path).rpartition(".")[2].lower() if "." in str(path).rpartition("/")[2] else ""
+    suffix = os.path.splitext(str(path))[1].lower().lstrip(".")
     if suffix not in PLOT_FORMATS:
         raise InputError(f"--plot: {str(path)!r}: expected a file name ending in "
                          f"{', '.join('.' + f for f in PLOT_FORMATS)}")

@@ -56,13 +56,13 @@ from math import comb
 
 import flint
 
-from exact_khk.diagnostics.degrees import check_count, check_primes, eps_of, random_primes, resolve_field
+from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, lift, monomial_text,
                                            monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim)
 from exact_khk.diagnostics.pencils import pencil_integrals, ratio_integrals
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.parsing import parse_vector
+from exact_khk.parsing import check_count, parse_vector
 
 MAX_MONOMIALS = 3000
 

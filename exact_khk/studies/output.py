@@ -14,9 +14,11 @@ import tempfile
 from exact_khk.errors import OutputError
 
 
-def check_writable(path, what: str = "output") -> str:
+def check_writable(path, what: str = "output", trial: bool = True) -> str:
     """``path`` as a string if a file can be written there; else :class:`OutputError`
-    naming the problem (missing folder, a folder in the way, no permission)."""
+    naming the problem (missing folder, a folder in the way, no permission).  ``trial``:
+    also create and remove a temporary file beside it, as :func:`write_atomic` will
+    (/proc, /sys or a read-only file system pass the permission test)."""
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     if os.path.isdir(path):
@@ -27,8 +29,10 @@ def check_writable(path, what: str = "output") -> str:
         raise OutputError(f"{what}: no permission to write in {folder!r}")
     if os.path.exists(path) and not os.access(path, os.W_OK):
         raise OutputError(f"{what}: no permission to overwrite {path!r}")
-    if not os.path.exists(path) or os.path.isfile(path):  # what write_atomic will do, tried now:
-        _try_temporary(path, folder, what)  # /proc, /sys, a read-only file system pass access()
+    if trial and (not os.path.exists(path) or os.path.isfile(path)):
+        fd, tmp = _temporary(path, folder, what)
+        os.close(fd)
+        os.unlink(tmp)
     return path
 
 
@@ -39,12 +43,6 @@ def _temporary(path, folder, what):
     except OSError as exc:
         raise OutputError(f"{what}: cannot write {path!r} (a file cannot be created in {folder!r}: "
                           f"{exc.strerror or exc})") from None
-
-
-def _try_temporary(path, folder, what):
-    fd, tmp = _temporary(path, folder, what)
-    os.close(fd)
-    os.unlink(tmp)
 
 
 def prepare_folder(path, what: str = "--out"):
@@ -68,7 +66,7 @@ def write_atomic(path, data, what: str = "output") -> None:
     ``path`` through a temporary file renamed into place (a path that exists and is
     not a regular file — a device such as /dev/stdout, a pipe — is written directly:
     renaming over it would replace it)."""
-    path = check_writable(path, what)
+    path = check_writable(path, what, trial=False)  # the temporary file below is the trial
 
     def fill(fh):
         if callable(data):

@@ -38,7 +38,7 @@ from math import gcd, lcm
 
 from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.errors import InputError, NotRationalError
-from exact_khk.parsing import MAX_N, _short, format_signs, parse_signs, parse_vector
+from exact_khk.parsing import MAX_N, _short, check_count, format_signs, parse_signs, parse_vector
 from exact_khk.systems.base import System
 from exact_khk.systems.quadratic import QuadraticField, certainly_zero
 
@@ -95,8 +95,7 @@ MAX_SIGN_PATTERNS = 2 ** 16
 
 def rational_sign_patterns(n: int) -> list[str]:
     """All sign patterns whose involution has rational entries (2^{#divisors})."""
-    if not isinstance(n, int) or isinstance(n, bool) or not 2 <= n <= MAX_N:
-        raise InputError(f"n: expected an integer in [2, {MAX_N}], got {_short(n)}")
+    check_count(n, "n", 2, MAX_N)
     classes = list(divisor_classes(n).values())
     if 2 ** len(classes) > MAX_SIGN_PATTERNS:
         raise InputError(f"n = {n}: {len(classes)} divisors give 2^{len(classes)} rational sign patterns, "
@@ -487,8 +486,7 @@ def _check_seed_bound(seed, bound):
     """InputError unless ``seed`` is an int (or None) and ``bound`` a positive int."""
     if seed is not None and (not isinstance(seed, int) or isinstance(seed, bool)):
         raise InputError(f"seed: expected an integer, got {seed!r}")
-    if not isinstance(bound, int) or isinstance(bound, bool) or bound < 1:
-        raise InputError(f"bound: expected a positive integer, got {bound!r}")
+    check_count(bound, "bound", 1, 2 ** 63)
 
 
 def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tuple:
@@ -549,8 +547,7 @@ def _degenerate_for(system, x, eps) -> bool:
 
 def b0_signs(n: int) -> str:
     """The sign pattern of B_0 = I - (2/n)(𝟙 ⊕ 𝟙): '-' then n-1 '+'."""
-    if not isinstance(n, int) or isinstance(n, bool) or n < 1:
-        raise InputError(f"n: expected a positive integer, got {n!r}")
+    check_count(n, "n", 1, 2 ** 63)
     return "-" + "+" * (n - 1)
 
 
