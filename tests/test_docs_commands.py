@@ -293,12 +293,26 @@ def test_documented_script_options(command, path, line):
     """Quick check of every documented script command: the script starts and its argument
     parser knows every option the command gives (``--help`` after the documented
     arguments: argparse converts the values before it and prints the options)."""
+    code, err, unknown = _options_check(command)
+    assert code == 0 and "Traceback" not in err, f"{path}:{line}: {err[-800:]}"
+    assert not unknown, f"{path}:{line}: {command!r}: options not in the script's --help: {unknown}"
+
+
+def _options_check(command):
+    """(exit status, stderr, options the script's --help does not list) of a script command."""
     env, argv = _script_argv(command, ROOT)
     res = subprocess.run(argv + ["--help"], cwd=ROOT, env={**os.environ, **env}, capture_output=True,
                          text=True, timeout=120)
-    assert res.returncode == 0 and "Traceback" not in res.stderr, f"{path}:{line}: {res.stderr[-800:]}"
     unknown = [w.split("=")[0] for w in argv if w.startswith("--") and w.split("=")[0] not in res.stdout]
-    assert not unknown, f"{path}:{line}: {command!r}: options not in the script's --help: {unknown}"
+    return res.returncode, res.stderr, unknown
+
+
+def test_script_options_check_can_fail():
+    """The negative controls of the quick check: an option the script does not have, a value
+    its parser refuses, a script that does not exist."""
+    assert _options_check("python3 scripts/bench_exact.py --no-such-option 3")[2] == ["--no-such-option"]
+    assert _options_check("python3 scripts/bench_exact.py --bits notanumber")[0] == 2
+    assert _options_check("python3 scripts/no_such_script.py")[0] != 0
 
 
 def _repo_copy(folder):
