@@ -73,6 +73,14 @@ class UndecidedError(ExactKHKError, ArithmeticError):
     e.g. no pivot is certainly nonzero.  Never a wrong answer: "undecided"."""
 
 
+class SingularMatrix(ArithmeticError):
+    """Internal: a linear system's matrix is singular (exactly, or a floating
+    pivot is exactly zero).  Raised by the elimination kernels of every layer
+    (:mod:`exact_khk.linalg`, an arithmetic's integer solver) and turned by their
+    callers into :class:`SingularStepError`, :class:`PoleError` or an "undefined"
+    check; it never reaches a user.  Not an :class:`ExactKHKError`."""
+
+
 class OutputError(ExactKHKError, OSError):
     """An output destination that cannot be written (checked before the work
     starts where possible); the message names the path and the reason."""

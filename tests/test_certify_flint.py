@@ -10,7 +10,7 @@ import flint
 import pytest
 
 from exact_khk import KahanMap, LiePoissonSystem, certify, get_arith
-from exact_khk.arith.dual import jacobian
+from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import jacobiator
 from exact_khk.certification.lie_poisson_flint import FlintForms
 from exact_khk.linalg.dense import matmul, transpose

@@ -12,7 +12,7 @@ import pytest
 import sympy as sp
 
 from exact_khk import InputError, LiePoissonSystem, get_arith
-from exact_khk.arith.dual import Dual, DualArith, gradient, jacobian, seed
+from exact_khk.linalg.dual import Dual, DualArith, gradient, jacobian, seed
 from exact_khk.certification.lie_poisson import htilde_definition
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, grad_Htilde,
                                   q_coefficients)

@@ -9,7 +9,8 @@ import pytest
 import sympy as sp
 
 from exact_khk import KahanMap, LiePoissonSystem, QuadraticField, SingularStepError, get_arith
-from exact_khk.linalg.dense import SingularMatrix, bareiss_solve, lu_factor, lu_solve, solve
+from exact_khk.arith import bareiss_solve
+from exact_khk.linalg.dense import SingularMatrix, lu_factor, lu_solve, solve
 
 from .conftest import EXACT
 

@@ -57,7 +57,7 @@ import math
 import numbers
 from fractions import Fraction
 
-from exact_khk.errors import InputError
+from exact_khk.errors import InputError, SingularMatrix
 from exact_khk.parsing import _short, any_int_digits
 
 #: the largest precision P (bits) of ``mp:P`` and ``ball:P``: one number of 10⁶ bits
@@ -173,12 +173,50 @@ def _as_fraction(value) -> Fraction:
     raise TypeError(f"cannot convert {value!r} ({type(value).__name__}) to an exact rational")
 
 
+def bareiss_solve(M, B):
+    """Fraction-free (Bareiss) elimination over the integers (int, gmpy2 mpz, ...).
+
+    Returns ``(Y, d)`` with ``M Y = d B`` and ``d = ±det M`` (nonzero): every
+    intermediate entry is a minor of ``[M | B]`` and each division is exact, so
+    integers never grow beyond Hadamard's bound.  Back substitution is
+    fraction-free too: ``d M^{-1} B`` is integral.  Raises :class:`SingularMatrix`.
+
+    >>> bareiss_solve([[2, 1], [1, 3]], [[1], [2]])
+    ([[1], [3]], 5)
+    """
+    n, m = len(M), len(B[0])
+    R = [list(M[i]) + list(B[i]) for i in range(n)]
+    prev = 1
+    for k in range(n):
+        p = next((i for i in range(k, n) if R[i][k] != 0), None)
+        if p is None:
+            raise SingularMatrix(f"no nonzero pivot in column {k}")
+        R[k], R[p] = R[p], R[k]
+        rk, piv = R[k], R[k][k]
+        for i in range(k + 1, n):
+            ri = R[i]
+            rik = ri[k]
+            for j in range(k + 1, n + m):
+                ri[j] = (piv * ri[j] - rik * rk[j]) // prev
+        prev = piv
+    d = prev
+    Y = [[0] * m for _ in range(n)]
+    for i in reversed(range(n)):
+        ri = R[i]
+        for c in range(m):
+            acc = d * ri[n + c]
+            for j in range(i + 1, n):
+                acc -= ri[j] * Y[j][c]
+            Y[i][c] = acc // ri[i]
+    return Y, d
+
+
 class IntegerKernel:
     """Integer linear algebra behind a rational arithmetic: denominators are
     cleared once and systems are solved over Z (fraction-free).
 
     ``split(v)`` → (integers, common denominator); ``solve(M, B)`` → rows of
-    rationals (:func:`~exact_khk.linalg.bareiss_solve`).
+    rationals (:func:`bareiss_solve`).
 
     The dense Kahan step works on *columns* of rationals in the kernel's own
     form: ``column(x)`` makes one from a sequence, ``values(col)`` gives the
@@ -214,8 +252,6 @@ class IntegerKernel:
         return [sum((c * v[k] for k, c in row), zero) for row in W]
 
     def solve(self, M, B):
-        from exact_khk.linalg.dense import bareiss_solve
-
         Y, d = bareiss_solve(M, B)
         return [[self.make(y, d) for y in row] for row in Y]
 

@@ -14,7 +14,7 @@ import time
 
 from exact_khk.certification.records import Check
 from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
-from exact_khk.arith.dual import jacobian
+from exact_khk.linalg.dual import jacobian
 from exact_khk.linalg.dense import matmul, matvec, transpose
 
 

@@ -42,7 +42,7 @@ import time
 from fractions import Fraction
 
 from exact_khk.arith import get_arith, point_height
-from exact_khk.arith.dual import jacobian as dual_jacobian
+from exact_khk.linalg.dual import jacobian as dual_jacobian
 from exact_khk.certification.checks import (commute_items, compare, conserved_items, jacobiator, lazy_orbit,
                                             poisson_map_items, reversible_items, run_check)
 from exact_khk.certification.records import Certificate, library_versions

@@ -49,7 +49,7 @@ from dataclasses import replace
 from fractions import Fraction
 
 from exact_khk.arith import as_point, get_arith, point_height
-from exact_khk.arith.dual import jacobian
+from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, jacobiator,
                                             conserved_items, lazy_orbit, poisson_map_items, rank,
                                             reversible_items, run_check)

@@ -16,11 +16,8 @@ uses it instead of the generic elimination.
 
 from __future__ import annotations
 
+from exact_khk.errors import SingularMatrix
 from exact_khk.linalg.paths import EXACT_INVERSE_MAX_N
-
-
-class SingularMatrix(ArithmeticError):
-    """``M`` is singular (exactly, or a floating pivot is exactly zero)."""
 
 
 def identity(ar, n):
@@ -175,44 +172,6 @@ def inverse_norm1_estimate(ar, LU, perm) -> float:
     # Higham's alternating vector guards against the cases where the above stalls
     alt = [ar.convert((-1) ** i * (1 + i / max(n - 1, 1))) for i in range(n)]
     return max(est, 2 * norm(col(alt)) / (3 * n))
-
-
-def bareiss_solve(M, B):
-    """Fraction-free (Bareiss) elimination over the integers (int, gmpy2 mpz, ...).
-
-    Returns ``(Y, d)`` with ``M Y = d B`` and ``d = ±det M`` (nonzero): every
-    intermediate entry is a minor of ``[M | B]`` and each division is exact, so
-    integers never grow beyond Hadamard's bound.  Back substitution is
-    fraction-free too: ``d M^{-1} B`` is integral.  Raises :class:`SingularMatrix`.
-
-    >>> bareiss_solve([[2, 1], [1, 3]], [[1], [2]])
-    ([[1], [3]], 5)
-    """
-    n, m = len(M), len(B[0])
-    R = [list(M[i]) + list(B[i]) for i in range(n)]
-    prev = 1
-    for k in range(n):
-        p = next((i for i in range(k, n) if R[i][k] != 0), None)
-        if p is None:
-            raise SingularMatrix(f"no nonzero pivot in column {k}")
-        R[k], R[p] = R[p], R[k]
-        rk, piv = R[k], R[k][k]
-        for i in range(k + 1, n):
-            ri = R[i]
-            rik = ri[k]
-            for j in range(k + 1, n + m):
-                ri[j] = (piv * ri[j] - rik * rk[j]) // prev
-        prev = piv
-    d = prev
-    Y = [[0] * m for _ in range(n)]
-    for i in reversed(range(n)):
-        ri = R[i]
-        for c in range(m):
-            acc = d * ri[n + c]
-            for j in range(i + 1, n):
-                acc -= ri[j] * Y[j][c]
-            Y[i][c] = acc // ri[i]
-    return Y, d
 
 
 def solve(ar, M, B, condition=None):

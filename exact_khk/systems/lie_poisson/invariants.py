@@ -348,7 +348,7 @@ def _grad_htilde_flint(field, x, e):
 def grad_Htilde_dual(field, x, eps, arith=None):
     """The exact gradient of :func:`Htilde` by forward-mode dual numbers (an
     independent route to :func:`grad_Htilde`; no differences)."""
-    from exact_khk.arith.dual import gradient
+    from exact_khk.linalg.dual import gradient
 
     ar = get_arith(arith)
     e = _eps(ar, eps)

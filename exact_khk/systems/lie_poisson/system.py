@@ -528,21 +528,24 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
 
 def _degenerate_for(system, x, eps) -> bool:
     """The system-dependent rejection rules of :func:`random_point`."""
-    from exact_khk.arith import get_arith
-    from exact_khk.errors import PoleError, SingularStepError
-    from exact_khk.kahan.map import KahanMap
+    from exact_khk.arith import get_arith, to_element
+    from exact_khk.errors import PoleError, SingularMatrix
+    from exact_khk.linalg.dense import solve
     from exact_khk.systems.lie_poisson.invariants import Htilde
 
     eps = DEFAULT_EPS if eps is None else eps
     if not any(sum((h * t for h, t in zip(row, x)), Fraction(0)) for row in system.hessian):
         return True
-    ar = get_arith("fraction")
+    ar, fld = get_arith("fraction"), system.field("f")
+    e, N = to_element(ar, eps, "eps"), 2 * system.n
     try:
-        Htilde(system.field("f"), x, eps, ar)
-        y = KahanMap(system.field("f"), eps, ar, method="dense").step(x)
-    except (PoleError, SingularStepError):
+        Htilde(fld, x, eps, ar)
+        # the first step of Φ_f (f homogeneous): (I − ε f'(x)) y = x
+        J = fld.jacobian(ar, x)
+        Y, _ = solve(ar, [[(i == j) - e * J[i][j] for j in range(N)] for i in range(N)], [[t] for t in x])
+    except (PoleError, SingularMatrix):
         return True
-    return hankel_singular(y[:system.n])
+    return hankel_singular([row[0] for row in Y[:system.n]])
 
 
 def b0_signs(n: int) -> str:
