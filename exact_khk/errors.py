@@ -25,7 +25,8 @@ class SingularStepError(ExactKHKError, ArithmeticError):
 
     Attributes: ``x`` (the point, as strings), ``eps`` (string), ``step``
     (index of the step in an orbit, or None), ``condition`` (condition
-    estimate for floating arithmetic, None when exactly singular).
+    estimate for floating arithmetic, ``inf`` where its elimination met an
+    exactly zero pivot; None when an exact arithmetic found det = 0).
     """
 
     def __init__(self, x, eps, *, step=None, condition=None, detail=""):

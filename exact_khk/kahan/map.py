@@ -234,8 +234,11 @@ class KahanMap:
                 f"(about {lost:.0f} of {ar.prec} bits at risk)", cond), stacklevel=4)
 
     def _singular(self, x, eps):
+        """An exactly zero pivot: det(I − εf'(x)) = 0 in an exact arithmetic; in a
+        floating one, no proof of that (the rounded matrix met a zero pivot): κ = ∞."""
         ar = self.arith
-        return SingularStepError([ar.format(t) for t in x], ar.format(eps))
+        return SingularStepError([ar.format(t) for t in x], ar.format(eps),
+                                 condition=None if ar.exact else math.inf)
 
     def _structured_step(self, x):
         """The 2×2-over-circulants step (exact in Q[t]/(tⁿ − 1), or by the DFT)."""
