@@ -100,6 +100,10 @@ ROWS = [
     ("heights max_bits None", lambda: height_growth(F3, X3, "1/10", max_bits=None)),
     ("degrees confirm -1", lambda: degree_sequence(S3, steps=5, confirm=-1)),
     ("degrees exact_terms -1", lambda: degree_sequence(S3, steps=5, exact_terms=-1)),
+    # arithmetic names: int() takes other scripts' digits, '_' and spaces; the names do not
+    ("arith mp:Arabic-Indic 53", lambda: KahanMap(F3, "1/10", "mp:\u0665\u0663")),
+    ("arith mp:5_3", lambda: KahanMap(F3, "1/10", "mp:5_3")),
+    ("arith gf:full-width 7", lambda: KahanMap(F3, "1/10", "gf:\uff17")),
 ]
 
 
@@ -145,3 +149,14 @@ def test_system_matrix_overflow_is_a_numerical_error():
 
 def test_certify_takes_a_catalogue_name():
     assert certify(TOP, steps=2).status == certify(System.load(TOP), steps=2).status == "VALID"
+
+
+@pytest.mark.parametrize("eps, arith, match", [
+    ("101", "gf:101", "eps: '101' is 0 in gf:101"),            # said 'underflows', as if rounded
+    ("-202", "gf:101", "eps: '-202' is 0 in gf:101"),
+    ("1/10" + "0" * 400, "float", "underflows to 0 in float"),  # a rounding arithmetic: it does
+])
+def test_a_step_size_that_is_zero_in_the_arithmetic_is_named(eps, arith, match):
+    with pytest.raises(InputError, match=match):
+        KahanMap(F3, eps, arith)
+    KahanMap(F3, "1/10", arith)  # control: a nonzero step size in the same arithmetic

@@ -55,6 +55,7 @@ import contextlib
 import importlib
 import math
 import numbers
+import re
 from fractions import Fraction
 
 from exact_khk.errors import InputError, SingularMatrix
@@ -572,10 +573,9 @@ def get_arith(name=None) -> Arith:
         if len(param) > _MAX_PARAM_DIGITS:
             raise InputError(f"arith: {prefix}:P with a parameter of {len(param)} characters is beyond "
                              f"every limit (see exact-khk --help for the arithmetics and their bounds)")
-        try:
-            value = int(param)
-        except ValueError:
-            raise InputError(f"arith: {name!r}: the parameter after ':' must be an integer") from None
+        if not re.fullmatch(r"[+-]?[0-9]+", param, re.ASCII):  # int() would take '٥٣', '5_3', ' 53'
+            raise InputError(f"arith: {name!r}: the parameter after ':' must be an integer in ASCII digits")
+        value = int(param)
         ar = _PARAMETRIZED[prefix](value)
     else:
         raise InputError(f"arith: unknown arithmetic {name!r}; known: {', '.join(arith_names())}")

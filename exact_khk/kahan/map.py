@@ -111,6 +111,9 @@ def _read_eps(ar, eps):
         exact = parse_rational(eps, "eps")
         value = to_element(ar, exact, "eps")
     if ar.is_zero(value) is True:
+        if exact and ar.exact:  # F_P: a multiple of P
+            raise InputError(f"eps: {_short(str(exact), 40)} is 0 in {ar.name} (a multiple of its "
+                             f"characteristic); choose another step size or prime")
         if exact:  # a nonzero rational rounded to 0 (e.g. 10^-5000 in float)
             raise InputError(f"eps: {_short(str(exact), 40)} underflows to 0 in {ar.name} "
                              f"(use mp:P or an exact arithmetic)")
