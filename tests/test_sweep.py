@@ -459,3 +459,26 @@ def test_summary_files_and_plots(tmp_path, capsys):
     assert code == 0 and "24 probe tasks, 24 done, 6 would run" in out
     code, out, _ = run(capsys, "sweep", spec, "--out", tmp_path / "out", "--summary", "--no-plots")
     assert code == 0 and "verdicts: OK 18, ERROR 6" in out and "already done" not in out
+    # --only names verdicts: an unknown one, or one this task never gives, selects nothing: refused
+    for only, message in (("bogus", "unknown verdict 'bogus'"), ("valid", "probe tasks never give VALID"),
+                          ("failed,found", "probe tasks never give FOUND")):
+        code, _, err = run(capsys, "sweep", spec, "--out", tmp_path / "out", "--only", only)
+        assert code == 2 and message in err, (only, err)
+        code, _, err = run(capsys, "sweep", spec, "--out", tmp_path / "out", "--dry-run", "--only", only)
+        assert code == 2 and message in err, (only, err)
+    assert ResultStore(tmp_path / "out").latest() and len((tmp_path / "out" / "results.jsonl").read_text()
+                                                          .splitlines()) == 24  # nothing ran
+
+
+def test_one_table_of_verdicts():
+    """Every verdict a task or the engine gives is in VERDICTS, which orders and colours the
+    summaries; registering a kind with another verdict is refused (negative control)."""
+    from exact_khk.sweep.summary import COLORS, VERDICT_ORDER
+    from exact_khk.sweep.tasks import ENGINE_VERDICTS, FAILED, TASKS, VERDICTS, TaskKind, register
+
+    given = {v for kind in TASKS.values() for v in (*kind.verdicts, kind.ok)} | set(ENGINE_VERDICTS) | set(FAILED)
+    assert given == set(VERDICTS) and len(set(VERDICTS)) == len(VERDICTS)
+    assert VERDICT_ORDER[:-1] == VERDICTS and set(COLORS) == set(VERDICT_ORDER)
+    with pytest.raises(ValueError, match="MAYBE"):
+        register(TaskKind("bogus-kind", lambda inp: {}, "never registered", verdicts=("OK", "MAYBE")))
+    assert "bogus-kind" not in TASKS

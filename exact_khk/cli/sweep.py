@@ -62,8 +62,8 @@ def cmd_sweep(args):
         raise InputError("--workers: --dask local needs at least one worker")
     if args.summary and (args.only is not None or args.dry_run):
         raise InputError("--summary runs nothing; it cannot be combined with --only or --dry-run")
-    only = parse_only(args.only)
     spec = load_spec(args.spec)
+    only = parse_only(args.only, spec.task)
     if args.dry_run:
         tasks = spec.tasks()
         latest = ResultStore(args.out).latest()

@@ -43,8 +43,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from exact_khk.errors import InputError, OutputError
+from exact_khk.parsing import _short
 from exact_khk.studies.output import check_writable, prepare_folder, write_atomic
-from exact_khk.sweep.tasks import FAILED, make_record, now_iso, run_task, worker_info
+from exact_khk.sweep.tasks import (ENGINE_VERDICTS, FAILED, TASKS, VERDICTS, make_record, now_iso, run_task,
+                                   worker_info)
 
 RESULTS = "results.jsonl"
 META = "sweep.json"
@@ -168,8 +170,10 @@ class _Lock:
 # --- what to run ------------------------------------------------------------------------
 
 
-def parse_only(text) -> frozenset:
-    """``--only``: comma-separated verdicts (any case) or groups (``failed``)."""
+def parse_only(text, task: str | None = None) -> frozenset:
+    """``--only``: comma-separated verdicts of :data:`~exact_khk.sweep.tasks.VERDICTS`
+    (any case) or groups (``failed``); with ``task``, only verdicts that kind of task
+    can give (its own and the engine's)."""
     if text is None:
         return None
     out = set()
@@ -177,9 +181,18 @@ def parse_only(text) -> frozenset:
         p = part.strip()
         if not p:
             continue
+        if p.lower() not in GROUPS and p.upper() not in VERDICTS:
+            raise InputError(f"--only: unknown verdict {_short(p, 40)}; verdicts: {', '.join(VERDICTS)}; "
+                             f"groups: {', '.join(GROUPS)}")
         out.update(GROUPS.get(p.lower(), (p.upper(),)))
     if not out:
         raise InputError("--only: give verdicts such as 'failed', 'inconclusive' or 'timeout,error'")
+    if task in TASKS:
+        possible = (*TASKS[task].verdicts, *ENGINE_VERDICTS)
+        never = sorted(v for v in out if v not in possible)
+        if never:
+            raise InputError(f"--only: {task} tasks never give {', '.join(never)} (they give "
+                             f"{', '.join(v for v in VERDICTS if v in possible)})")
     return frozenset(out)
 
 
@@ -544,7 +557,7 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
 
     say = echo or (lambda line: None)
     timeout = spec.timeout if timeout == "spec" else (timeout or None)
-    only = parse_only(only) if isinstance(only, str) else only
+    only = parse_only(only, spec.task) if isinstance(only, str) else only
     out = prepare_folder(out_dir)
     check_writable(out / RESULTS, "--out")
     tasks = spec.tasks()

@@ -31,7 +31,7 @@ from fractions import Fraction
 from pathlib import Path
 
 from exact_khk.studies.output import write_atomic
-from exact_khk.sweep.tasks import FAILED, TASKS
+from exact_khk.sweep.tasks import FAILED, TASKS, VERDICTS
 
 #: order in which axes are chosen for tables and plots
 AXIS_ORDER = ("n", "system", "eps", "steps", "arith", "seed", "point")
@@ -41,11 +41,12 @@ REPLICATES = ("seed", "point")
 MAX_LEVELS = 40
 #: numeric figures shown in the printed tables (all are in the JSON and CSV)
 MAX_FIGURE_COLUMNS = 6
-VERDICT_ORDER = ("VALID", "OK", "INCONCLUSIVE", "WARNED", "INVALID", "SINGULAR", "UNDEFINED", "UNDECIDED",
-                 "TIMEOUT", "ERROR", "MISSING")
-COLORS = {"VALID": "#2a9d3f", "OK": "#2a9d3f", "INCONCLUSIVE": "#f4a261", "WARNED": "#f4a261",
-          "INVALID": "#d62828", "SINGULAR": "#7b8cde", "UNDEFINED": "#9d7bde", "UNDECIDED": "#b0b0b0",
-          "TIMEOUT": "#8d5524", "ERROR": "#222222", "MISSING": "#ffffff"}
+#: the tasks' verdicts, then MISSING (a task without a record)
+VERDICT_ORDER = VERDICTS + ("MISSING",)
+COLORS = {"VALID": "#2a9d3f", "OK": "#2a9d3f", "FOUND": "#2a9d3f", "NONE": "#a8c6a0", "INCONCLUSIVE": "#f4a261",
+          "WARNED": "#f4a261", "UNDETERMINED": "#e9c46a", "INVALID": "#d62828", "SINGULAR": "#7b8cde",
+          "UNDEFINED": "#9d7bde", "UNDECIDED": "#b0b0b0", "TIMEOUT": "#8d5524", "ERROR": "#222222",
+          "MISSING": "#ffffff"}
 
 
 @dataclass

@@ -68,6 +68,11 @@ from exact_khk.parsing import any_int_digits
 
 #: version of a result line (``results.jsonl``)
 RECORD_FORMAT = 1
+#: every verdict a result line can carry, from "as expected" to "failed" (the order of the
+#: summaries); each task kind's ``verdicts`` (checked by :func:`register`) and
+#: :data:`ENGINE_VERDICTS` are among them, and ``--only`` accepts no other
+VERDICTS = ("VALID", "OK", "FOUND", "NONE", "INCONCLUSIVE", "WARNED", "UNDETERMINED", "INVALID", "SINGULAR",
+            "UNDEFINED", "UNDECIDED", "TIMEOUT", "ERROR")
 #: verdicts of failed tasks (rerun with ``--only failed``)
 FAILED = ("ERROR", "TIMEOUT")
 #: verdicts that :func:`run_task` gives from what was raised
@@ -227,7 +232,10 @@ TASKS: dict = {}
 
 
 def register(kind: TaskKind) -> TaskKind:
-    """Add (or replace) a task kind in :data:`TASKS`."""
+    """Add (or replace) a task kind in :data:`TASKS`; its verdicts must be in :data:`VERDICTS`."""
+    unknown = [v for v in (*kind.verdicts, kind.ok) if v not in VERDICTS]
+    if unknown:
+        raise ValueError(f"task kind {kind.name!r}: verdicts {unknown} are not in VERDICTS")
     TASKS[kind.name] = kind
     return kind
 
