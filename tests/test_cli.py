@@ -115,3 +115,25 @@ def test_liouville_default_runs_on_the_built_in_system(capsys):
     assert "exact in Q(zeta_3)" in out and "control:conservation" in out
     assert main(["liouville", "--arith", "flint"]) == 2
     assert "cyclo:3" in capsys.readouterr().err
+
+
+def test_a_failed_or_interrupted_command_leaves_no_new_empty_folder(capsys, tmp_path, monkeypatch):
+    new = tmp_path / "new" / "deeper"
+    code, _, err = run(capsys, "hard", "--out", str(new), "--long-steps", "0")  # refused after the folder
+    assert code == 2 and "--long-steps" in err
+    assert not (tmp_path / "new").exists()
+    kept = tmp_path / "kept"  # control: a folder that was there before stays, empty or not
+    kept.mkdir()
+    code, _, _ = run(capsys, "hard", "--out", str(kept), "--long-steps", "0")
+    assert code == 2 and kept.is_dir()
+    from exact_khk.studies import scaling
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(scaling, "scaling_study", interrupted)
+    code, _, err = run(capsys, "scale", "--steps", "2", "--ariths", "float", "--out", str(new))
+    assert code == 130 and "Ctrl-C" in err and not (tmp_path / "new").exists()
+    monkeypatch.undo()
+    # control: a command that succeeds keeps its new folder (and what it wrote)
+    code, _, _ = run(capsys, "scale", "--steps", "2", "--ariths", "float", "--out", str(new))
+    assert code == 0 and any(new.iterdir())

@@ -131,6 +131,9 @@ def main(argv=None) -> int:
         warnings.simplefilter("always")
         warnings.showwarning = lambda message, category, *rest, **kw: seen.append((category, message))
         code = _run(argv)
+    output = sys.modules.get("exact_khk.studies.output")  # imported by the commands that create folders
+    if output is not None:  # an error or Ctrl-C before anything was written there: no empty folder left
+        output.settle_new_folders(failed=code not in (EXIT["ok"], EXIT["invalid"], EXIT["inconclusive"]))
     if seen and code in (EXIT["ok"], EXIT["invalid"], EXIT["inconclusive"]):
         category, message = seen[0]
         more = f" (and {len(seen) - 1} more warning(s))" if len(seen) > 1 else ""

@@ -45,6 +45,10 @@ def _temporary(path, folder, what):
                           f"{exc.strerror or exc})") from None
 
 
+#: the folders :func:`prepare_folder` created in this process (see :func:`settle_new_folders`)
+_CREATED: list = []
+
+
 def prepare_folder(path, what: str = "--out"):
     """The output folder ``path`` (a Path), created if missing; :class:`OutputError` if a
     file is in the way or it cannot be created (called before the work starts)."""
@@ -53,11 +57,25 @@ def prepare_folder(path, what: str = "--out"):
     folder = Path(path)
     if folder.exists() and not folder.is_dir():
         raise OutputError(f"{what}: {str(folder)!r} exists and is not a folder")
+    missing = [p for p in (folder, *folder.absolute().parents) if not p.exists()]
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OutputError(f"{what}: cannot create the folder {str(folder)!r}: {exc.strerror or exc}") from None
+    _CREATED.extend(missing)
     return folder
+
+
+def settle_new_folders(failed: bool) -> None:
+    """Forget the folders :func:`prepare_folder` created; when the work ``failed`` (the
+    command line: an error or Ctrl-C), first remove those still empty, deepest first.
+    A folder with anything in it stays."""
+    for folder in sorted(_CREATED, key=lambda p: len(p.absolute().parts), reverse=True) if failed else ():
+        try:
+            folder.rmdir()  # only an empty folder
+        except OSError:
+            pass
+    _CREATED.clear()
 
 
 def write_atomic(path, data, what: str = "output") -> None:
