@@ -1,5 +1,6 @@
 """cyclo:N — exact arithmetic in Q(ζ_N), involutions over Q(ω), Liouville integrability."""
 
+import re
 from fractions import Fraction
 
 import pytest
@@ -9,7 +10,7 @@ from .conftest import EXACT
 from exact_khk.arith.cyclotomic import CycloNumber, cyclotomic_field
 from exact_khk.systems.lie_poisson.invariants import grad_Htilde
 from exact_khk.certification.identities import (integral_patterns, involution_patterns,
-                                  liouville_at_points)
+                                  liouville_at_points, liouville_identities)
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.systems.lie_poisson.system import (DEFAULT_X0, default_system, involution_circulant,
                                involution_circulant_cyclotomic, rational_sign_patterns, random_point)
@@ -260,3 +261,17 @@ def test_cli_liouville_cyclo(capsys):
     assert all(r["evidence"] == "exact in Q(zeta_3) at 2 orbit points" for r in out["records"])
     assert main(["liouville", "--arith", "flint", "--steps", "0"]) == 2
     assert "--arith: flint cannot represent" in capsys.readouterr().err
+
+
+def test_liouville_reports_progress_in_solves():
+    """``progress(k)`` hears the running count of solves, ending at the count the
+    Schwartz–Zippel bound states for one point (a single trial, so the two agree)."""
+    system = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
+    seen = []
+    recs = liouville_identities(system, trials=1, seed=1, progress=seen.append)
+    assert all(r.passed for r in recs)
+    solves = int(re.search(r"S = (\d+) solves", recs[0].evidence).group(1))
+    assert seen == sorted(set(seen)) and seen[-1] == solves > 10
+    seen.clear()
+    liouville_at_points(system, DEFAULT_X0, "1/10", "cyclo:3", steps=1, progress=seen.append)
+    assert seen == sorted(set(seen)) and seen[-1] == 2 * solves  # two orbit points, the same solves each

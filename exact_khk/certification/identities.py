@@ -103,7 +103,17 @@ def _patterns(system, patterns):
 
 
 class _Counter:
-    solves = 0
+    """``solves``: the solves of the current point (the Schwartz–Zippel bound's S);
+    ``progress(done)``, if given, hears the solves of all points so far."""
+
+    def __init__(self, progress=None):
+        self.solves, self.done, self.progress = 0, 0, progress
+
+    def add(self, k=1):
+        self.solves += k
+        self.done += k
+        if self.progress is not None:
+            self.progress(self.done)
 
 
 def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
@@ -121,11 +131,11 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
     x = maps["f"].point(x)
 
     def step(m, pt):
-        cnt.solves += 1
+        cnt.add()
         return m.step(pt)
 
     def integral(fld, pt):
-        cnt.solves += 1
+        cnt.add()
         return Htilde(fld, pt, e, ar)
 
     images = {k: step(m, x) for k, m in maps.items()}
@@ -141,7 +151,7 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
             if pairs == "all" or a == "f":
                 ab, ba = step(maps[a], images[b]), step(maps[b], images[a])
                 out["commutation"].append((f"Phi_{a} o Phi_{b}", [p - q for p, q in zip(ab, ba)]))
-    cnt.solves += 2 * (n + 1)
+    cnt.add(2 * (n + 1))
     gH = grad_Htilde(system.field("f"), x, e, ar)
     grads = [grad_Htilde(fld, x, e, ar) for fld in ints]
     for j, (s, gK) in enumerate(zip(integral_patterns(n), grads)):
@@ -232,11 +242,12 @@ def _records(system, per_point, ar, seconds, evidence, rank_evidence, rank_rule,
     return recs
 
 
-def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None, pairs="all"):
+def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None, pairs="all", progress=None):
     """Check every claim exactly at the points x_0..x_steps of the Φ_f-orbit of x0.
 
     ``patterns``: the involutions whose maps are checked (default all 2^n − 2);
-    ``pairs``: ``'all'`` pairs of maps commute, or ``'f'`` (Φ_f with each Φ_g).
+    ``pairs``: ``'all'`` pairs of maps commute, or ``'f'`` (Φ_f with each Φ_g);
+    ``progress(k)``: called with the number of solves (Kahan steps, integrals) made so far.
     In ``cyclo:N`` (n | N) every pattern is exact; a rational arithmetic raises
     :class:`~exact_khk.errors.NotRationalError` for non-rational patterns.
     Evidence: "exact in Q(zeta_N) at K orbit points" (or Q, or F_P: a nonzero
@@ -249,10 +260,10 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
         raise InputError(f"pairs: expected 'all' or 'f', got {pairs!r}")
     t0 = time.perf_counter()
     pts = KahanMap(system.field("f"), eps, ar).orbit(x0, steps)
-    per_point = []
+    per_point, cnt = [], _Counter(progress)
     for k, x in enumerate(pts):
         try:
-            per_point.append(residuals_at(system, x, eps, ar, patterns, pairs))
+            per_point.append(residuals_at(system, x, eps, ar, patterns, pairs, cnt))
         except SingularStepError as exc:  # a map Φ_g (or Φ_c) undefined at the orbit point x_k
             raise SingularStepError(exc.x, exc.eps, condition=exc.condition,
                                     detail=f"at the orbit point x_{k} of Phi_f (an associated map's step)"
@@ -265,7 +276,7 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
 
 
 def liouville_identities(system, arith=f"gf:{DEFAULT_PRIME}", trials=3, seed=0,
-                         patterns=None, pairs="all", max_draws=None):
+                         patterns=None, pairs="all", max_draws=None, progress=None):
     """Schwartz–Zippel: the claims as identities of rational functions in (x, ε).
 
     Draws (x, ε) uniformly from F_P^{2n+1}; a draw where ε = 0 or some map or
@@ -279,6 +290,7 @@ def liouville_identities(system, arith=f"gf:{DEFAULT_PRIME}", trials=3, seed=0,
     coefficient of the cleared numerator, which one fixed P cannot exclude.
     A nonzero residual (controls) refutes a claim exactly; rank n at one point
     proves generic rank n (a nonzero minor mod P is a nonzero minor over Q(ω)).
+    ``progress``: as for :func:`liouville_at_points`.
 
     >>> from exact_khk import LiePoissonSystem
     >>> s = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
@@ -294,7 +306,7 @@ def liouville_identities(system, arith=f"gf:{DEFAULT_PRIME}", trials=3, seed=0,
     n, P = system.n, ar.P
     rng = random.Random(seed)
     t0 = time.perf_counter()
-    per_point, skipped, cnt = [], [], _Counter()
+    per_point, skipped, cnt = [], [], _Counter(progress)
     draws = 0
     limit = max_draws if max_draws is not None else 10 * trials
     while len(per_point) < trials:

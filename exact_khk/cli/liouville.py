@@ -10,7 +10,8 @@ every record is as expected (claims hold, controls fail), 1 otherwise.
 from __future__ import annotations
 
 from exact_khk.arith import get_arith
-from exact_khk.cli.options import add_system_options, check_output, check_resources, system_from_args, write_json
+from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
+                                   write_json)
 from exact_khk.certification.records import library_versions
 from exact_khk.arith.cyclotomic import GFArith
 from exact_khk.errors import InputError, NotRationalError
@@ -93,15 +94,18 @@ def cmd_liouville(args):
     check_resources("liouville", system, KahanMap(system.field("f"), eps, ar), x0, args.steps, dense=True,
                     orbits=1 + len(pats), per_point=1 + system.dim, cube_numbers=2)
     if isinstance(ar, GFArith):
-        recs = liouville_identities(system, ar, trials=args.trials, seed=args.draw_seed,
-                                    patterns=pats, pairs=args.pairs)
+        with Progress(args, None, "liouville", unit="solve") as progress:
+            recs = liouville_identities(system, ar, trials=args.trials, seed=args.draw_seed,
+                                        patterns=pats, pairs=args.pairs, progress=progress)
         extra = {"arith": ar.name, "trials": args.trials}
     else:
         if not ar.exact:
             raise InputError(f"--arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), "
                              f"got {ar.name}")
         try:
-            recs = liouville_at_points(system, x0, eps, ar, steps=args.steps, patterns=pats, pairs=args.pairs)
+            with Progress(args, None, "liouville", unit="solve") as progress:
+                recs = liouville_at_points(system, x0, eps, ar, steps=args.steps, patterns=pats,
+                                           pairs=args.pairs, progress=progress)
         except NotRationalError as exc:
             raise InputError(f"--arith: {ar.name} cannot represent the involutions over Q(omega) ({exc}); "
                              f"use --arith cyclo:{system.n} or gf:P") from None
