@@ -310,3 +310,15 @@ def test_cli_orbit_reports_the_height_growth(capsys):
     assert last.startswith("heights (bits)") and "growth linear" in last
     assert main(["orbit", "--steps", "12", "--arith", "float", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["height_growth"] is None   # floats have no height
+
+
+def test_degree_sequence_reports_progress_in_steps():
+    """``progress(k)`` counts the steps over F_p: steps per line, every line; a line that
+    passes max_degree early counts as finished (the count ends on the total)."""
+    seen = []
+    res = degree_sequence("euler-top", steps=6, primes=2, lines=2, progress=seen.append)
+    assert seen == list(range(1, 2 * 2 * 6 + 1)) and len(res.degrees) == 7
+    seen.clear()
+    res = degree_sequence(LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1"), steps=30, primes=1,
+                          max_degree=40, progress=seen.append)
+    assert len(res.degrees) < 31 and seen[-1] == 30 and seen == sorted(set(seen))

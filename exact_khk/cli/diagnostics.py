@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 
-from exact_khk.cli.options import (add_field_options, add_system_options, check_output, field_name,
+from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_output, field_name,
                                    system_from_args, write_json)
 from exact_khk.errors import InputError
 
@@ -68,10 +68,14 @@ def cmd_degrees(args):
         plot_format(args.plot)
         check_output(args.plot, "--plot")
     system, x0, eps = system_from_args(args)
+    primes = _primes(args.primes)
     try:
-        res = degree_sequence(system, steps=args.steps, eps=eps, field=field_name(system, args),
-                              primes=_primes(args.primes), lines=args.lines, seed=args.line_seed, exact=args.exact,
-                              confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits)
+        total = (primes if isinstance(primes, int) else len(primes)) * args.lines * args.steps  # steps over F_p
+        with Progress(args, total if 0 < total <= 10 ** 12 else None, "degrees") as progress:
+            res = degree_sequence(system, steps=args.steps, eps=eps, field=field_name(system, args),
+                                  primes=primes, lines=args.lines, seed=args.line_seed, exact=args.exact,
+                                  confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits,
+                                  progress=progress)
     except InputError as exc:  # name the command-line options
         raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits):",
                                 lambda m: "--" + m.group(1).replace("_", "-") + ":", str(exc))) from None

@@ -227,9 +227,9 @@ def _nmod_gcd_reduce(rng, p):
     return reduce
 
 
-def line_degrees(fld, eps, p, steps, rng, max_degree=None):
+def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
     """d_0..d_steps of Φ restricted to one random line over F_p (see the module docstring);
-    stops early once a degree exceeds ``max_degree``."""
+    stops early once a degree exceeds ``max_degree``; ``progress()`` after each step."""
     V, R = kahan_rows(fld, eps)
     V = [[c % p for c in row] for row in V]
     R = [[c % p for c in row] for row in R]
@@ -241,6 +241,8 @@ def line_degrees(fld, eps, p, steps, rng, max_degree=None):
     for _ in range(steps):
         w = step_polys(w, V, R, zero, lambda a, b: a // b, reduce)
         degs.append(max(_deg(c) for c in w))
+        if progress is not None:
+            progress()
         if max_degree is not None and degs[-1] > max_degree:
             break
     return degs
@@ -335,7 +337,8 @@ class DegreeSequence:
 
 
 def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, seed=0, exact=0,
-                    exact_terms=10_000, confirm=3, heights=False, x0=None, max_bits=200_000, max_degree=20_000):
+                    exact_terms=10_000, confirm=3, heights=False, x0=None, max_bits=200_000, max_degree=20_000,
+                    progress=None):
     """Degrees d_0..d_steps of the iterates of the Kahan map of ``field`` (module docstring).
 
     ``system`` a System, catalogue name, system file or QuadraticField; ``primes``
@@ -344,6 +347,8 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     below ``exact_terms`` terms); the iteration stops once a degree exceeds
     ``max_degree`` (exponential growth); ``heights=True`` adds
     :func:`~exact_khk.diagnostics.heights.height_growth` of the orbit of ``x0``.
+    ``progress(k)``: called with the steps over F_p made so far, of ``steps`` per line
+    (a line that stops early counts as finished).
     """
     from exact_khk.diagnostics.recurrence import fit_recurrence, too_short
 
@@ -359,16 +364,26 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     if fld.dim > MAX_DIM:
         raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")
     primes = check_primes(primes, seed=seed)
-    runs, failed = [], 0
+    runs, failed, done = [], 0, [0]
+
+    def tick():
+        done[0] += 1
+        progress(done[0])
     for p in primes:
         rng = random.Random(f"line-{seed}-{p}")
         for i in range(lines):
+            start = done[0]
             for _attempt in range(5):
+                done[0] = start  # a degenerate line's steps are taken again
                 try:
-                    runs.append((p, i, tuple(line_degrees(fld, eps, p, steps, rng, max_degree))))
+                    runs.append((p, i, tuple(line_degrees(fld, eps, p, steps, rng, max_degree,
+                                                          None if progress is None else tick))))
                     break
                 except _Degenerate:
                     failed += 1
+            if progress is not None and done[0] < start + steps:  # stopped early, or every try degenerated
+                done[0] = start + steps
+                progress(done[0])
     if not runs:
         raise InputError("primes: every run degenerated (the step matrix is singular along every line "
                          "tried: choose other primes)")
