@@ -229,7 +229,7 @@ def _nmod_gcd_reduce(rng, p):
 
 def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
     """d_0..d_steps of Φ restricted to one random line over F_p (see the module docstring);
-    stops early once a degree exceeds ``max_degree``; ``progress()`` after each step."""
+    stops early once a degree exceeds ``max_degree``; ``progress(k)`` after step k."""
     V, R = kahan_rows(fld, eps)
     V = [[c % p for c in row] for row in V]
     R = [[c % p for c in row] for row in R]
@@ -238,11 +238,11 @@ def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
     w = [P([rng.randrange(p), rng.randrange(p)]) for _ in range(N)] + [P([1])]
     zero, reduce = P([]), _nmod_gcd_reduce(rng, p)
     degs = [1]
-    for _ in range(steps):
+    for k in range(1, steps + 1):
         w = step_polys(w, V, R, zero, lambda a, b: a // b, reduce)
         degs.append(max(_deg(c) for c in w))
         if progress is not None:
-            progress()
+            progress(k)
         if max_degree is not None and degs[-1] > max_degree:
             break
     return degs
@@ -364,26 +364,23 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     if fld.dim > MAX_DIM:
         raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")
     primes = check_primes(primes, seed=seed)
-    runs, failed, done = [], 0, [0]
+    runs, failed, reported = [], 0, [0]
 
-    def tick():
-        done[0] += 1
-        progress(done[0])
-    for p in primes:
-        rng = random.Random(f"line-{seed}-{p}")
-        for i in range(lines):
-            start = done[0]
-            for _attempt in range(5):
-                done[0] = start  # a degenerate line's steps are taken again
-                try:
-                    runs.append((p, i, tuple(line_degrees(fld, eps, p, steps, rng, max_degree,
-                                                          None if progress is None else tick))))
-                    break
-                except _Degenerate:
-                    failed += 1
-            if progress is not None and done[0] < start + steps:  # stopped early, or every try degenerated
-                done[0] = start + steps
-                progress(done[0])
+    def report(k):  # increasing only: the steps of a degenerate line, taken again, count once
+        if progress is not None and k > reported[0]:
+            reported[0] = k
+            progress(k)
+    for line, (p, i) in enumerate((p, i) for p in primes for i in range(lines)):
+        if i == 0:
+            rng = random.Random(f"line-{seed}-{p}")
+        for _attempt in range(5):
+            try:
+                runs.append((p, i, tuple(line_degrees(fld, eps, p, steps, rng, max_degree,
+                                                      lambda k, base=line * steps: report(base + k)))))
+                break
+            except _Degenerate:
+                failed += 1
+        report((line + 1) * steps)  # a line that stopped early (or degenerated every time) is done
     if not runs:
         raise InputError("primes: every run degenerated (the step matrix is singular along every line "
                          "tried: choose other primes)")
