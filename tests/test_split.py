@@ -215,3 +215,51 @@ def test_split_equals_dense_at_tall_points(n, seed, kind, coords, eps):
             split.step(x)
         return
     assert split.step(x) == y
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 6, 7])
+def test_structure_rows_are_the_integer_system_rows(n):
+    """The split step's first rows from the declared structure (O(n²)) equal the rows of
+    the field's whole integer system, built from its rational Jacobian (the generic route),
+    up to one common factor; a structure with one entry changed does not (control)."""
+    from dataclasses import replace
+
+    from exact_khk.linalg.split import structure_rows
+
+    s = LiePoissonSystem.random(n, seed=3)
+    for fld in (s.field("f"), s.field("control"), s.field("g", signs="-" + "+" * (n - 1))):
+        struct = fld.circulant_structure()
+        for p, q in ((1, 10), (-3, 7)):
+            V, R0 = fld.integer_rows(p, q)
+
+            def proportional(declared):
+                first, R = structure_rows(declared, p, q)
+                a, b = R[0][0], R0[0][0]
+                return all([t * b for t in first[bi][bj][k]] == [t * a for t in V[bi * n * 2 * n + bj * n + k]]
+                           for bi in range(2) for bj in range(2) for k in range(n)) and \
+                    all([t * b for t in r] == [t * a for t in r0] for r, r0 in zip(R, R0))
+            assert proportional(struct)
+            # the dense step's whole integer system (built from the structure) at a point
+            K, v = get_arith("gmpy2").integers, [(-1) ** i * (i * i + 1) for i in range(2 * n)] + [5]
+            Vs, Rs = fld.integer_system(K, p, q)
+            M, r = K.square(Vs, v), K.apply(Rs, v)
+            Mg = [[sum(c * t for c, t in zip(V[i * 2 * n + j], v)) for j in range(2 * n)] for i in range(2 * n)]
+            rg = [sum(c * t for c, t in zip(row, v)) for row in R0]
+            a, b = structure_rows(struct, p, q)[1][0][0], R0[0][0]  # the two common factors
+            assert [[t * b for t in row] for row in M] == [[t * a for t in row] for row in Mg]
+            assert [t * b for t in r] == [t * a for t in rg]
+            (m11, m12), row2 = struct.m
+            bad = replace(struct, m=((m11, (m12[0] + 1,) + m12[1:]), row2))
+            assert not proportional(bad)
+
+
+def test_auto_builds_the_split_system_only_when_it_steps():
+    """Choosing the path costs nothing: at n = 11, 13 (dense, then structured) the split
+    system is never built; at n = 12 (split) by the first step."""
+    built = lambda fld: any(isinstance(k, tuple) and k[0] == "split" for k in fld._cache)  # noqa: E731
+    for n, used in ((11, False), (12, True)):
+        fld = LiePoissonSystem.random(n, seed=1).field("f")
+        phi = KahanMap(fld, "1/10", "flint")
+        assert not built(fld)
+        phi.step(random_point(n, 1))
+        assert built(fld) is used

@@ -84,7 +84,7 @@ from exact_khk.linalg.dense import SingularMatrix, solve
 from exact_khk.parsing import MAX_STEPS, _short, parse_rational
 from exact_khk.linalg.split import split_system
 from exact_khk.systems.quadratic import QuadraticField
-from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, auto_path
+from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, SPLIT_N, auto_path
 
 METHODS = ("auto", "dense", "structured", "split")
 
@@ -412,15 +412,16 @@ def _choose_path(field, ar, method, eps):
     if method == "dense":
         return False, None, 0
     K = ar.integers
-    splits = K is not None and split_system(field, K, K.num(eps), K.den(eps)) is not None
     if method == "split":
-        if not splits:
+        if K is None or split_system(field, K, K.num(eps), K.den(eps)) is None:
             raise InputError("method: 'split' needs a rational arithmetic with an integer kernel (flint, "
                              "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
     usable = ar.rational or ar.fourier
     st = field.circulant_structure() if usable else None
+    # a declared structure splits for every n of SPLIT_N: built by the first split step, not here
+    splits = K is not None and st is not None and field.dim // 2 in SPLIT_N
     if method == "structured":
         if st is None:
             raise InputError("method: 'structured' needs a field whose Jacobian blocks are circulant "

@@ -47,6 +47,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
+from math import lcm
 
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
@@ -109,6 +110,37 @@ def circulant_structure(field):
     if cache is not None:
         cache["circulant"] = out
     return out
+
+
+def structure_rows(st, p, q):
+    """``(first, R)``: the rows over [x_0, …, x_{2n−1}, D] of the first row of each
+    block of D·(I − εf'(x)), ``first[bi][bj][m]`` for entry (bi·n, bj·n + m), and of
+    the right-hand side D·x (``R``, 2n rows), at ε = p/q, for a homogeneous field
+    with the declared :class:`~exact_khk.linalg.circulant.CirculantStructure` ``st``
+    — what :meth:`~exact_khk.systems.quadratic.QuadraticField.integer_rows` gives for
+    those entries up to one common factor, in O(n²) integer operations instead of the
+    O(n³) rational Jacobian.  With w_kl = den·m_kl (den the common denominator of the
+    Hankel first rows) the first rows of the blocks of f'(x) are (docs/conventions.md)
+
+        f11: 2 X(m21)u + X(m22)v   f12: X(m22)u   f21: −2 X(m11)u − X(m12)v   f22: −X(m12)u,
+
+    X(w)u having the entry Σ_j w[(k + j) mod n] u_j at k.
+    """
+    n = st.n
+    den = lcm(*(t.denominator for row in st.m for w in row for t in w))
+    (m11, m12), (m21, m22) = [[[int(t * den) for t in w] for w in row] for row in st.m]
+    zero = [0] * n
+    # the first rows of f'(x)'s blocks as (coefficients of u, of v) for a shift k: w[(k + j) % n]
+    forms = (((2, m21), (1, m22)), ((1, m22), (0, zero)), ((-2, m11), (-1, m12)), ((-1, m12), (0, zero)))
+    first = [[[], []], [[], []]]
+    for b, ((cu, wu), (cv, wv)) in enumerate(forms):
+        bi, bj = divmod(b, 2)
+        for k in range(n):
+            first[bi][bj].append([-p * cu * wu[(k + j) % n] for j in range(n)]
+                                 + [-p * cv * wv[(k + j) % n] for j in range(n)]
+                                 + [den * q if bi == bj and k == 0 else 0])
+    R = [[den * q if i == j else 0 for j in range(2 * n)] + [0] for i in range(2 * n)]
+    return first, R
 
 
 def reflect(w):

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 
+from exact_khk.linalg.circulant import structure_rows
 from exact_khk.linalg.paths import SPLIT_N
 from exact_khk.linalg.numtheory import ramanujan_sum
 
@@ -240,12 +241,17 @@ def split_system(field, kernel, p, q):
 
 
 def _build(field, kernel, p, q):
-    V, R = field.integer_rows(p, q)
     n = field.dim // 2
-    row = lambda i, j: V[i * 2 * n + j]  # noqa: E731  (the row of entry (i, j) of M)
-    if any(row(bi * n + i, bj * n + j) != row(bi * n, bj * n + (j - i) % n)
-           for bi in range(2) for bj in range(2) for i in range(n) for j in range(n)):
-        return None
+    st = field.circulant_structure()
+    if st is not None:
+        first, R = structure_rows(st, p, q)
+        row = lambda i, j: first[i // n][j // n][j % n]  # noqa: E731  (i the first row of its block)
+    else:  # undeclared: the field's whole integer system, checked circulant block by block
+        V, R = field.integer_rows(p, q)
+        row = lambda i, j: V[i * 2 * n + j]  # noqa: E731  (the row of entry (i, j) of M)
+        if any(row(bi * n + i, bj * n + j) != row(bi * n, bj * n + (j - i) % n)
+               for bi in range(2) for bj in range(2) for i in range(n) for j in range(n)):
+            return None
     width, rows = len(R[0]), []
     for d, deg, powers in _factors(n):
         block = []

@@ -191,10 +191,21 @@ class QuadraticField:
         so the Kahan step x̃ = (I − εf'(x))^{-1}((I + εL)x + 2εc) — equal to
         x + 2ε(I − εf'(x))^{-1} f(x), since f'(x)x = 2Q(x) + Lx — is one
         integer solve.  For homogeneous f, R · v = q·den·xi.  Cached for the
-        last few (kernel, ε).
+        last few (kernel, ε).  A field that declares circulant blocks gets its rows
+        from the structure (:func:`~exact_khk.linalg.circulant.structure_rows`, O(n²)
+        integer work, one common factor apart: the same solutions) instead of the
+        O(n³) rational Jacobian.
         """
         def build(p, q):
-            V, R = self.integer_rows(p, q)
+            st = self.circulant_structure()
+            if st is None:
+                V, R = self.integer_rows(p, q)
+            else:
+                from exact_khk.linalg.circulant import structure_rows
+
+                first, R = structure_rows(st, p, q)
+                n, N = st.n, self.dim  # entry (bi·n + i, bj·n + j) is the first row's entry (j − i) mod n
+                V = [first[i // n][j // n][(j % n - i % n) % n] for i in range(N) for j in range(N)]
             return kernel.square_tensor(V), kernel.tensor(R)
 
         return self.cached_system(("intsys", kernel.name), int(p), int(q), build)
