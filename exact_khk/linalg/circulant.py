@@ -231,8 +231,9 @@ NEWTON_SLACK_BITS = 4
 #: bound 6547 bits); along orbits the bound is far above the answer, and d⁻¹ far larger
 DIVISION_BY_INVERSE_MAX_BITS = 4096
 #: the last answer's height relative to its d, as a hint for the next division, is taken
-#: at most this large (a first step from a small point needs ~n·hd bits, the next ~1.1·hd)
-HINT_MAX_RATIO = 1.25
+#: at most this large (a first step from a small point needs ~n·hd bits, the next ~1.1·hd;
+#: the solves J((x + x̃)/2) z = x̃ of the certificates ~1.33·hd, which 1.25 missed every time)
+HINT_MAX_RATIO = 1.5
 #: the approximate quotients are trusted to within 2^TOLERANCE_BITS units (a heuristic:
 #: every answer is checked exactly)
 TOLERANCE_BITS = 12
@@ -266,7 +267,7 @@ class CirculantRing:
     coefficient (2×2 lattice reduction), and the candidate W = round(δ·r/d) is
     accepted only if d·W = δ·r holds exactly.  So the numerics decide the
     speed, never the answer.  Q starts from a hint (the last answer's height
-    relative to d) and grows fourfold until the check passes, up to twice a
+    relative to d) and doubles until the check passes, up to twice a
     bound on the answer's height read off d's values at the roots of unity (δ
     divides Π_ω d(ω)); if the attempt at that bound fails, d⁻¹ over Q answers
     (as it does when Cramer's bound is small,
@@ -346,7 +347,7 @@ class CirculantRing:
             cap = 2 * inverse.answer_bits(hr) + 64 + 2 * TOLERANCE_BITS
             if Q >= cap:  # numerics out of reach (d far too ill-conditioned for the floating start)
                 return self._solve_inverse(d, rhs)  # pragma: no cover
-            Q = cap if 8 * Q >= cap else 4 * Q  # a few cheap attempts, then the bound
+            Q = min(cap, 2 * Q)  # doubling: the attempts cost at most twice the last one
 
     def _attempt(self, d, rhs, inverse, hr, Q):
         """(W, δ) from quotients approximated to 2^−Q, checked exactly, or None."""
