@@ -230,10 +230,12 @@ NEWTON_SLACK_BITS = 4
 #: (1.2–2.2× faster than the fixed-point division for n = 48..128; 0.84× at n = 256,
 #: bound 6547 bits); along orbits the bound is far above the answer, and d⁻¹ far larger
 DIVISION_BY_INVERSE_MAX_BITS = 4096
-#: the last answer's height relative to its d, as a hint for the next division, is taken
-#: at most this large (a first step from a small point needs ~n·hd bits, the next ~1.1·hd;
-#: the solves J((x + x̃)/2) z = x̃ of the certificates ~1.33·hd, which 1.25 missed every time)
-HINT_MAX_RATIO = 1.5
+#: the last answer's height relative to its d sets the next division's first precision when
+#: it is at most this (Kahan steps along orbits ~1.1, the certificates' J((x + x̃)/2) solves
+#: ~1.33); a larger one comes from a first step off a small point (~n) and is no guide ...
+HINT_TRUSTED_RATIO = 2.0
+#: ... and then, or without a last answer, the first precision is set for this ratio
+HINT_MAX_RATIO = 1.25
 #: the approximate quotients are trusted to within 2^TOLERANCE_BITS units (a heuristic:
 #: every answer is checked exactly)
 TOLERANCE_BITS = 12
@@ -267,8 +269,8 @@ class CirculantRing:
     coefficient (2×2 lattice reduction), and the candidate W = round(δ·r/d) is
     accepted only if d·W = δ·r holds exactly.  So the numerics decide the
     speed, never the answer.  Q starts from a hint (the last answer's height
-    relative to d) and doubles until the check passes, up to twice a
-    bound on the answer's height read off d's values at the roots of unity (δ
+    relative to d), doubles after a first miss and then grows fourfold until the
+    check passes, up to twice a bound on the answer's height read off d's values at the roots of unity (δ
     divides Π_ω d(ω)); if the attempt at that bound fails, d⁻¹ over Q answers
     (as it does when Cramer's bound is small,
     :data:`DIVISION_BY_INVERSE_MAX_BITS`).  A division costs a few polynomial
@@ -335,9 +337,9 @@ class CirculantRing:
         if _hadamard_bits(n, hd, hr) <= DIVISION_BY_INVERSE_MAX_BITS:
             return self._remember(self._solve_inverse(d, rhs), hd)
         inverse = _Reciprocal(self, d, hd)
-        ratio = HINT_MAX_RATIO if self.height_ratio is None else min(max(self.height_ratio, 0.25),
-                                                                     HINT_MAX_RATIO)
-        Q = int(2 * ratio * hd * 1.05) + 64 + 2 * TOLERANCE_BITS
+        last = self.height_ratio
+        ratio = HINT_MAX_RATIO if last is None or last > HINT_TRUSTED_RATIO else max(last, 0.25)
+        Q, missed = int(2 * ratio * hd * 1.05) + 64 + 2 * TOLERANCE_BITS, False
         while True:
             found = self._attempt(d, rhs, inverse, hr, Q)
             if found is not None:
@@ -347,7 +349,10 @@ class CirculantRing:
             cap = 2 * inverse.answer_bits(hr) + 64 + 2 * TOLERANCE_BITS
             if Q >= cap:  # numerics out of reach (d far too ill-conditioned for the floating start)
                 return self._solve_inverse(d, rhs)  # pragma: no cover
-            Q = min(cap, 2 * Q)  # doubling: the attempts cost at most twice the last one
+            # a first miss is mostly narrow (the answer a little above the hint): twice the
+            # precision; after that a few fourfold steps, then the bound
+            Q = min(cap, 2 * Q) if not missed else cap if 8 * Q >= cap else 4 * Q
+            missed = True
 
     def _attempt(self, d, rhs, inverse, hr, Q):
         """(W, δ) from quotients approximated to 2^−Q, checked exactly, or None."""
