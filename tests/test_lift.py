@@ -198,3 +198,21 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     C.circulant_ring.cache_clear()
     x0 = [ar(t) for t in random_point(n, 3)]
     assert C.exact_step(st, x0, eps, ar) == first and calls == [n]
+
+
+def test_certificate_divisions_need_no_bound(monkeypatch):
+    """The divisions of a certificate (Kahan steps, H̃, the J((x + x̃)/2) solves of the
+    definition checks) start from a precision their last answer justifies and never miss
+    it: the bound read off d's values is not asked for.  With the hint capped at 1.25 the
+    definition solves (answers ≈ 1.33× d's height) missed 19 times here, each miss then
+    costing an attempt at the bound's 6× precision (5edf94a to e329474)."""
+    from exact_khk import LiePoissonSystem, certify
+    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson.system import random_point
+
+    asked = []
+    answer_bits = C._Reciprocal.answer_bits
+    monkeypatch.setattr(C._Reciprocal, "answer_bits", lambda self, hr: asked.append(hr) or answer_bits(self, hr))
+    system = LiePoissonSystem.random(8, 1)
+    cert = certify(system, random_point(8, 1, system=system), steps=14)
+    assert cert.status == "VALID" and asked == []

@@ -269,9 +269,10 @@ class CirculantRing:
     coefficient (2×2 lattice reduction), and the candidate W = round(δ·r/d) is
     accepted only if d·W = δ·r holds exactly.  So the numerics decide the
     speed, never the answer.  Q starts from a hint (the last answer's height
-    relative to d), doubles after a first miss and then grows fourfold until the
-    check passes, up to twice a bound on the answer's height read off d's values at the roots of unity (δ
-    divides Π_ω d(ω)); if the attempt at that bound fails, d⁻¹ over Q answers
+    relative to d), doubles after a first miss and then grows fourfold until
+    the check passes, up to twice a bound on the answer's height read off d's
+    values at the roots of unity (δ divides Π_ω d(ω)); if the attempt at that
+    bound fails, d⁻¹ over Q answers
     (as it does when Cramer's bound is small,
     :data:`DIVISION_BY_INVERSE_MAX_BITS`).  A division costs a few polynomial
     products at the size of the answer, all in FLINT (no p-adic reductions:
