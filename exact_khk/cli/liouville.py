@@ -93,23 +93,21 @@ def cmd_liouville(args):
 
     check_resources("liouville", system, KahanMap(system.field("f"), eps, ar), x0, args.steps, dense=True,
                     orbits=1 + len(pats), per_point=1 + system.dim, cube_numbers=2)
-    if isinstance(ar, GFArith):
-        with Progress(args, None, "liouville", unit="solve") as progress:
+    if not isinstance(ar, GFArith) and not ar.exact:
+        raise InputError(f"--arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), got {ar.name}")
+    with Progress(args, None, "liouville", unit="solve") as progress:
+        if isinstance(ar, GFArith):
             recs = liouville_identities(system, ar, trials=args.trials, seed=args.draw_seed,
                                         patterns=pats, pairs=args.pairs, progress=progress)
-        extra = {"arith": ar.name, "trials": args.trials}
-    else:
-        if not ar.exact:
-            raise InputError(f"--arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), "
-                             f"got {ar.name}")
-        try:
-            with Progress(args, None, "liouville", unit="solve") as progress:
+            extra = {"arith": ar.name, "trials": args.trials}
+        else:
+            try:
                 recs = liouville_at_points(system, x0, eps, ar, steps=args.steps, patterns=pats,
                                            pairs=args.pairs, progress=progress)
-        except NotRationalError as exc:
-            raise InputError(f"--arith: {ar.name} cannot represent the involutions over Q(omega) ({exc}); "
-                             f"use --arith cyclo:{system.n} or gf:P") from None
-        extra = {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
+            except NotRationalError as exc:
+                raise InputError(f"--arith: {ar.name} cannot represent the involutions over Q(omega) ({exc}); "
+                                 f"use --arith cyclo:{system.n} or gf:P") from None
+            extra = {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
     return _report(args, system, recs, {**extra, "involutions": pats})
 
 

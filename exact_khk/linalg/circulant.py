@@ -112,6 +112,13 @@ def circulant_structure(field):
     return out
 
 
+#: the first rows of the blocks f11, f12, f21, f22 of f'(x) (docs/conventions.md) as combinations
+#: of p[2b + c] = X(m_b) times u (c = 0) or v (c = 1), b = 11, 12, 21, 22:
+#: 2 p[4] + p[7], p[6], −2 p[0] − p[3], −p[2]  (f11 = 2 X(m21)u + X(m22)v, …)
+JACOBIAN_FIRST_ROWS = ((0, 0, 0, 0, 2, 0, 0, 1), (0, 0, 0, 0, 0, 0, 1, 0), (-2, 0, 0, -1, 0, 0, 0, 0),
+                       (0, 0, -1, 0, 0, 0, 0, 0))
+
+
 def structure_rows(st, p, q):
     """``(first, R)``: the rows over [x_0, …, x_{2n−1}, D] of the first row of each
     block of D·(I − εf'(x)), ``first[bi][bj][m]`` for entry (bi·n, bj·n + m), and of
@@ -119,25 +126,20 @@ def structure_rows(st, p, q):
     with the declared :class:`~exact_khk.linalg.circulant.CirculantStructure` ``st``
     — what :meth:`~exact_khk.systems.quadratic.QuadraticField.integer_rows` gives for
     those entries up to one common factor, in O(n²) integer operations instead of the
-    O(n³) rational Jacobian.  With w_kl = den·m_kl (den the common denominator of the
-    Hankel first rows) the first rows of the blocks of f'(x) are (docs/conventions.md)
-
-        f11: 2 X(m21)u + X(m22)v   f12: X(m22)u   f21: −2 X(m11)u − X(m12)v   f22: −X(m12)u,
-
-    X(w)u having the entry Σ_j w[(k + j) mod n] u_j at k.
+    O(n³) rational Jacobian.  The first rows of the blocks of f'(x) are
+    :data:`JACOBIAN_FIRST_ROWS` of the X(m_b)u and X(m_b)v, X(w)u having the entry
+    Σ_j w[(k + j) mod n] u_j at k; the m_b are scaled by den, their common denominator.
     """
     n = st.n
     den = lcm(*(t.denominator for row in st.m for w in row for t in w))
-    (m11, m12), (m21, m22) = [[[int(t * den) for t in w] for w in row] for row in st.m]
-    zero = [0] * n
-    # the first rows of f'(x)'s blocks as (coefficients of u, of v) for a shift k: w[(k + j) % n]
-    forms = (((2, m21), (1, m22)), ((1, m22), (0, zero)), ((-2, m11), (-1, m12)), ((-1, m12), (0, zero)))
+    m = [[int(t * den) for t in w] for row in st.m for w in row]  # m11, m12, m21, m22
     first = [[[], []], [[], []]]
-    for b, ((cu, wu), (cv, wv)) in enumerate(forms):
-        bi, bj = divmod(b, 2)
+    for r, F in enumerate(JACOBIAN_FIRST_ROWS):
+        bi, bj = divmod(r, 2)
+        # the combination of the m_b that multiplies u (c = 0) and v (c = 1) in this block
+        w = [[sum(F[2 * b + c] * m[b][i] for b in range(4)) for i in range(n)] for c in range(2)]
         for k in range(n):
-            first[bi][bj].append([-p * cu * wu[(k + j) % n] for j in range(n)]
-                                 + [-p * cv * wv[(k + j) % n] for j in range(n)]
+            first[bi][bj].append([-p * w[c][(k + j) % n] for c in range(2) for j in range(n)]
                                  + [den * q if bi == bj and k == 0 else 0])
     R = [[den * q if i == j else 0 for j in range(2 * n)] + [0] for i in range(2 * n)]
     return first, R

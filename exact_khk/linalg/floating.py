@@ -55,6 +55,7 @@ import threading
 import numpy
 from numpy.lib.stride_tricks import as_strided
 
+from exact_khk.linalg.circulant import JACOBIAN_FIRST_ROWS as _FIRST_ROWS
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.paths import BINARY64_CONDITION_MAX
 
@@ -62,7 +63,7 @@ from exact_khk.linalg.paths import BINARY64_CONDITION_MAX
 def _data(field, ar):
     """The field's coefficients as numpy data for ``ar`` (cached on the field):
     ``('circulant', X, F)`` with X the (4, n, n) cyclic Hankel matrices X(m11),
-    X(m12), X(m21), X(m22) (views of one (4, 2n) array) and F :data:`_FIRST_ROWS`, or ``('terms', rows, ks, coefs, L)`` (binary64 only)."""
+    X(m12), X(m21), X(m22) (views of one (4, 2n) array) and F :data:`~exact_khk.linalg.circulant.JACOBIAN_FIRST_ROWS`, or ``('terms', rows, ks, coefs, L)`` (binary64 only)."""
     key = ("numpy system", ar.name)
     hit = field._cache.get(key)
     if hit is not None:
@@ -89,11 +90,6 @@ def _data(field, ar):
         hit = (None,)
     field._cache[key] = hit
     return hit
-
-
-#: with p[2b + c] = X(m_b) times u (c = 0) or v (c = 1), b = 11, 12, 21, 22, the first
-#: rows of f11, f12, f21, f22 are 2 p[4] + p[7], p[6], −2 p[0] − p[3], −p[2]
-_FIRST_ROWS = ((0, 0, 0, 0, 2, 0, 0, 1), (0, 0, 0, 0, 0, 0, 1, 0), (-2, 0, 0, -1, 0, 0, 0, 0), (0, 0, -1, 0, 0, 0, 0, 0))
 
 
 def _viewer(dtype, offset, shape, strides):
@@ -133,7 +129,7 @@ def _matrix_builder(data, N, ar, eps, reuse=False):
         # block (a, c), entry (i, k) = w_ac[(k − i) mod n] = [w | w][2a + c, n − i + k]
         blocks = _viewer(float if ar.lapack else object, n, (2, n, 2, n), (4 * n, -1, 2 * n, 1))
         # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1); w = −ε × the
-        # first rows of f11, f12, f21, f22 = (−ε F) p, F = :data:`_FIRST_ROWS`
+        # first rows of f11, f12, f21, f22 = (−ε F) p, F = circulant.JACOBIAN_FIRST_ROWS
         if ar.lapack:
             eF = F * -eps
             first_rows = lambda x: eF @ (x.reshape(2, n) @ hankel).reshape(8, n)  # noqa: E731
