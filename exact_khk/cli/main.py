@@ -59,7 +59,8 @@ def build_parser(commands=None):
     imported and registered in full (default: all); every other command gets a
     stub with its one-line help (enough for ``exact-khk --help``)."""
     parser = Parser(prog="exact-khk", description="Exact certification of Kahan–Hirota–Kimura maps "
-                    "(Lie–Poisson family of Petrera & Suris).")
+                    "of quadratic vector fields (system files, a catalogue of classic systems, and the "
+                    "Lie–Poisson family of Petrera & Suris).")
     parser.add_argument("--version", action="version", version=f"exact-khk {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     for module in COMMAND_MODULES:

@@ -14,13 +14,14 @@ from exact_khk.kahan.map import METHODS, KahanMap
 
 def register(sub):
     p = sub.add_parser("orbit", help="iterate a Kahan map and print the orbit",
-                       description="Iterate the Kahan map of a Lie–Poisson field.")
+                       description="Iterate the Kahan map of a quadratic field (the built-in Lie–Poisson system, "
+                       "the family with --n/--a/--b/--c/--seed, or --system NAME|FILE) and print the orbit.")
     add_system_options(p)
     add_field_options(p)
     p.add_argument("--method", choices=METHODS, default="auto",
                    help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
-                        "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n = 2, 3, 4, "
-                        "6: 2x2 over each factor of t^n - 1); default auto: the fastest measured path")
+                        "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n < 16: "
+                        "2x2 over each factor of t^n - 1); default auto: the fastest measured path")
     p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     p.set_defaults(func=cmd_orbit)
 

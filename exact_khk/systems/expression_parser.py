@@ -2,7 +2,7 @@
 
 SymPy's ``parse_expr`` calls Python's ``eval``; this parser never does.  An
 expression may contain only the names it is given (variables, parameters,
-``eps``), integer and decimal literals (exact: 0.1 = 1/10), ``+ - * / **`` and
+``eps``), integer and decimal literals (exact: 0.1 = 1/10, 1e-5 = 1/100000), ``+ - * / **`` and
 parentheses, with Python's precedence; an exponent is an integer literal with
 |e| <= 64, and towers such as ``x**10**9`` are refused.  The value is computed
 exactly as a quotient num/den of two polynomials in SymPy's sparse polynomial
@@ -32,6 +32,7 @@ import sympy
 from sympy.polys.rings import ring
 
 from ..errors import InputError
+from ..parsing import MAX_EXPONENT as MAX_DECIMAL_EXPONENT
 from .functions import Polynomial
 
 MAX_LENGTH = 100_000      # characters in one expression
@@ -39,7 +40,7 @@ MAX_EXPONENT = 64         # |e| in x**e
 MAX_DEPTH = 100           # nested parentheses
 MAX_WORK = 3_000_000      # term products (weighted by number size) spent on one expression
 MAX_BITS = 2_000_000      # size of the numbers
-_TOKEN = re.compile(r"\s*(?:(\d+\.?\d*|\.\d+)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
+_TOKEN = re.compile(r"\s*(?:((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
 #: the ring of constants, for parameter values
 CONSTANTS = ring([], sympy.QQ)[0]
 
@@ -220,8 +221,14 @@ class Parser:
     def atom(self, depth):
         kind, tok, pos = self.take()
         if kind == "num":
-            whole, _, frac = tok.partition(".")
-            return self.R(sympy.QQ(to_int(whole + frac), 10 ** len(frac))), self.R.one
+            mantissa, _, exp = tok.lower().partition("e")
+            if exp and (len(exp) > 6 or abs(int(exp)) > MAX_DECIMAL_EXPONENT):
+                self.fail(f"the exponent of {tok[:30]} at position {pos} is beyond the limit of "
+                          f"{MAX_DECIMAL_EXPONENT}")
+            whole, _, frac = mantissa.partition(".")
+            shift = int(exp or 0) - len(frac)
+            num, den = to_int(whole + frac) * 10 ** max(shift, 0), 10 ** max(-shift, 0)
+            return self.R(sympy.QQ(num, den)), self.R.one
         if kind == "name":
             return self.names[tok], self.R.one
         if tok != "(":
