@@ -88,6 +88,9 @@ def test_keys_are_content_addresses():
 
 BAD = [
     ("", "task: missing"),
+    ('task = "certify"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = 0\n[grid]\n'
+     'eps = {start = "1/100", stop = "1/2", count = 1000001}\n',
+     "grid.eps.count: expected an integer from 1 to 1,000,000, got 1000001"),
     ('task = "fly"\n', "task: unknown task 'fly'"),
     ('task = "certify"\ncolour = 1\n', "colour: unknown key"),
     ('task = "certify"\n', "system: missing table [system]"),

@@ -426,7 +426,7 @@ def _eps_values(value, err) -> list:
         a, b = _rational(value["start"], f"{where}.start", err), _rational(value["stop"], f"{where}.stop", err)
         count = value["count"]
         if isinstance(count, bool) or not isinstance(count, int) or count < 1 or count > 1_000_000:
-            raise err(f"{where}.count", f"expected a positive integer, got {count!r}")
+            raise err(f"{where}.count", f"expected an integer from 1 to 1,000,000, got {count!r}")
         vals = [a] if count == 1 else [a + (b - a) * Fraction(i, count - 1) for i in range(count)]
     else:
         items = value if isinstance(value, list) else [value]
