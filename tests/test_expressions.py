@@ -171,7 +171,8 @@ def test_bad_system_arguments(kw, match):
 
 def test_variables_are_checked():
     for variables, match in ((["x", "x"], "'x' is used twice"), (["x", "eps"], "reserved for the step size"),
-                             (["x", "2y"], "not a valid name"), ([], "non-empty list")):
+                             (["x", "2y"], "not a valid name"), ([], "non-empty list"),
+                             (["x", 5], r"variables\[1\]: expected a name \(a string\), got 5")):
         with pytest.raises(InputError, match=match):
             ExpressionSystem.from_expressions(variables, ["0"] * len(variables))
 

@@ -176,8 +176,11 @@ class ExpressionSystem(System):
             raise InputError(at(f"name: {t['name']!r} must be letters, digits, '.', '_' or '-'"))
         self.name, self.title, self.source = t["name"], t.get("title", ""), t.get("source", "")
         variables = t["variables"]
-        if not isinstance(variables, (list, tuple)) or not variables or not all(isinstance(v, str) for v in variables):
+        if not isinstance(variables, (list, tuple)) or not variables:
             raise InputError(at("variables: expected a non-empty list of names"))
+        for i, v in enumerate(variables):
+            if not isinstance(v, str):
+                raise InputError(at(f"variables[{i}]: expected a name (a string), got {v!r}"))
         for v in variables:
             if not _NAME.match(v) or v == EPS or variables.count(v) > 1:
                 raise InputError(at(f"variables: {v!r} is " + ("used twice" if variables.count(v) > 1 else
