@@ -28,6 +28,9 @@ from exact_khk.errors import InputError
 
 #: version of the certificate JSON (``Certificate.to_json``)
 SCHEMA_VERSION = 2
+#: the widest check name that sets the width of :meth:`Certificate.table`'s first column;
+#: a longer name (at large n the rank check lists dozens of integrals) gets a line of its own
+TABLE_NAME_WIDTH = 64
 
 
 @dataclass(frozen=True)
@@ -161,14 +164,18 @@ class Certificate:
 
     def table(self) -> str:
         """A readable table: check, expected, holds, abbreviated residual, time; the claim below."""
-        w = max(len(c.name) for c in self.checks)
+        w = min(max(len(c.name) for c in self.checks), TABLE_NAME_WIDTH)
         kinds = [c.evidence for c in self.checks]
         common = max(set(kinds), key=kinds.count)
         lines = [f"{'check':<{w}}  {'expect':<6}  {'holds':<9}  {'residual':<24}  {'time':>7}"]
         for c in self.checks:
             holds = {True: "true", False: "false", None: "undecided"}[c.holds]
             mark = "" if c.status == "ok" else f"  <-- {c.status}"
-            lines.append(f"{c.name:<{w}}  {str(c.expected).lower():<6}  {holds:<9}  "
+            name = c.name
+            if len(name) > w:  # a long name (e.g. the rank check listing every integral at large n)
+                lines.append(name)  # on a line of its own, so that it does not widen every row
+                name = ""
+            lines.append(f"{name:<{w}}  {str(c.expected).lower():<6}  {holds:<9}  "
                          f"{abbreviate(c.residual):<24}  {c.seconds:>6.3f}s{mark}")
             lines.append(f"    {c.claim}" + (f" [{c.detail}]" if c.detail else "")
                          + (f" (evidence: {c.evidence})" if c.evidence != common else ""))
