@@ -176,11 +176,18 @@ def test_validity_needs_controls_to_fail(default_cert):
     inapplicable = dataclasses.replace(default_cert, checks=tuple(
         checks[:i] + [dataclasses.replace(checks[i], holds=True, applicable=False)] + checks[i + 1:]))
     assert inapplicable.valid and "1 inapplicable" in inapplicable.verdict()
+    # no applicable control at all (an equilibrium): nothing shows the checks can fail there
+    idle = dataclasses.replace(default_cert, checks=tuple(
+        k if k.expected else dataclasses.replace(k, holds=True, applicable=False) for k in checks))
+    assert not idle.valid and idle.status == "INCONCLUSIVE"
+    assert idle.verdict().startswith("INCONCLUSIVE: all 31 claims hold, but no negative control can fail at "
+                                     "this point (4 inapplicable)")
     with pytest.raises(AssertionError, match="INCONCLUSIVE"):
         assert_certificate_valid(broken)
     with pytest.raises(AssertionError, match="INVALID"):
         assert_certificate_valid(false_claim)
-    assert not dataclasses.replace(default_cert, checks=()).valid
+    empty = dataclasses.replace(default_cert, checks=())
+    assert not empty.valid and empty.verdict().startswith("INCONCLUSIVE: the certificate has no checks")
 
 
 def test_certificate_json_schema(default_cert):

@@ -82,6 +82,17 @@ def test_equilibrium_makes_controls_inapplicable_not_failed():
     assert all(c.holds for c in cert.checks if c.expected)
 
 
+def test_no_applicable_control_is_inconclusive_not_valid():
+    """A field with nothing declared, at its equilibrium 0: reversibility and the Jacobian
+    hold, and neither control can fail there (Φ(x) = x, f'(Φ(x)) = f'(x)); nothing shows
+    that the checks can fail."""
+    field_only = ExpressionSystem.from_expressions(["x", "y"], ["x*y", "x - y**2"])
+    cert = certify(field_only, x0=["0", "0"], steps=3)
+    assert [c.holds for c in cert.checks if c.expected] == [True, True]
+    assert [c.applicable for c in cert.checks if not c.expected] == [False, False]
+    assert cert.status == "INCONCLUSIVE" and "no negative control can fail at this point" in cert.verdict()
+
+
 def _expressions(field, names):
     """The components of a QuadraticField as expression strings (for a system file)."""
     return {names[i]: " + ".join(f"({c})*{names[j]}*{names[k]}" for (j, k), c in terms) or "0"

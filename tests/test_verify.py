@@ -211,6 +211,13 @@ LP_MUTATIONS = {
     "system a": (_set(["system", "a", 0], lambda t: "2"), "Kahan step equations"),
     "steps": (_set(["steps"], lambda k: k + 1), "orbit length"),
     "signs": (_set(["signs"], lambda s: ["+--"]), "integrals recorded"),
+    # cut short: the claims only (no control left, so it cannot be VALID), or with one control
+    # (still VALID, but the verdict's counts are those of the whole certificate)
+    "checks cut to the claims": (lambda d: d.update(checks=[c for c in d["checks"] if c["expected"]][:3]),
+                                 "status"),
+    "checks cut to 3 claims and a control": (
+        lambda d: d.update(checks=[c for c in d["checks"] if c["expected"]][:3]
+                           + [c for c in d["checks"] if not c["expected"]][:1]), "verdict"),
 }
 
 

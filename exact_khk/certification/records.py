@@ -11,11 +11,13 @@ certificate fail.
 
 The verdict of a certificate:
 
-* ``VALID`` — every claim holds and every applicable control fails;
+* ``VALID`` — every claim holds, every applicable control fails, and at least
+  one control is applicable;
 * ``INVALID`` — some claim is decided false (the only verdict that says a
   statement about the system is wrong);
 * ``INCONCLUSIVE`` — no claim is false, but a check is undecided, or a control
-  did not fail (the check did not show that it can fail at this point).
+  did not fail (the check did not show that it can fail at this point), or no
+  control is applicable at all (e.g. at an equilibrium).
 """
 
 from __future__ import annotations
@@ -116,8 +118,10 @@ class Certificate:
 
     @property
     def valid(self) -> bool:
-        """True iff every claim holds and every applicable control fails."""
-        return bool(self.checks) and all(c.passed for c in self.checks)
+        """True iff every claim holds, every applicable control fails, and at least one
+        control is applicable (otherwise nothing shows that the checks can fail here)."""
+        return (bool(self.checks) and all(c.passed for c in self.checks)
+                and any(not c.expected and c.applicable for c in self.checks))
 
     @property
     def status(self) -> str:
@@ -152,6 +156,11 @@ class Certificate:
             bad = [c.name for c in self.checks if c.wrong]
             return f"INVALID: {len(bad)} claim(s) are false: {'; '.join(bad)} ({where})"
         open_ = [c.name for c in self.checks if not c.passed]
+        if not self.checks:
+            return f"INCONCLUSIVE: the certificate has no checks ({where})"
+        if not open_:
+            return (f"INCONCLUSIVE: all {len(claims)} claims hold, but no negative control can fail at this "
+                    f"point ({len(idle)} inapplicable), so nothing shows that the checks can fail here ({where})")
         return (f"INCONCLUSIVE: no claim is false, but {len(open_)} check(s) are undecided or did not fail, "
                 f"e.g. {open_[0]!r} ({where})")
 

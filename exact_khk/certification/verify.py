@@ -37,9 +37,11 @@ The named results, in order:
 * ``H~ closed form = definition`` (Lie–Poisson) — H~(x_k) = (2ε)⁻¹ x_kᵀ J(m)⁻¹ x_{k+1},
   m = (x_k + x_{k+1})/2, along the recorded orbit, where J(m) is invertible;
 * ``status`` — the status recomputed from the checks' ``expected``, ``holds`` and
-  ``applicable`` fields (VALID iff every claim holds and every applicable control
-  fails; INVALID iff a claim is false; else INCONCLUSIVE) is the recorded one,
-  and so is ``valid``; ``verdict`` — the verdict line starts with that status.
+  ``applicable`` fields (VALID iff every claim holds, every applicable control
+  fails and some control is applicable; INVALID iff a claim is false; else
+  INCONCLUSIVE) is the recorded one, and so is ``valid``; ``verdict`` — the
+  verdict line starts with that status and, for VALID and INVALID, with the
+  counts of the recorded checks (claims and applicable controls; false claims).
 
 ``ok`` is True iff every result holds.  The other checks of a certificate
 (commutation, Poisson structure, ranks, controls) are not recomputed: they are
@@ -975,18 +977,26 @@ def _status_results(data) -> list:
     passed = [(not c.get("applicable", True)) or (c["holds"] is not None and c["holds"] == c["expected"])
               for c in checks]
     wrong = [c["expected"] and c["holds"] is False for c in checks]
-    valid = bool(checks) and all(passed)
+    controls = sum(1 for c in checks if not c["expected"] and c.get("applicable", True))
+    valid = bool(checks) and all(passed) and controls > 0
     status = "VALID" if valid else "INVALID" if any(wrong) else "INCONCLUSIVE"
     out = []
     if data["status"] != status or data["valid"] != valid:
         bad = next((c["name"] for c, p in zip(checks, passed) if not p), None)
-        why = f" (check {bad!r} is {'wrong' if bad and wrong[passed.index(False)] else 'not passed'})" if bad else ""
+        why = (f" (check {bad!r} is {'wrong' if wrong[passed.index(False)] else 'not passed'})" if bad else
+               " (no negative control is applicable)" if checks and not controls else "")
         out.append(("status", False, f"recorded status {str(data['status'])[:20]!r} (valid = "
                     f"{str(data['valid']).lower()}), but the checks give {status}{why}"))
     else:
         out.append(("status", True, f"recomputed {status} from {len(checks)} checks, as recorded"))
-    if data["verdict"].startswith(f"{status}:"):
-        out.append(("verdict", True, f"the verdict line states {status}"))
+    # the verdict line's status, and for VALID / INVALID its counts (a certificate cut short keeps
+    # the verdict of the whole one)
+    claims = sum(1 for c in checks if c["expected"])
+    head = {"VALID": f"VALID: all {claims} claims hold and all {controls} negative controls fail",
+            "INVALID": f"INVALID: {sum(wrong)} claim(s) are false"}.get(status, f"{status}:")
+    if data["verdict"].startswith(head):
+        out.append(("verdict", True, f"the verdict line states {status}"
+                    + (f" with the counts of the {len(checks)} checks" if status != "INCONCLUSIVE" else "")))
     else:
-        out.append(("verdict", False, f"the verdict line {data['verdict'][:60]!r} does not state {status}"))
+        out.append(("verdict", False, f"the verdict line {data['verdict'][:60]!r} does not state {head!r}"))
     return out

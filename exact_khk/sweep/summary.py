@@ -37,6 +37,9 @@ from exact_khk.sweep.tasks import FAILED, TASKS, VERDICTS
 AXIS_ORDER = ("n", "system", "eps", "steps", "arith", "seed", "point")
 #: axes that are replicates (never the second axis of a grid or plot)
 REPLICATES = ("seed", "point")
+#: axes whose values are ordered quantities: their figures are drawn as lines (on the
+#: others — systems, arithmetics, points, seeds — as unconnected markers)
+ORDERED_AXES = ("n", "eps", "steps")
 #: largest number of distinct values of an axis that gets a table
 MAX_LEVELS = 40
 #: numeric figures shown in the printed tables (all are in the JSON and CSV)
@@ -332,7 +335,8 @@ def plot_summary(s: Summary, out_dir) -> list:
             ax.plot(pos[r["axes"].get(first)] + jitter, r["seconds"], ".", ms=3, alpha=0.5,
                     color=COLORS.get(r["verdict"], "#888888"))
         med = [s.by_axis[first][i]["seconds_median"] for i in range(len(levels))]
-        ax.plot([i for i, m in enumerate(med) if m], [m for m in med if m], "k-", lw=1.2, label="median")
+        ax.plot([i for i, m in enumerate(med) if m], [m for m in med if m], "k-" if first in ORDERED_AXES else "k_",
+                ms=12, lw=1.2, label="median")
         secs = [r["seconds"] for r in timed]
         if max(secs) / min(secs) > 20:
             ax.set_yscale("log")
@@ -361,7 +365,8 @@ def plot_summary(s: Summary, out_dir) -> list:
                         xs.append(pos[lv])
                         ys.append(statistics.fmean(vals))
                 if xs:
-                    ax.plot(xs, ys, "o-", ms=3, lw=1, label=None if sv is None else f"{second}={sv}")
+                    ax.plot(xs, ys, "o-" if first in ORDERED_AXES else "o", ms=3, lw=1,
+                            label=None if sv is None else f"{second}={sv}")
             ax.set_title(f, fontsize=9)
             ax.set_xticks(range(len(levels)), [str(v) for v in levels], fontsize=7,
                           rotation=45 if len(levels) > 8 else 0)
