@@ -150,6 +150,9 @@ def test_malformed_spec_on_the_command_line(capsys, tmp_path):
     assert code == 2 and "no such sweep spec file" in err
     code, _, err = run(capsys, "sweep", EXAMPLE, "--out", tmp_path / "out", "--workers", "-1")
     assert code == 2 and "--workers" in err
+    # a typo such as 100000 would start a process per task: refused before anything runs
+    code, _, err = run(capsys, "sweep", EXAMPLE, "--out", tmp_path / "out", "--workers", "100000")
+    assert code == 2 and "--workers: 100000 is more than 4 per core" in err and not (tmp_path / "out").exists()
     (tmp_path / "file").write_text("")
     code, _, err = run(capsys, "sweep", EXAMPLE, "--out", tmp_path / "file", "--workers", "0")
     assert code == 5 and "not a folder" in err

@@ -66,6 +66,25 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: the most local worker processes per core (``--workers``, also for ``--dask local``): every
+#: worker is a process running CPU-bound tasks, so more only costs memory and switching
+MAX_WORKERS_PER_CORE = 4
+
+
+def checked_workers(workers):
+    """``workers`` (None: the default) if it is a sensible number of local worker processes,
+    else :class:`InputError` (a typo such as 10000 would start a process per task)."""
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
+        raise InputError(f"--workers: expected a non-negative integer, got {workers!r}")
+    cap = MAX_WORKERS_PER_CORE * default_workers()
+    if workers > cap:
+        raise InputError(f"--workers: {workers} is more than {MAX_WORKERS_PER_CORE} per core of this machine "
+                         f"({default_workers()} cores: at most {cap}); every worker is a process")
+    return workers
+
+
 def default_grace(timeout) -> float:
     """Seconds past the time limit before a task is stopped from outside."""
     return max(5.0, 0.25 * timeout) if timeout else 0.0
@@ -535,6 +554,7 @@ class _Progress:
 
 def make_engine(workers=None, dask=None, client=None):
     """The engine for ``--workers`` / ``--dask`` (``workers = 0``: inline)."""
+    workers = checked_workers(workers)
     if client is not None or dask is not None:
         return DaskEngine(dask, workers, client=client)
     if workers == 0:
