@@ -49,10 +49,9 @@ def register(sub):
 
 
 def cmd_sweep(args):
-    from exact_khk.sweep.run import ResultStore, checked_workers, parse_only, run_sweep, select
+    from exact_khk.sweep.run import ResultStore, parse_only, run_sweep, select
     from exact_khk.sweep.spec import load_spec
 
-    checked_workers(args.workers)
     if args.timeout is not None and not args.timeout >= 0:
         raise InputError(f"--timeout: expected a non-negative number of seconds, got {args.timeout}")
     if args.dask is not None and args.dask != "local" and args.workers is not None:

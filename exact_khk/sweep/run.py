@@ -78,10 +78,10 @@ def checked_workers(workers):
         return None
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
         raise InputError(f"--workers: expected a non-negative integer, got {workers!r}")
-    cap = MAX_WORKERS_PER_CORE * default_workers()
-    if workers > cap:
+    cores = default_workers()
+    if workers > MAX_WORKERS_PER_CORE * cores:
         raise InputError(f"--workers: {workers} is more than {MAX_WORKERS_PER_CORE} per core of this machine "
-                         f"({default_workers()} cores: at most {cap}); every worker is a process")
+                         f"({cores} cores: at most {MAX_WORKERS_PER_CORE * cores}); every worker is a process")
     return workers
 
 
@@ -578,6 +578,7 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
     say = echo or (lambda line: None)
     timeout = spec.timeout if timeout == "spec" else (timeout or None)
     only = parse_only(only, spec.task) if isinstance(only, str) else only
+    workers = checked_workers(workers)  # refused before the output folder exists
     out = prepare_folder(out_dir)
     check_writable(out / RESULTS, "--out")
     tasks = spec.tasks()
