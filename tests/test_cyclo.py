@@ -275,3 +275,23 @@ def test_liouville_reports_progress_in_solves():
     seen.clear()
     liouville_at_points(system, DEFAULT_X0, "1/10", "cyclo:3", steps=1, progress=seen.append)
     assert seen == sorted(set(seen)) and seen[-1] == 2 * solves  # two orbit points, the same solves each
+
+
+@pytest.mark.parametrize("n", range(2, 13))
+def test_expresses_omega_is_whether_every_entry_of_an_involution_converts(n):
+    """The one-conversion probe (ζ_n) agrees with converting every entry of the involution
+    with s_1 = −1 alone (the definition), over rational, cyclotomic and finite-field arithmetics."""
+    from exact_khk.systems.lie_poisson.system import expresses_omega
+
+    probe = "+-" + "+" * (n - 2)
+    entries = involution_circulant_cyclotomic(n, probe)
+    for name in ("flint", "fraction", f"cyclo:{n}", f"cyclo:{2 * n}", f"cyclo:{n + 1}", "gf:13", "gf:101",
+                 "gf:1009", "gf:2521"):
+        ar = get_arith(name)
+        try:
+            for t in entries:
+                ar.convert(t)
+            every = True
+        except (TypeError, ValueError, ArithmeticError):
+            every = False
+        assert expresses_omega(ar, n) is every, (n, name)

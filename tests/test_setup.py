@@ -87,3 +87,26 @@ def test_cli_refuses_the_exact_step_at_n_20000(capsys):
     assert main(["orbit", "--n", "20000", "--seed", "1", "--steps", "1"]) == 2
     err = capsys.readouterr().err
     assert "EXACT_KHK_MAX_MEMORY" in err and "structured step" in err and err.count("\n") == 1
+
+
+def test_cli_integrals_refuses_the_exact_solve_at_large_n(capsys):
+    """With no steps, `integrals` still divides once per integral at x0 (about a step from
+    it): at n = 19 999 that is tens of GB, refused up front (it was killed for memory after
+    minutes) and without the orbit command's --method hint, which `integrals` lacks."""
+    assert main(["integrals", "--n", "19999", "--seed", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "EXACT_KHK_MAX_MEMORY" in err and "structured solve" in err and err.count("\n") == 1
+    assert "--method" not in err
+
+
+def test_cli_integrals_counts_the_default_involutions_without_building_them(capsys, monkeypatch):
+    """n = 5 000 has 2^20 − 2 rational involutions: refused at once.  The probe for ζ_n used
+    to build an n×n-term involution in Q(ζ_n) first (minutes); here building one fails the test."""
+    from exact_khk.systems.lie_poisson import system as lp
+
+    def forbidden(*args):
+        raise AssertionError("an involution in Q(ζ_n) was built")
+
+    monkeypatch.setattr(lp, "involution_circulant_cyclotomic", forbidden)
+    assert main(["integrals", "--n", "5000", "--seed", "1"]) == 2
+    assert "MAX_DEFAULT_SIGNS" in capsys.readouterr().err

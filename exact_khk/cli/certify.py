@@ -141,12 +141,17 @@ def cmd_integrals(args):
     # H~ takes the structured solve for exact flint arithmetic and n >= 3, else the dense one
     structured_htilde = ar.rational and ar.integers is not None and ar.integers.name == "flint" and system.n >= 3
     check_resources("integrals", system, phi, x0, args.steps,
-                    dense=not structured_htilde or (phi.structure is None and not phi.split))
+                    dense=not structured_htilde or (phi.structure is None and not phi.split), final_solve=True)
     signs = _signs(args, system.n, ar)
     with Progress(args, args.steps, "orbit") as progress:
         x = phi.orbit(x0, args.steps, progress=progress)[-1]
-    H = ar.format(Htilde(system.field("f"), x, eps, ar))
-    K = {s: ar.format(Htilde(system.field("g", s, cyclotomic=True), x, eps, ar)) for s in signs}
+    K = {}
+    with Progress(args, 1 + len(signs), "integrals", unit="integral") as progress:
+        H = ar.format(Htilde(system.field("f"), x, eps, ar))
+        for k, s in enumerate(signs, 1):
+            progress(k)
+            K[s] = ar.format(Htilde(system.field("g", s, cyclotomic=True), x, eps, ar))
+        progress(1 + len(signs))
     return _show_integrals(args, system, x, eps, ar, {"Htilde": H, "Ktilde": K},
                            {"H~": H} | {f"K~[{s}]": v for s, v in K.items()})
 

@@ -317,12 +317,15 @@ def _growth(phi, x0, steps, ar):
     return h0, int(n * (2 * math.log2(n) + GROWTH_BITS_PER_N)) + 2 * h0
 
 
-def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_point=1, cube_numbers=0):
+def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_point=1, cube_numbers=0,
+                    final_solve=False):
     """Refuse at once (:class:`InputError`, with the estimate and the limit) a run whose
     planned memory is beyond :func:`max_memory`: the dense 2n×2n path (``dense``),
     ``cube_numbers``·(2n)³ further numbers (the certificate's exact gradients and
-    Jacobi sums), and ``orbits`` stored orbits of ``steps`` + 1 points with
-    ``per_point`` numbers each (2n for an orbit)."""
+    Jacobi sums), ``orbits`` stored orbits of ``steps`` + 1 points with
+    ``per_point`` numbers each (2n for an orbit), and on the structured path the last
+    exact division: the last step's, or with ``final_solve`` one more at the orbit's
+    last point (H̃ and K̃ there cost about a step from it)."""
     check_steps(steps)
     ar, N, limit = phi.arith, system.dim, max_memory()
     n = N // 2
@@ -336,15 +339,18 @@ def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_poi
                              f"{human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x (2n)^3"
                              + (f" + {cube_numbers} x (2n)^3 numbers" if cube_numbers else "")
                              + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY){hint}")
-    h0, g = _growth(phi, x0, steps, ar)
-    if phi.structure is not None and ar.exact and steps:  # the last structured step's division
-        step = STRUCTURED_STEP_BYTES_PER_BIT * n * (h0 + g * steps + 2 * (h0 + g * (steps - 1)))
+    solves = steps + 1 if final_solve else steps
+    h0, g = _growth(phi, x0, solves, ar)
+    if phi.structure is not None and ar.exact and solves:  # the last structured division
+        step = STRUCTURED_STEP_BYTES_PER_BIT * n * (h0 + g * solves + 2 * (h0 + g * (solves - 1)))
         if step > limit:
-            raise InputError(f"--n: one exact structured step at n = {n} needs about {human_bytes(step)} of "
-                             f"working memory (estimate: {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (the step's output "
-                             f"height + twice its input height), heights growing from {h0} by about {g} bits per step), beyond the limit of "
+            kind = "step" if solves == steps else "solve (H~ or K~ at a point, like a step from it)"
+            raise InputError(f"--n: one exact structured {kind} at n = {n} needs about {human_bytes(step)} of "
+                             f"working memory (estimate: {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (the output's "
+                             f"height + twice the input's), heights growing from {h0} by about {g} bits per step), beyond the limit of "
                              f"{human_bytes(limit)} (EXACT_KHK_MAX_MEMORY); exact heights grow like n log n bits "
-                             f"per step: use --arith float or mp:P with --method structured for large n")
+                             f"per step" + (": use --arith float or mp:P with --method structured for large n"
+                                            if what == "orbit" else ""))
     mean_bits = h0 + g * steps / 2
     need = orbits * (steps + 1) * N * per_point * _number_bytes(ar, mean_bits)
     if need > limit:
