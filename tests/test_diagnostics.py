@@ -322,3 +322,19 @@ def test_degree_sequence_reports_progress_in_steps():
     res = degree_sequence(LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1"), steps=30, primes=1,
                           max_degree=40, progress=seen.append)
     assert len(res.degrees) < 31 and seen[-1] == 30 and seen == sorted(set(seen))
+
+
+def test_conjugate_pencils_beyond_the_size_limit_are_named_not_expanded(monkeypatch):
+    """The symmetric functions of e conjugate pencils have up to C(N + e·D, N) terms (n = 10:
+    3.1 million, and the expansion grew past 17 GB): beyond MAX_SYMMETRIC_TERMS they are
+    skipped with a note.  n = 3, seed 1 has one conjugate pair (e = 2, bound C(6 + 4, 6) = 210):
+    with the limit at 209 its two symmetric functions are skipped, with the default they are found."""
+    from exact_khk.diagnostics import pencils
+
+    s = LiePoissonSystem.random(3, 1)
+    full = find_integrals(s, degree=2)
+    assert len(full.integrals) == 3 and not any("MAX_SYMMETRIC_TERMS" in t for t in full.notes)
+    monkeypatch.setattr(pencils, "MAX_SYMMETRIC_TERMS", 209)
+    cut = find_integrals(s, degree=2)
+    assert len(cut.integrals) == 1 and all(f.verified for f in cut.integrals)
+    assert any("up to 210 terms, beyond the limit of 209 (MAX_SYMMETRIC_TERMS)" in t for t in cut.notes)

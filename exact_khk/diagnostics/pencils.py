@@ -32,6 +32,11 @@ from fractions import Fraction
 import flint
 
 MAX_FIELD_DEGREE = 6
+#: the symmetric functions of e conjugate pencils are not expanded when a polynomial of degree
+#: e·D in N variables may have more terms than this (C(N + e·D, N); the Laplace expansion holds
+#: many polynomials of that size: n = 8, D = 2, e = 4 has 735 471 terms: 3.5 min, 4.7 GB; n = 10 grew
+#: past 17 GB and was stopped)
+MAX_SYMMETRIC_TERMS = 200_000
 
 
 def _q(x):
@@ -128,6 +133,13 @@ def pencil_integrals(K, exps, notes):
             notes.append(f"{e} pencils are conjugate over a number field of degree {e} > {MAX_FIELD_DEGREE}: "
                          f"not extracted")
             continue
+        terms = symmetric_terms_bound(e, exps)
+        if e > 1 and terms > MAX_SYMMETRIC_TERMS:
+            notes.append(f"{e} pencils are conjugate over a number field of degree {e}: their symmetric "
+                         f"functions (degree {e * max(map(sum, exps))} in {len(exps[0])} variables) may have up to "
+                         f"{terms:,} terms, beyond the limit of {MAX_SYMMETRIC_TERMS:,} (MAX_SYMMETRIC_TERMS): "
+                         f"not extracted")
+            continue
         f = f / f.coeffs()[-1]
         alpha = _eigenvector(S, f)      # entries: fmpq_poly in y, reduced mod f
         P = _combine(alpha, B1, f)      # per monomial: fmpq_poly in y
@@ -140,6 +152,19 @@ def pencil_integrals(K, exps, notes):
                          f"symmetric functions of their integrals are given (degree {e} in the pencil polynomials)")
             out += _symmetric(*_echelon_pair(P, Q, f), f, exps)
     return out
+
+
+def symmetric_terms_bound(e, exps) -> int:
+    """An upper bound on the terms of each symmetric function of e conjugate pencils whose
+    polynomials have the monomials ``exps``: they have degree ≤ e·D (D the largest degree
+    in ``exps``) in N variables, so at most C(N + e·D, N) terms.
+
+    >>> symmetric_terms_bound(4, [(0, 0), (1, 0), (0, 2)])  # C(2 + 8, 2)
+    45
+    """
+    from math import comb
+
+    return comb(len(exps[0]) + e * max(map(sum, exps)), len(exps[0]))
 
 
 def _mod(a, f):
