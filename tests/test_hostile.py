@@ -556,6 +556,35 @@ def test_progress_only_on_a_terminal(monkeypatch):
     assert shows_progress(argparse.Namespace(quiet=True)) is False
 
 
+def test_progress_bar_shows_while_one_long_step_reports_nothing(monkeypatch):
+    """A run whose first step takes minutes (degrees at n = 30, liouville at n = 12 building
+    its maps) reported nothing, so tqdm never drew the bar: a thread now redraws it after
+    DELAY and every TICK, and stops with the bar."""
+    import argparse
+    import io
+    import time
+
+    from exact_khk.cli.options import Progress
+
+    class Tty(io.StringIO):
+        def isatty(self):
+            return True
+
+    err = Tty()
+    monkeypatch.setattr(sys, "stderr", err)
+    monkeypatch.setattr(Progress, "DELAY", 0.05)
+    monkeypatch.setattr(Progress, "TICK", 0.05)
+    with Progress(argparse.Namespace(quiet=False), 10, "slowstage") as progress:
+        monkeypatch.setattr(progress.bar, "delay", 0.05)
+        deadline = time.monotonic() + 30
+        while "slowstage" not in err.getvalue() and time.monotonic() < deadline:
+            time.sleep(0.02)  # no update: only the thread can draw the bar
+        assert "slowstage" in err.getvalue() and "0/10" in err.getvalue()
+    size = len(err.getvalue())
+    time.sleep(0.2)
+    assert len(err.getvalue()) == size  # the thread stopped with the bar
+
+
 def test_real_vectors_of_unknown_length_are_limited_per_coordinate():
     """A real vector read without a known dimension (``enclose --a`` without ``--n``)
     is limited per coordinate, like one of known dimension: 300 entries ``sqrt(2)``

@@ -106,7 +106,8 @@ def cmd_find_integrals(args):
     else:
         kw["degree"] = 2 if args.degree is None else args.degree
     try:
-        res = find_integrals(system, **kw)
+        with Progress(args, None, "find-integrals", unit="stage") as progress:
+            res = find_integrals(system, **kw, progress=progress)
     except InputError as exc:
         msg = str(exc)
         for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0"):

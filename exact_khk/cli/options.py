@@ -374,15 +374,32 @@ def shows_progress(args) -> bool:
 class Progress:
     """A progress display on stderr for long runs: a tqdm bar shown after 2 s, only
     when stderr is a terminal and ``--quiet`` is not given.  Call it with a step
-    number (``k``, of ``total``) or a stage name."""
+    number (``k``, of ``total``) or a stage name.  A daemon thread redraws the bar
+    every second from then on, so a run whose first step (or any one step) takes
+    minutes shows the bar and its elapsed time instead of nothing."""
+
+    #: seconds before the bar appears, and between redraws while nothing is reported
+    DELAY, TICK = 2.0, 1.0
 
     def __init__(self, args, total=None, desc="", unit="step"):
-        self.bar = None
+        self.bar, self._stop = None, None
         if shows_progress(args):
+            import threading
+
             from tqdm import tqdm
 
-            self.bar = tqdm(total=total, desc=desc, unit=unit, delay=2.0, file=sys.stderr, leave=False,
+            self.bar = tqdm(total=total, desc=desc, unit=unit, delay=self.DELAY, file=sys.stderr, leave=False,
                             dynamic_ncols=True)
+            self._stop = threading.Event()
+            threading.Thread(target=self._tick, daemon=True).start()
+
+    def _tick(self):
+        if self._stop.wait(self.DELAY):
+            return
+        while True:
+            self.bar.refresh()
+            if self._stop.wait(self.TICK):
+                return
 
     def __call__(self, where):
         if self.bar is None:
@@ -398,6 +415,7 @@ class Progress:
 
     def __exit__(self, *exc):
         if self.bar is not None:
+            self._stop.set()
             self.bar.close()
         return False
 

@@ -203,7 +203,7 @@ class IntegralSearch:
 
 def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None, homogeneous=False,
                    orbits=3, steps=None, margin=None, primes=None, seed=0, x0=None, verify_steps=6,
-                   max_primes=16):
+                   max_primes=16, progress=None):
     """Search conserved rational functions of the Kahan map whose numerator and
     denominator lie in the span of the candidates (module docstring).
 
@@ -212,8 +212,10 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     least 2; 4 are used for pencils) plus ``x0`` if given, of ``steps`` steps
     (default: candidates + 2·margin); ``primes`` a list, or a count of random
     primes to start with (default 2; more are drawn, up to ``max_primes``, until
-    the rational lift is confirmed by a prime it was not computed from)."""
+    the rational lift is confirmed by a prime it was not computed from); ``progress(stage)``
+    is called with the name of each stage as it starts."""
     t0 = time.perf_counter()
+    stage = progress or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim
@@ -249,10 +251,19 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         job.warnings.append(f"orbit too short: {steps + 1} points for {m} candidates (+ margin {margin}); "
                             f"the kernel has dimension >= {m - steps - 1} for that reason alone")
     p0 = plist[0]
-    ks = [k for k in (job.kernel(x, p0) for x in starts) if k is not None]
+
+    def kernel(x):
+        stage(f"orbit kernel {len(ks) + 1} mod p ({m} candidates)")
+        return job.kernel(x, p0)
+
+    ks = []
+    for x in starts:
+        k = kernel(x)
+        if k is not None:
+            ks.append(k)
     while len([k for k in ks if k.stable and not k.periodic]) < 4 and len(starts) < orbits + 6:
         starts.append(_point(rng, N))  # more orbits (4 are needed for pencils)
-        k = job.kernel(starts[-1], p0)
+        k = kernel(starts[-1])
         if k is not None:
             ks.append(k)
     good = [k for k in ks if k.stable and not k.periodic]
@@ -270,6 +281,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
             job.warnings.append(f"orbit of {_fmt(k.x0)} has a {k.dim}-dimensional kernel > generic {d}: it lies on "
                                 f"a smaller invariant set (not used)")
     generic = [k for k in good if k.dim == d]
+    stage("trivial kernel vectors")
     tdim = trivial_dim(generic[0].basis, exps, p0)
     table = by_degree(generic[0].basis, exps, p0) if degree is not None and not homogeneous else ()
     if table:
@@ -281,7 +293,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         job.notes.append("no polynomial in the span vanishes on the orbits: no integral of this shape")
     elif table and low < degree:
         sub = find_integrals(system, degree=low, field=field, eps=eps, orbits=orbits, primes=plist, seed=seed,
-                             verify_steps=verify_steps, max_primes=max_primes)
+                             verify_steps=verify_steps, max_primes=max_primes, progress=progress)
         integrals, independent, used = sub.integrals, sub.independent, sub.primes
         job.notes += [f"integrals extracted at degree {low}, where the kernel first appears"] + list(sub.notes)
         job.warnings += list(sub.warnings)
@@ -290,7 +302,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
             # polynomial with a monomial of degree ≥ 1: the new integrals separate there
             top = ["1"] + [monomial_text(e, variables) for e in monomials(N, D, True)]
             more = find_integrals(system, monomials_list=top, field=field, eps=eps, orbits=orbits, primes=plist,
-                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes)
+                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes, progress=progress)
             found = [f for f in more.integrals if f.verified]
             integrals += tuple(found)
             job.notes.append(f"{new} new kernel direction(s) at degree {D}: {len(found)} integral(s) extracted from "
@@ -300,6 +312,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     elif tdim:
         job.notes.append("trivial kernel vectors present: integrals not extracted")
     else:
+        stage("lift to Q, extract and check the integrals")
         integrals, used = job.extract(generic, d, w, plist, seed, max_primes, verify_steps)
         independent = independent_count([f.polynomials() for f in integrals if f.verified], rng)
     return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
