@@ -348,3 +348,22 @@ def test_find_integrals_reports_its_stages():
     assert res.integrals
     assert stages[0] == "orbit kernel 1 mod p (28 candidates)" and "trivial kernel vectors" in stages
     assert stages[-1] == "lift to Q, extract and check the integrals"
+
+
+def test_restricted_kernel_is_the_nullspace_combination():
+    """K ∩ span(columns keep) over F_p (one nmod_mat product) equals the combinations
+    Σ_r X[r, k]·basis[r] written out, X the nullspace of the basis on the other columns."""
+    import flint
+
+    from exact_khk.diagnostics.kernels import _restricted
+
+    rng, p = random.Random(5), 1009
+    for d, m in ((3, 5), (4, 9), (7, 12)):
+        basis = [[rng.randrange(p) for _ in range(m)] for _ in range(d)]
+        keep = set(rng.sample(range(m), m - d + 2))  # d − 2 conditions: a nonzero intersection
+        outside = [c for c in range(m) if c not in keep]
+        X, nul = flint.nmod_mat(len(outside), d, [basis[r][c] for c in outside for r in range(d)], p).nullspace()
+        naive = [[sum(int(X[r, k]) * basis[r][c] for r in range(d)) % p for c in range(m)] for k in range(nul)]
+        got = _restricted(basis, keep, p)
+        assert got == naive and len(got) == nul >= 2
+        assert all(v[c] == 0 for v in got for c in outside)

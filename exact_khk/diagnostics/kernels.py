@@ -230,7 +230,13 @@ def _restricted(basis, keep, p):
     if not outside:
         return [list(v) for v in basis]
     X, nul = flint.nmod_mat(len(outside), d, [basis[r][c] for c in outside for r in range(d)], p).nullspace()
-    return [[sum(int(X[r, k]) * basis[r][c] for r in range(d)) % p for c in range(m)] for k in range(nul)]
+    if not nul:
+        return []
+    # the combinations Σ_r X[r, k]·basis[r] as one product over F_p (nul × d times d × m)
+    Y = flint.nmod_mat(nul, d, [X[r, k] for k in range(nul) for r in range(d)], p) \
+        * flint.nmod_mat(d, m, [t for v in basis for t in v], p)
+    flat = [int(t) for t in Y.entries()]
+    return [flat[k * m:(k + 1) * m] for k in range(nul)]
 
 
 def _multiples(vectors, exps, p):
