@@ -36,11 +36,15 @@ def test_kahan_step_over_rational_functions_specialises_to_the_rational_step():
 
 
 def test_n2_proofs():
+    """Each proof is followed by its negative control, which must be disproved."""
     recs = prove_all(S2)
-    assert [r.name for r in recs] == ["proof:conservation", "proof:commutation", "proof:jacobi"]
+    assert [r.name for r in recs] == ["proof:conservation", "proof:conservation:control", "proof:commutation",
+                                      "proof:commutation:control", "proof:jacobi", "proof:jacobi:control"]
     for r in recs:
-        assert r.passed and r.holds is True and r.residual == "0", r
-        assert r.evidence.startswith("symbolic proof: ")
+        control = r.name.endswith(":control")
+        assert r.passed and r.expected is not control and r.holds is not control, r
+        assert (r.residual == "0") is not control
+        assert r.evidence.startswith("symbolic disproof: " if control else "symbolic proof: ")
     assert "Q(x0, x1, x2, x3, eps)" in recs[0].evidence
 
 
@@ -95,7 +99,8 @@ def test_cli_prove(capsys):
     from exact_khk.cli.main import main
 
     assert main(["prove", "--n", "2", "--seed", "1"]) == 0
-    assert capsys.readouterr().out.count("symbolic proof") == 3
+    out = capsys.readouterr().out
+    assert out.count("symbolic proof") == 3 and out.count("symbolic disproof") == 3
 
 
 def test_evidence_doc_examples_run(capsys):
@@ -111,3 +116,14 @@ def test_evidence_doc_examples_run(capsys):
     out = capsys.readouterr().out
     assert out.count("exact in Q(zeta_3) at 4 orbit points") == 8
     assert "control:commutation False" in out and "proof:jacobi True" in out
+
+
+def test_cli_prove_without_options_proves_the_documented_n2_system(capsys):
+    """`exact-khk prove` alone refused (the built-in default has n = 3); it now proves the n = 2
+    system of docs/evidence.md, with the three negative controls disproved."""
+    from exact_khk.cli.main import main
+
+    assert main(["prove"]) == 0
+    out = capsys.readouterr().out
+    assert "a=(1, 2), b=(0, 1), c=(3, 1)" in out and out.count("ok  ") == 6 and "FAIL" not in out
+    assert out.count(":control") == 3 and out.count("holds=False") == 3
