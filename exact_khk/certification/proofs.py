@@ -186,9 +186,9 @@ def _kmap(field, eps, ar):
     return KahanMap(field, eps, ar, method="dense")
 
 
-def _evidence(holds, ring, scope="for this system"):
+def _evidence(holds, ring, scope="for this system", identity="identity"):
     """A proof when the identity holds; a disproof (a nonzero difference) when it does not."""
-    return (f"symbolic proof: identity in {ring} {scope}" if holds
+    return (f"symbolic proof: {identity} in {ring} {scope}" if holds
             else f"symbolic disproof: a nonzero difference in {ring} {scope}")
 
 
@@ -274,7 +274,7 @@ def prove_jacobi(system, symbolic_hessian=False, eps_zero=False, perturb=False):
     tensor = ("J(x)" if eps_zero else "Pi(x)") + (" + eps^2 x0 (E01 - E10)" if perturb else "")
     return Check("proof:jacobi" + (":control" if perturb else ""), f"Jacobi identity of {tensor}, n = {system.n}",
                  not perturb, holds, res, "qmpoly[" + ",".join(names) + "]", time.perf_counter() - t0,
-                 _evidence(holds, f"Q[{', '.join(names)}]", scope).replace("identity", "polynomial identity"))
+                 _evidence(holds, f"Q[{', '.join(names)}]", scope, "polynomial identity"))
 
 
 def prove_all(system):

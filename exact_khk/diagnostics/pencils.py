@@ -162,9 +162,7 @@ def symmetric_terms_bound(e, exps) -> int:
     >>> symmetric_terms_bound(4, [(0, 0), (1, 0), (0, 2)])  # C(2 + 8, 2)
     45
     """
-    from math import comb
-
-    return comb(len(exps[0]) + e * max(map(sum, exps)), len(exps[0]))
+    return math.comb(len(exps[0]) + e * max(map(sum, exps)), len(exps[0]))
 
 
 def _mod(a, f):
