@@ -127,3 +127,13 @@ def test_cli_prove_without_options_proves_the_documented_n2_system(capsys):
     out = capsys.readouterr().out
     assert "a=(1, 2), b=(0, 1), c=(3, 1)" in out and out.count("ok  ") == 6 and "FAIL" not in out
     assert out.count(":control") == 3 and out.count("holds=False") == 3
+
+
+@pytest.mark.parametrize("option", [["--eps", "1/3"], ["--x0", "1,0,0,1"]])
+def test_cli_prove_refuses_a_point_or_step_size(option, capsys):
+    """x and eps are symbols in the proofs: a given --x0 or --eps was silently ignored."""
+    from exact_khk.cli.main import main
+
+    assert main(["prove", "--n", "2", "--seed", "1", *option]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and option[0] + ": prove works with rational functions" in err

@@ -122,7 +122,11 @@ def cmd_prove(args):
     check_output(args.json)
     if args.steps:
         raise InputError("--steps: prove works with rational functions of x and eps, not along an orbit")
-    if all(getattr(args, k, None) is None for k in ("system", "n", "a", "b", "c", "seed", "x0", "eps")):
+    for option in ("x0", "eps"):
+        if getattr(args, option, None) is not None:
+            raise InputError(f"--{option}: prove works with rational functions of x and eps (symbols), "
+                             f"not at a point or step size")
+    if all(getattr(args, k, None) is None for k in ("system", "n", "a", "b", "c", "seed")):
         from exact_khk.systems.lie_poisson.system import LiePoissonSystem
 
         system = LiePoissonSystem.from_vectors(*PROVE_DEFAULT_VECTORS)
