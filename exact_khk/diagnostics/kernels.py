@@ -221,8 +221,10 @@ def _rref_rows(rows, m, p):
     return [[int(R[i, j]) for j in range(m)] for i in range(rank)], rank
 
 
-def _restricted(basis, keep, p):
-    """Basis vectors of K ∩ span(columns ``keep``) over F_p."""
+def _restricted(basis, keep, p, combine=None):
+    """Basis vectors of K ∩ span(columns ``keep``) over F_p: the combinations
+    Σ_r X[r, k]·basis[r] for the nullspace X of the basis on the other columns
+    (``combine(X, nul, basis, p)`` forms them; default one ``nmod_mat`` product)."""
     d, m = len(basis), len(basis[0]) if basis else 0
     outside = [c for c in range(m) if c not in keep]
     if not d:
@@ -230,9 +232,12 @@ def _restricted(basis, keep, p):
     if not outside:
         return [list(v) for v in basis]
     X, nul = flint.nmod_mat(len(outside), d, [basis[r][c] for c in outside for r in range(d)], p).nullspace()
-    if not nul:
-        return []
-    # the combinations Σ_r X[r, k]·basis[r] as one product over F_p (nul × d times d × m)
+    return (combine or _combine)(X, nul, basis, p) if nul else []
+
+
+def _combine(X, nul, basis, p):
+    """The rows Σ_r X[r, k]·basis[r], k < nul, as one product over F_p (nul × d times d × m)."""
+    d, m = len(basis), len(basis[0])
     Y = flint.nmod_mat(nul, d, [X[r, k] for k in range(nul) for r in range(d)], p) \
         * flint.nmod_mat(d, m, [t for v in basis for t in v], p)
     flat = [int(t) for t in Y.entries()]
