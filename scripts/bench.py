@@ -408,7 +408,8 @@ def write(path, info, args, res, elapsed):
     L += ["", "## Where the structured step overtakes the dense and the split one (exact orbits)", "",
           "dense / structured and split / structured time (above 1: structured faster) of 4 steps of "
           "`KahanMap.orbit` from points of the orbit of `random_point(n, 1)`, by the start point's height, "
-          "for n = 7..15 except 8 (`auto` splits at n = 9, 10, 12 at every height; the others are the n where "
+          "for n = 7..15 except 8 (`auto` splits at n = "
+          + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 8) + " at every height; the others are the n where "
           "it switches). The dense map solves output-sensitively "
           "once its answers are known to be small; the timed calls repeat one orbit, so after the warm-up "
           "call it does so from the first step. `auto` (flint) switches to the structured step at "
@@ -435,7 +436,8 @@ def write(path, info, args, res, elapsed):
         if len(pts) >= 2:
             L.append(f"- {k}: fitted log–log exponent {fit_exponent(pts):.2f} (n ≥ 8)")
     L += ["", "The answer itself has 2n coordinates of about 2n·h bits (Cramer), so n² is the size of "
-          "the output; the structured step's fitted exponent is close to that, the dense one's is not.", "",
+          "the output: an exponent near 2 means a step costs about as much as its output is large "
+          "(the dense one is fitted on n = 8..32 only).", "",
           f"## Exact orbit length reachable in {args.budget:g} s (python-flint)", "",
           "| n | method | path | steps | final height (bits) |", "|---|---|---|---|---|"]
     L += [f"| {n} | {m} | {p} | {s} | {h} |" for n, m, p, s, h in reach]
@@ -465,7 +467,8 @@ def main(argv=None):
                                  (("flint", (2, 3, 4, 5, 6, 8, 9, 10, 12)), ("gmpy2", (2, 3, 4, 5, 6, 7, 8, 11, 15))),
                                  (0, 50, 100, 200, 400),
                                  (16, 64, 128, 256, 512), log),
-        "crossover": crossover((7, 11) if quick else (7, 9, 10, 11, 12, 13, 14, 15), (0, 250, 500, 1000, 1500, 2000, 3000),
+        "crossover": crossover((7, 11) if quick else (7, 9, 10, 11, 12, 13, 14, 15),
+                               (0, 250, 500, 1000, 1500, 2000, 3000, 4500, 6000),
                                log),
         "along": structured_along_orbit(32, (0, 24) if quick else (0, 24, 50), log),
         "htilde": htilde_table(((3, 50), (8, 20)) if quick else ((3, 50), (8, 20), (16, 10)), log),

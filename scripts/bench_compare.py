@@ -8,7 +8,7 @@ except in the cases that time them on purpose).  Trees alternate round by
 round (old, new, old, new, …) so that a change of machine load hits both; the
 table keeps each tree's best time and the ratio new/old.
 
-Usage:  python3 scripts/bench_compare.py OLD_TREE [NEW_TREE] [--rounds R] [--out PATH]
+Usage:  python3 scripts/bench_compare.py OLD_TREE [NEW_TREE] [--rounds R] [--only TEXT] [--out PATH]
 (OLD_TREE e.g. a ``git worktree`` of the previous commit).  No timing is
 asserted anywhere; this only measures.
 """
@@ -48,6 +48,7 @@ def orbit_case(n, arith, steps, method="auto"):
 CASES = [
     *[(f"exact orbit step, flint auto, n = {n} ({k} steps)", f"print(orbit_case({n}, 'flint', {k}))")
       for n, k in ((2, 60), (3, 40), (4, 30), (6, 20), (8, 16), (12, 10), (16, 6), (32, 4))],
+    *[(f"exact orbit step, flint auto, n = 9 ({k} steps)", f"print(orbit_case(9, 'flint', {k}))") for k in (20, 200)],
     *[(f"exact orbit step, gmpy2 auto, n = {n}", f"print(orbit_case({n}, 'gmpy2', 16))") for n in (3, 8)],
     ("exact orbit step, flint dense, n = 5", "print(orbit_case(5, 'flint', 16, 'dense'))"),
     *[(f"float orbit step (dense), n = {n}", f"print(orbit_case({n}, 'float', 50))") for n in (3, 8)],
@@ -82,11 +83,15 @@ def main():
     ap.add_argument("old", type=Path)
     ap.add_argument("new", type=Path, nargs="?", default=Path(__file__).resolve().parent.parent)
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--only", help="only the cases whose name contains this text")
     ap.add_argument("--out", type=Path, help="write the markdown table here")
     args = ap.parse_args()
+    cases = [c for c in CASES if args.only is None or args.only in c[0]]
+    if not cases:
+        ap.error(f"no case's name contains {args.only!r}")
     best = {tree: {} for tree in ("old", "new")}
     for r in range(args.rounds):
-        for name, snippet in CASES:
+        for name, snippet in cases:
             for tree in ("old", "new"):
                 t = run_case(getattr(args, tree), snippet)
                 best[tree][name] = min(t, best[tree].get(name, t))
@@ -95,7 +100,7 @@ def main():
     lines = [f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
              f"{platform.python_version()}; best of 5 repetitions × {args.rounds} alternating rounds.", "",
              "| case | before | after | after / before |", "|---|---|---|---|"]
-    for name, _ in CASES:
+    for name, _ in cases:
         o, n = best["old"][name], best["new"][name]
         lines.append(f"| {name} | {fmt(o)} | {fmt(n)} | {n / o:.2f} |")
     text = "\n".join(lines) + "\n"

@@ -213,12 +213,15 @@ def test_auto_choice_and_fallbacks():
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
 
 
-@pytest.mark.parametrize("n, low, switch", [(11, "dense", STRUCTURED_MIN_BITS), (15, "split", AUTO_SPLIT_BELOW[15])])
-def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch):
-    """Where ``auto`` does not split at every height (flint, n = 7, 11, 13, 14, 15), it
-    steps dense (n = 11, 13) or split (n = 7, 14, 15) from low points and structured from
-    points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly."""
-    steps = 8  # heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …
+@pytest.mark.parametrize("n, low, switch, steps", [(11, "dense", STRUCTURED_MIN_BITS, 8),
+                                                   (15, "split", AUTO_SPLIT_BELOW[15], 8),
+                                                   (9, "split", AUTO_SPLIT_BELOW[9], 40)])
+def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch, steps):
+    """Where ``auto`` does not split at every height (flint, n = 7, 9, 11, 13, 14, 15), it
+    steps dense (n = 11, 13) or split (n = 7, 9, 14, 15) from low points and structured from
+    points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
+    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 9: about 100
+    bits a step, 3560 after 34 steps."""
     calls, solves = [], []
     real_init = split_mod.SplitSystem.__init__
 

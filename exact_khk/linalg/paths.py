@@ -14,7 +14,7 @@ circulant blocks, kernel gmpy2  split for n in :data:`SPLIT_N` (Bareiss is
                                 1.7–100× slower)
 circulant blocks, kernel flint  split for n in :data:`AUTO_SPLIT_N`;
                                 split below :data:`AUTO_SPLIT_BELOW` [n] bits, then
-                                structured (n = 7, 14, 15);
+                                structured (n = 7, 9, 14, 15);
                                 structured for n ≥ :data:`STRUCTURED_MIN_N`;
                                 dense below :data:`STRUCTURED_MIN_BITS`, then
                                 structured (n = 11, 13)
@@ -35,12 +35,15 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
 #: the n for which the split step exists (the generated code grows like the cube
 #: of the largest degree φ(d); for n ≥ 16 the structured step is as fast)
 SPLIT_N = tuple(range(1, 16))
-#: flint: split at every height (split faster than dense to 10 000 bits for n ≤ 8
-#: and than structured to 3000 bits for n = 9, 10, 12)
-AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 9, 10, 12)
+#: flint: split at every height (split faster than dense to 10 000 bits for n ≤ 8,
+#: and than structured to 20 000 bits for n = 5, 6, 8, 10, 12: split / structured
+#: 0.24–0.91 along orbits at 3000, 10 000 and 20 000 bits)
+AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 10, 12)
 #: flint: split below these heights, where the structured step overtakes it (4 orbit
-#: steps: split / structured = 1 near 1700, 1500, 750 bits for n = 7, 14, 15)
-AUTO_SPLIT_BELOW = {7: 2048, 14: 1536, 15: 768}
+#: steps: split / structured = 1 near 1700, 1500, 750 bits for n = 7, 14, 15; one step:
+#: near 3500 bits for n = 9, whose factor of degree 6 makes the split step 1.23× and
+#: 1.50× the structured one at 6000 and 20 000 bits)
+AUTO_SPLIT_BELOW = {7: 2048, 9: 3584, 14: 1536, 15: 768}
 #: flint: structured from the first step for n ≥ 16 (faster than a dense step even once
 #: that is built: 1.2× at the first orbit point at n = 16, 1.5× at n = 32; a dense step's
 #: first call also builds the field's integer system, 10 ms at n = 32, 1.4 s before 8d7521b) ...
