@@ -212,21 +212,24 @@ def _product(out, terms, field, wanted=None):
     return [out.let(out.form([(powers[m % d][c], t) for m, t in enumerate(tmp)])) for c in wanted]
 
 
-def _in_characters(rows, n, d, deg, powers):
-    """Rows over [x, D] of one factor as rows over the coefficients of χ_d(x_u),
-    χ_d(x_v) and D, or None if one is not such a form.  With circulant blocks
-    every one is: the Hessian is then cyclic Hankel in each block (as for
-    Lie–Poisson fields, docs/conventions.md), and the generated step computes those few
-    sums once."""
-    out = []
-    for row in rows:
-        # χ_d(x_blk) = Σ_i ζ^i x_{blk·n + i} with ζ^c = θ^c for c < deg: α_c is the x_c entry
-        alpha = [row[blk * n + c] for blk in range(2) for c in range(deg)]
-        if any(row[blk * n + i] != sum(alpha[blk * deg + c] * powers[i % d][c] for c in range(deg))
-               for blk in range(2) for i in range(n)):
+def _in_characters(rows, n, pos):
+    """Rows (an ``fmpz_mat`` over [x, D]) of one factor as rows over the coefficients of
+    χ_d(x_u), χ_d(x_v) and D, or None if one is not such a form (``pos``: the deg × n
+    matrix of the coordinates (θ^i)_c).  With circulant blocks every one is: the Hessian
+    is then cyclic Hankel in each block (as for Lie–Poisson fields, docs/conventions.md),
+    and the generated step computes those few sums once."""
+    import flint
+
+    # χ_d(x_blk) = Σ_i ζ^i x_{blk·n + i} with ζ^c = θ^c for c < deg: α_c is the x_c entry,
+    # and the x_i entry must be Σ_c α_c·(θ^i)_c
+    deg, cols, out = pos.nrows(), rows.ncols(), rows.tolist()
+    alpha = []
+    for blk in range(2):
+        A = flint.fmpz_mat([[r[blk * n + c] for c in range(deg)] for r in out])
+        if A * pos != flint.fmpz_mat([r[blk * n:(blk + 1) * n] for r in out]):
             return None
-        out.append(alpha + [row[-1]])
-    return out
+        alpha.append(A.tolist())
+    return [[int(t) for t in a + b + [r[cols - 1]]] for a, b, r in zip(*alpha, out)]
 
 
 def split_system(field, kernel, p, q):
@@ -252,18 +255,18 @@ def _build(field, kernel, p, q):
         if any(row(bi * n + i, bj * n + j) != row(bi * n, bj * n + (j - i) % n)
                for bi in range(2) for bj in range(2) for i in range(n) for j in range(n)):
             return None
-    width, rows = len(R[0]), []
+    import flint
+
+    # the first rows c_m of the four blocks and the right-hand side's rows, over [x, D]
+    F = [flint.fmpz_mat([row(bi * n, bj * n + m) for m in range(n)]) for bi in range(2) for bj in range(2)]
+    F += [flint.fmpz_mat(R[bi * n:(bi + 1) * n]) for bi in range(2)]
+    rows = []
     for d, deg, powers in _factors(n):
-        block = []
-        for bi in range(2):  # entries c_{bi,bj}(ζ^{−1}) = Σ_m c_m ζ^{−m}
-            for bj in range(2):
-                for c in range(deg):
-                    block.append([sum(row(bi * n, bj * n + m)[w] * powers[-m % d][c] for m in range(n))
-                                 for w in range(width)])
-        for bi in range(2):  # right-hand side χ_d(r) = Σ_i ζ^i r_i
-            for c in range(deg):
-                block.append([sum(R[bi * n + i][w] * powers[i % d][c] for i in range(n)) for w in range(width)])
-        block = _in_characters(block, n, d, deg, powers)
+        # entries c_{bi,bj}(ζ^{−1}) = Σ_m c_m ζ^{−m}, right-hand side χ_d(r) = Σ_i ζ^i r_i
+        neg = flint.fmpz_mat([[powers[-m % d][c] for m in range(n)] for c in range(deg)])
+        pos = flint.fmpz_mat([[powers[i % d][c] for i in range(n)] for c in range(deg)])
+        block = flint.fmpz_mat([r for k, B in enumerate(F) for r in ((neg if k < 4 else pos) * B).tolist()])
+        block = _in_characters(block, n, pos)
         if block is None:
             return None
         rows += block
