@@ -37,12 +37,13 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
 SPLIT_N = tuple(range(1, 16))
 #: flint: split at every height (split faster than dense to 10 000 bits for n ≤ 8,
 #: and than structured to 20 000 bits for n = 5, 6, 8, 10, 12: split / structured
-#: 0.24–0.91 along orbits at 3000, 10 000 and 20 000 bits)
+#: 0.20–0.91 along orbits at 3000, 10 000 and 20 000 bits in two runs,
+#: scripts/bench_split_height.py)
 AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 10, 12)
 #: flint: split below these heights, where the structured step overtakes it (4 orbit
-#: steps: split / structured = 1 near 1700, 1500, 750 bits for n = 7, 14, 15; one step:
-#: near 3500 bits for n = 9, whose factor of degree 6 makes the split step 1.23× and
-#: 1.50× the structured one at 6000 and 20 000 bits)
+#: steps: split / structured = 1 near 1700, 1500, 750 bits for n = 7, 14, 15 and near
+#: 3500 bits for n = 9, whose factor of degree 6 makes the split step 1.17× the
+#: structured one at 6099 bits, and one step 1.23× and 1.52× at 10 000 and 20 000 bits)
 AUTO_SPLIT_BELOW = {7: 2048, 9: 3584, 14: 1536, 15: 768}
 #: flint: structured from the first step for n ≥ 16 (faster than a dense step even once
 #: that is built: 1.2× at the first orbit point at n = 16, 1.5× at n = 32; a dense step's
