@@ -59,6 +59,13 @@ CASES = [
        f"print(best(lambda: Htilde(f, x, Fraction(1, 10), ar)))") for n in (3, 8, 16)],
     ("certify, the default certificate (n = 3, 20 steps)",
      "from exact_khk import certify\nprint(best(lambda: certify(), reps=3))"),
+    *[(f"default point, random_point(n, 1, system) of a new system, n = {n}",
+       f"print(best(lambda: random_point({n}, 1, system=LiePoissonSystem.random({n}, seed=1))))")
+      for n in (4, 8, 14)],
+    *[(f"default point, whole command exact-khk {cmd}",
+       "import subprocess, sys\ndef run():\n"
+       f"    subprocess.run([sys.executable, '-m', 'exact_khk', *{cmd.split()!r}], check=True, capture_output=True)\n"
+       "print(best(run, reps=3))") for cmd in ("orbit --n 14 --seed 1 --steps 5", "integrals --n 12 --seed 1")],
     ("import exact_khk (whole process start, 1 rep)",
      "import subprocess, sys\nt0 = time.perf_counter()\n"
      "subprocess.run([sys.executable, '-c', 'import exact_khk'], check=True)\nprint(time.perf_counter() - t0)"),

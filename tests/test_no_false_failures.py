@@ -15,6 +15,8 @@ The default run checks 50 systems (n = 2..6); ``-m slow`` checks 1000.
 from __future__ import annotations
 
 import collections
+import random
+from fractions import Fraction
 
 import pytest
 
@@ -77,6 +79,56 @@ def test_random_point_with_system_avoids_equilibria_and_poles():
         x = random_point(3, seed, system=system, eps="1/10")
         Htilde(system.field("f"), x, "1/10", "fraction")  # no pole
         assert any(sum(h * t for h, t in zip(row, x)) for row in system.hessian)  # not an equilibrium
+
+
+def test_random_point_with_system_avoids_a_singular_commuting_step():
+    """At n = 6, seed 1 the first draw off the Hankel-singular set has a regular Φ_f step but
+    det(I − εg'(x)) = 0 for the commuting field g, so a certificate (which steps Φ_g for
+    the commutation) would stop at once; the system's point is the next draw, where both
+    first steps are defined."""
+    from exact_khk import KahanMap
+
+    system = LiePoissonSystem.random(6, 1)
+    plain, x = random_point(6, 1), random_point(6, 1, system=system)
+    maps = [KahanMap(system.field(kind), "1/10", "fraction", method="dense") for kind in ("f", "g")]
+    maps[0].step(plain)
+    with pytest.raises(SingularStepError):
+        maps[1].step(plain)
+    with pytest.raises(SingularStepError, match=r"a step of Phi_g\[-\+\+\+\+\+\]$"):
+        certify(system, x0=plain, steps=1)  # the error names the map whose step is singular
+    assert x != plain
+    assert all(len(m.step(x)) == 12 for m in maps)
+    assert [Fraction(t) for t in x] == list(x)
+
+
+def test_random_point_system_check_matches_the_dense_solve():
+    """The rejection rules step Φ_f and Φ_g by the structured solve: the points are those of
+    the dense Fraction solve, checked here by redoing the rules with it for n = 2..7."""
+    from exact_khk import KahanMap
+    from exact_khk.systems.lie_poisson.invariants import Htilde
+
+    def acceptable(system, x):
+        if not any(sum(h * t for h, t in zip(row, x)) for row in system.hessian):
+            return False
+        try:
+            Htilde(system.field("f"), x, "1/10", "fraction")
+            ys = [KahanMap(system.field(k), "1/10", "fraction", method="dense").step(x) for k in ("f", "g")]
+        except Exception:  # a pole or a singular step
+            return False
+        return not hankel_singular(ys[0][:system.n])
+
+    def draws(n, seed):  # random_point's draws off the Hankel-singular set (its docstring)
+        rng = random.Random(f"x0-{seed}")
+        while True:
+            x = tuple(Fraction(rng.randint(-3, 3)) for _ in range(2 * n))
+            if any(x) and not hankel_singular(x[:n]):
+                yield x
+
+    for n in range(2, 8):
+        for seed in range(8):
+            system = LiePoissonSystem.random(n, seed)
+            first = next(x for x in draws(n, seed) if acceptable(system, x))
+            assert random_point(n, seed, system=system, eps="1/10") == first, (n, seed)
 
 
 def test_hankel_singular_sets():

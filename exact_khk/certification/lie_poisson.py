@@ -54,7 +54,7 @@ from exact_khk.certification.checks import (bracket, commute_items, commute_poin
                                             conserved_items, lazy_orbit, poisson_map_items, rank,
                                             reversible_items, run_check)
 from exact_khk.certification.records import Certificate, Check, library_versions  # noqa: F401
-from exact_khk.errors import InputError, PoleError
+from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, _eps, grad_Htilde,
                          q_coefficients, shift_index)
 from exact_khk.systems.lie_poisson.invariants import _pole as htilde_pole
@@ -364,9 +364,16 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     and how its steps were solved."""
     n = system.n
     fields = {"f": system.field("f")} | {s: system.field("g", s, cyclotomic=True) for s in signs}
-    orbits = {key: _Orbit(fld, eps, ar, x0, steps) for key, fld in fields.items()}
     integral = {"f": "H~"} | {s: f"K~[{s}]" for s in signs}
     mapname = {"f": "Phi_f"} | {s: f"Phi_g[{s}]" for s in signs}
+    orbits = {}
+    for key, fld in fields.items():
+        try:
+            orbits[key] = _Orbit(fld, eps, ar, x0, steps)
+        except SingularStepError as exc:  # say which map (the message's f' is that map's field)
+            raise SingularStepError(exc.x, exc.eps, step=exc.step, condition=exc.condition,
+                                    detail="; ".join(filter(None, [f"a step of {mapname[key]}", exc.detail]))
+                                    ) from None
     F = orbits["f"]
     npts = steps + 1
     checks = []

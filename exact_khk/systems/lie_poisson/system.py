@@ -512,7 +512,8 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
     n ≤ :data:`RANDOM_POINT_SYSTEM_CHECK_MAX_N`, when
 
     * x is an equilibrium (Hs x = 0: every map of the family fixes it);
-    * H̃(x, ε) has a pole, or the first step of Φ_f is singular;
+    * H̃(x, ε) has a pole, or the first step of Φ_f or of Φ_g (the commuting
+      flow's map, which certificates step too) is singular;
     * Φ_f(x) has X(u) singular (x on the critical set of Φ_f, which Φ_f maps
       into the invariant singular set, where Φ_f⁻¹ is undefined).
 
@@ -539,22 +540,33 @@ def _degenerate_for(system, x, eps) -> bool:
     """The system-dependent rejection rules of :func:`random_point`."""
     from exact_khk.arith import get_arith, to_element
     from exact_khk.errors import PoleError, SingularMatrix
+    from exact_khk.linalg import circulant
     from exact_khk.linalg.dense import solve
     from exact_khk.systems.lie_poisson.invariants import Htilde
 
     eps = DEFAULT_EPS if eps is None else eps
     if not any(sum((h * t for h, t in zip(row, x)), Fraction(0)) for row in system.hessian):
         return True
-    ar, fld = get_arith("fraction"), system.field("f")
-    e, N = to_element(ar, eps, "eps"), 2 * system.n
-    try:
-        Htilde(fld, x, eps, ar)
-        # the first step of Φ_f (f homogeneous): (I − ε f'(x)) y = x
+    ar, N = get_arith("fraction"), 2 * system.n
+    e = to_element(ar, eps, "eps")
+
+    def first_step(fld):
+        """Φ(x) of a homogeneous field: (I − ε f'(x)) y = x, by the 2×2 solve over circulants
+        where the blocks are circulant (0.5 ms against 180 ms for the dense one at n = 14)."""
+        st = fld.circulant_structure()
+        if st is not None:
+            return circulant.exact_step(st, x, e, ar)
         J = fld.jacobian(ar, x)
         Y, _ = solve(ar, [[(i == j) - e * J[i][j] for j in range(N)] for i in range(N)], [[t] for t in x])
+        return [row[0] for row in Y]
+
+    try:
+        Htilde(system.field("f"), x, eps, ar)
+        y = first_step(system.field("f"))
+        first_step(system.field("g"))  # the commuting flow's map, which certificates step too
     except (PoleError, SingularMatrix):
         return True
-    return hankel_singular([row[0] for row in Y[:system.n]])
+    return hankel_singular(y[:system.n])
 
 
 def b0_signs(n: int) -> str:
