@@ -98,13 +98,13 @@ def test_random_point_with_system_avoids_a_singular_commuting_step():
         certify(system, x0=plain, steps=1)  # the error names the map whose step is singular
     assert x != plain
     assert all(len(m.step(x)) == 12 for m in maps)
-    assert [Fraction(t) for t in x] == list(x)
 
 
 def test_random_point_system_check_matches_the_dense_solve():
     """The rejection rules step Φ_f and Φ_g by the structured solve: the points are those of
     the dense Fraction solve, checked here by redoing the rules with it for n = 2..7."""
     from exact_khk import KahanMap
+    from exact_khk.errors import PoleError
     from exact_khk.systems.lie_poisson.invariants import Htilde
 
     def acceptable(system, x):
@@ -113,7 +113,7 @@ def test_random_point_system_check_matches_the_dense_solve():
         try:
             Htilde(system.field("f"), x, "1/10", "fraction")
             ys = [KahanMap(system.field(k), "1/10", "fraction", method="dense").step(x) for k in ("f", "g")]
-        except Exception:  # a pole or a singular step
+        except (PoleError, SingularStepError):
             return False
         return not hankel_singular(ys[0][:system.n])
 
