@@ -213,7 +213,7 @@ def _product(out, terms, field, wanted=None):
 
 
 def _in_characters(rows, n, pos):
-    """Rows (an ``fmpz_mat`` over [x, D]) of one factor as rows over the coefficients of
+    """Rows (lists over [x, D]) of one factor as rows over the coefficients of
     χ_d(x_u), χ_d(x_v) and D, or None if one is not such a form (``pos``: the deg × n
     matrix of the coordinates (θ^i)_c).  With circulant blocks every one is: the Hessian
     is then cyclic Hankel in each block (as for Lie–Poisson fields, docs/conventions.md),
@@ -222,14 +222,13 @@ def _in_characters(rows, n, pos):
 
     # χ_d(x_blk) = Σ_i ζ^i x_{blk·n + i} with ζ^c = θ^c for c < deg: α_c is the x_c entry,
     # and the x_i entry must be Σ_c α_c·(θ^i)_c
-    deg, cols, out = pos.nrows(), rows.ncols(), rows.tolist()
-    alpha = []
+    deg, alpha = pos.nrows(), []
     for blk in range(2):
-        A = flint.fmpz_mat([[r[blk * n + c] for c in range(deg)] for r in out])
-        if A * pos != flint.fmpz_mat([r[blk * n:(blk + 1) * n] for r in out]):
+        A = flint.fmpz_mat([[r[blk * n + c] for c in range(deg)] for r in rows])
+        if A * pos != flint.fmpz_mat([r[blk * n:(blk + 1) * n] for r in rows]):
             return None
         alpha.append(A.tolist())
-    return [[int(t) for t in a + b + [r[cols - 1]]] for a, b, r in zip(*alpha, out)]
+    return [[int(t) for t in a + b + [r[-1]]] for a, b, r in zip(*alpha, rows)]
 
 
 def split_system(field, kernel, p, q):
@@ -265,8 +264,7 @@ def _build(field, kernel, p, q):
         # entries c_{bi,bj}(ζ^{−1}) = Σ_m c_m ζ^{−m}, right-hand side χ_d(r) = Σ_i ζ^i r_i
         neg = flint.fmpz_mat([[powers[-m % d][c] for m in range(n)] for c in range(deg)])
         pos = flint.fmpz_mat([[powers[i % d][c] for i in range(n)] for c in range(deg)])
-        block = flint.fmpz_mat([r for k, B in enumerate(F) for r in ((neg if k < 4 else pos) * B).tolist()])
-        block = _in_characters(block, n, pos)
+        block = _in_characters([r for k, B in enumerate(F) for r in ((neg if k < 4 else pos) * B).tolist()], n, pos)
         if block is None:
             return None
         rows += block
