@@ -13,7 +13,8 @@ import sympy
 from exact_khk import InputError, LiePoissonSystem, get_arith
 from exact_khk.cli.main import main
 from exact_khk.diagnostics import degree_sequence, exact_degrees, find_integrals, fit_recurrence, height_growth
-from exact_khk.diagnostics.degrees import _Degenerate, line_degrees, resolve_field
+from exact_khk.diagnostics.degrees import (_Degenerate, cauchy_degree, interpolate, line_degrees, line_run,
+                                           polynomial_line_degrees, resolve_field, valued_line_degrees)
 from exact_khk.diagnostics.integrals import _Job, verify_exact
 from exact_khk.diagnostics.kernels import monomials, orbit_kernel_exact
 from exact_khk.systems.expressions import ExpressionSystem
@@ -51,8 +52,11 @@ def test_degrees_match_sympy_golden(case):
     assert list(res.degrees) == gold
     assert not res.disagreeing
     _, fld = resolve_field(system, kind)
+    # both routes are covered: polynomial arithmetic below dimension 8, values from it
+    assert {r["route"] for r in res.to_json()["runs"]} == {"values" if fld.dim >= 8 else "polynomials"}
     ex = exact_degrees(fld, F(case["eps"]), 3, max_terms=3000)
-    assert len(ex) >= 2 and ex == gold[:len(ex)]
+    assert ex == gold[:len(ex)]
+    assert len(ex) >= 2 or fld.dim >= 8  # dimension 8: the first composition has C(16, 8) > 3000 terms
 
 
 def test_exact_mode_reported_and_agrees():
@@ -111,6 +115,104 @@ def test_undercount_frequency_within_schwartz_zippel_bound():
             assert under[k] / lines <= 2 * true[k] * (true[k] + 1) / p
     res = degree_sequence(EULER, steps=3, eps="1/10")
     assert 0 < res.undercount_bound < 1e-20
+
+
+CYCLIC_8 = ExpressionSystem.from_expressions(
+    [f"x{i}" for i in range(8)],
+    field=[f"x{(i + 1) % 8}*x{(i + 2) % 8} - x{i} + {i + 1}*x{(i + 3) % 8}**2" for i in range(8)], name="cyclic-8")
+
+
+@pytest.mark.parametrize("system, kind, steps", [
+    (EULER, "f", 8), (LV, "f", 9), (LiePoissonSystem.random(2, 3), "f", 12), (LiePoissonSystem.random(4, 1), "f", 10),
+    (LiePoissonSystem.random(4, 1), "g", 6), (LiePoissonSystem.random(4, 2), "control", 6),
+    (LiePoissonSystem.random(5, 1), "f", 5), (CYCLIC_8, "f", 3)],
+    ids=["euler", "lv", "lp2-f", "lp4-f", "lp4-g", "lp4-control", "lp5-f", "cyclic8"])
+def test_values_route_equals_polynomial_route(system, kind, steps):
+    """The degrees read off values at points of the line (Cauchy interpolation) equal those of
+    polynomial arithmetic over F_p[t] (checked against SymPy by the golden test), on other
+    random lines, at every dimension (the rule picks the route only from dimension 8)."""
+    _, fld = resolve_field(system, kind)
+    poly = polynomial_line_degrees(fld, F(1, 10), GOOD, steps, random.Random(1))
+    vals = valued_line_degrees(fld, F(1, 10), GOOD, steps, random.Random(2))
+    assert vals == poly and len(vals) == steps + 1 and vals[-1] > vals[1]
+
+
+def test_values_route_stops_before_a_degree_past_max_degree():
+    """From values a degree above max_degree is never fitted (no fit at D = max_degree): the
+    route stops before it, where polynomial arithmetic reports it and stops after it."""
+    _, fld = resolve_field(CYCLIC_8, "f")
+    assert valued_line_degrees(fld, F(1, 10), GOOD, 6, random.Random(1), max_degree=100) == [1, 8, 64]
+    assert polynomial_line_degrees(fld, F(1, 10), GOOD, 6, random.Random(1), max_degree=100) == [1, 8, 64, 512]
+    res = degree_sequence(CYCLIC_8, steps=6, eps="1/10", max_degree=100)
+    assert res.degrees == (1, 8, 64) and any("stopped after k = 2" in n for n in res.notes)
+
+
+def test_geometric_growth_hands_over_to_polynomial_arithmetic():
+    """From values, degrees that grow geometrically (cyclic-8: 8^k) hand over to polynomial
+    arithmetic, which reaches past max_degree; linear growth stays with values."""
+    res = degree_sequence(CYCLIC_8, steps=5, eps="1/10", max_degree=1000)
+    assert res.degrees == (1, 8, 64, 512, 4096) and res.routes == ("polynomials", "polynomials")
+    assert [r["route"] for r in res.to_json()["runs"]] == ["polynomials", "polynomials"]
+    lp = degree_sequence(LiePoissonSystem.random(4, 1), steps=8)
+    assert lp.degrees == (1,) + tuple(8 * k for k in range(1, 9))
+    assert lp.routes == ("values", "values") and "runs from values" in lp.summary()
+    _, fld = resolve_field(CYCLIC_8, "f")
+    assert valued_line_degrees(fld, F(1, 10), GOOD, 5, random.Random(1), 1000, hand_over=True) is None
+
+
+def test_no_hand_over_from_the_dimension_of_the_rule(monkeypatch):
+    """From DEGREES_HAND_OVER_BELOW_DIM on, geometric growth stays with values (faster there):
+    the rule lowered to 8 keeps cyclic-8 on values, which stop before the degree past max_degree."""
+    from exact_khk.linalg import paths
+
+    _, fld = resolve_field(CYCLIC_8, "f")
+    assert line_run(fld, F(1, 10), GOOD, 5, random.Random(1), 1000)[1] == "polynomials"
+    monkeypatch.setattr(paths, "DEGREES_HAND_OVER_BELOW_DIM", 8)
+    assert line_run(fld, F(1, 10), GOOD, 5, random.Random(1), 1000) == ([1, 8, 64, 512], "values")
+
+
+def test_cauchy_degree_exact_at_enough_points_never_above_the_bound():
+    """A fraction of degree d through 2D + 1 points: found exactly (reduced, B monic) when D ≥ d;
+    when D < d either refused or of degree ≤ D (an undercount, never an overcount)."""
+    rng, p = random.Random(5), GOOD
+    for _ in range(40):
+        da, db = rng.randrange(0, 12), rng.randrange(0, 12)
+        A = flint.nmod_poly([rng.randrange(p) for _ in range(da)] + [1 + rng.randrange(p - 1)], p)
+        B = flint.nmod_poly([rng.randrange(p) for _ in range(db)] + [1], p)
+        d = max(A.degree(), B.degree())
+        for D in (max(d - 3, 0), max(d - 1, 0), d, d + 4):
+            xs = rng.sample(range(p), 2 * D + 1)
+            xs = [x for x in xs if B(x) != 0]
+            if len(xs) < 2 * D + 1:
+                continue
+            fit = cauchy_degree(xs, [A(x) / B(x) for x in xs], p, D)
+            if D >= d:
+                assert fit == (d, A * B.leading_coefficient() ** -1, B)  # random A, B: coprime here
+            else:
+                assert fit is None or fit[0] <= D
+
+
+def test_interpolate_matches_the_values():
+    rng, p = random.Random(3), 1009
+    xs = rng.sample(range(p), 37)
+    vs = [rng.randrange(p) for _ in xs]
+    f, m = interpolate(xs, vs, p)
+    assert f.degree() < 37 and all(f(x) == v for x, v in zip(xs, vs))
+    assert m.degree() == 37 and all(m(x) == 0 for x in xs)
+
+
+def test_degenerate_lines_raise_on_both_routes():
+    """A field whose step matrix is singular everywhere (x0' = 10 x0 at eps = 1/10: the first
+    row of I - eps f'(x) vanishes): every line degenerates on either route."""
+    names = [f"x{i}" for i in range(8)]
+    field = ["10*x0"] + [f"x{(i + 1) % 8}*x{(i + 2) % 8}" for i in range(1, 8)]
+    sysobj = ExpressionSystem.from_expressions(names, field=field, name="singular-8")
+    _, fld = resolve_field(sysobj, "f")
+    for route in (valued_line_degrees, polynomial_line_degrees):
+        with pytest.raises(_Degenerate):
+            route(fld, F(1, 10), GOOD, 3, random.Random(1))
+    with pytest.raises(InputError, match="degenerated"):
+        degree_sequence(sysobj, steps=3, eps="1/10", primes=1)
 
 
 @pytest.mark.parametrize("kw, name", [

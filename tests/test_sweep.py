@@ -426,6 +426,7 @@ def test_diagnostics_tasks(tmp_path):
     recs = lines(tmp_path / "d")
     assert len(recs) == 2 and {r["verdict"] for r in recs} == {"OK"}
     assert {(r["figures"]["growth"], r["figures"]["polynomial_degree"]) for r in recs} == {("polynomial", 1)}
+    assert {tuple(r["figures"]["routes"]) for r in recs} == {("polynomials",)}  # dimension 4
     lv = parse_spec('task = "degrees"\n[system]\ncatalogue = "lotka-volterra"\n[grid]\nsteps = 10\n',
                     origin="lv.toml")
     run_sweep(lv, tmp_path / "lv", workers=0, plots=False)

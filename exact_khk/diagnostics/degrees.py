@@ -22,7 +22,13 @@ C(Q, P) = (det M, adj(M) r) whose projective class is Φ.  Along a line
 F_p[t]^{N+1}: fraction-free elimination (Bareiss, exact divisions in
 ``nmod_poly``) gives C of the current point, and the gcd of its N + 1
 coordinates is divided out at every step.  The degree of the reduced vector is
-the degree of the curve Φ^k(ℓ).
+the degree of the curve Φ^k(ℓ).  From dimension 8 (:func:`line_route`) the same
+degree is read off values instead: the orbits of points ℓ(s) of the line, one
+``nmod_mat`` solve per point and step, give the values of L₁(G)/L₂(G) for two
+random linear forms, whose degree Cauchy interpolation finds
+(:func:`valued_line_degrees`): 2d_k + 5 solves per step instead of O(N³)
+products of polynomials of degree ~N·d_k (21× faster for the Lie–Poisson family
+at n = 8, docs/benchmarks.md).
 
 **Never an overcount.**  Let G = (G_0, …, G_N) be the coprime integral forms of
 degree d_k representing Φ^k.  The k-fold formal composite C^{∘k} equals H·G
@@ -44,7 +50,9 @@ and the reported degree, the maximum over independent (prime, line) runs, is
 too small only if every run undercounts: probability ≤ Π_runs 2 d(d+1)/p for
 the good primes among them (the bound is stated at the reported d_k; a bad
 prime undercounts at every line, which is why several primes are used and
-runs that disagree with the maximum are reported).
+runs that disagree with the maximum are reported).  The route from values adds
+(4d/p)^4 per fit that could pass its check falsely (:func:`run_bound`); it never
+overcounts either.
 
 >>> from exact_khk.systems.expressions import ExpressionSystem
 >>> euler = ExpressionSystem.from_expressions(["x", "y", "z"], field=["y*z", "-2*x*z", "x*y"])
@@ -229,7 +237,70 @@ def _nmod_gcd_reduce(rng, p):
 
 def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
     """d_0..d_steps of Φ restricted to one random line over F_p (see the module docstring);
-    stops early once a degree exceeds ``max_degree``; ``progress(k)`` after step k."""
+    stops early at a degree past ``max_degree`` (reported by polynomial arithmetic, not
+    from values); ``progress(k)`` after step k.
+
+    By polynomial arithmetic (:func:`polynomial_line_degrees`) below dimension
+    :data:`~exact_khk.linalg.paths.DEGREES_BY_VALUES_MIN_DIM` or for p below
+    :data:`VALUES_MIN_PRIME`, else from values at points of the line
+    (:func:`valued_line_degrees`) unless the degrees grow geometrically
+    (:func:`line_run`)."""
+    return line_run(fld, eps, p, steps, rng, max_degree, progress)[0]
+
+
+def line_route(dim: int, p: int) -> str:
+    """Where :func:`line_run` starts for dimension ``dim`` over F_p: ``'values'`` or
+    ``'polynomials'`` (the rule of :mod:`exact_khk.linalg.paths`)."""
+    from exact_khk.linalg.paths import DEGREES_BY_VALUES_MIN_DIM
+
+    return "values" if dim >= DEGREES_BY_VALUES_MIN_DIM and p >= VALUES_MIN_PRIME else "polynomials"
+
+
+def line_run(fld, eps, p, steps, rng, max_degree=None, progress=None) -> tuple:
+    """``(degrees, route)`` of :func:`line_degrees`: from values where :func:`line_route`
+    says so, handing over to polynomial arithmetic on a new line from the start once the
+    degrees grow geometrically (:func:`_geometric`) below dimension
+    :data:`~exact_khk.linalg.paths.DEGREES_HAND_OVER_BELOW_DIM` (there the values' new
+    points, each iterated from the line, and a last step that must fail at
+    D = ``max_degree`` make that route about 1.6× slower, docs/benchmarks.md)."""
+    from exact_khk.linalg.paths import DEGREES_HAND_OVER_BELOW_DIM
+
+    if line_route(fld.dim, p) == "values":
+        degs = valued_line_degrees(fld, eps, p, steps, rng, max_degree, progress,
+                                   hand_over=fld.dim < DEGREES_HAND_OVER_BELOW_DIM)
+        if degs is not None:
+            return degs, "values"
+    return polynomial_line_degrees(fld, eps, p, steps, rng, max_degree, progress), "polynomials"
+
+
+def _geometric(degs) -> bool:
+    """The last three degrees grew geometrically by a factor of at least 2:
+    d_k ≥ 2d_(k−1), d_k d_(k−2) ≥ d_(k−1)² and d_(k−1) d_(k−3) ≥ d_(k−2)² (never
+    for polynomial growth past its first terms: 1, 3, 9, 19 and 1, 6, 12, 18 fail it).
+
+    >>> _geometric([1, 8, 64, 512]), _geometric([1, 3, 9, 19]), _geometric([1, 16, 32, 48])
+    (True, False, False)
+    """
+    if len(degs) < 4:
+        return False
+    d3, d2, d1, d0 = degs[-4:]
+    return d0 >= 2 * d1 and d0 * d2 >= d1 * d1 and d1 * d3 >= d2 * d2
+
+
+def run_bound(d: int, p: int, route: str) -> float:
+    """The probability bound of an undercount of d on one random line over a good prime p:
+    2d(d + 1)/p (module docstring), plus, for the route from values
+    (:func:`valued_line_degrees`), (4d/p)^CHECK_POINTS for each fit tried at a degree
+    below d that could pass its check falsely (D doubles: at most bit_length(d) + 1
+    of them); at most 1."""
+    extra = (d.bit_length() + 1) * (4 * d / p) ** CHECK_POINTS if route == "values" else 0.0
+    return min(1.0, 2 * d * (d + 1) / p + extra)
+
+
+def polynomial_line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
+    """:func:`line_degrees` by iterating the point (1, a + t b) in F_p[t]^(N+1) (Bareiss
+    over ``nmod_poly``, the coordinates' gcd removed every step); the step that passes
+    ``max_degree`` is the last one reported."""
     V, R = kahan_rows(fld, eps)
     V = [[c % p for c in row] for row in V]
     R = [[c % p for c in row] for row in R]
@@ -245,6 +316,166 @@ def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
             progress(k)
         if max_degree is not None and degs[-1] > max_degree:
             break
+    return degs
+
+
+# --- degrees from values at points of the line -----------------------------------------
+
+#: the evaluation needs 2d + 1 + CHECK_POINTS distinct points of F_p per degree d and
+#: bounds a false check by (4d/p)^CHECK_POINTS: used only for p from here (smaller
+#: primes, as in the tests of the undercount frequency, take the polynomial route)
+VALUES_MIN_PRIME = 2 ** 31
+#: points of the line not used by the fit that must confirm it
+CHECK_POINTS = 4
+
+
+def interpolate(xs, vs, p):
+    """``(f, m)``: the polynomial f of degree < len(xs) over F_p with f(x_j) = v_j, and
+    m = Π (t − x_j) (distinct x_j), by a subproduct tree (O(len(xs)) ``nmod_poly`` calls).
+
+    >>> f, m = interpolate([1, 2, 3], [2, 5, 10], 101)
+    >>> f, m
+    (x^2 + 1, x^3 + 95*x^2 + 11*x + 95)
+    """
+    levels = [[flint.nmod_poly([-x % p, 1], p) for x in xs]]
+    while len(levels[-1]) > 1:
+        lv = levels[-1]
+        levels.append([lv[i] * lv[i + 1] if i + 1 < len(lv) else lv[i] for i in range(0, len(lv), 2)])
+    m = levels[-1][0]
+    rems = [m.derivative()]
+    for lv in reversed(levels[:-1]):  # m'(x_j) by a remainder tree
+        rems = [rems[i // 2] % lv[i] for i in range(len(lv))]
+    ws = [flint.nmod_poly([int(v) * pow(int(r[0]), -1, p)], p) for v, r in zip(vs, rems)]
+    for lv in levels[:-1]:  # Lagrange's sum, combined up the tree
+        ws = [ws[i] * lv[i + 1] + ws[i + 1] * lv[i] if i + 1 < len(ws) else ws[i] for i in range(0, len(ws), 2)]
+    return ws[0], m
+
+
+def cauchy_degree(xs, vs, p, D):
+    """max(deg A, deg B) of the reduced A/B with deg A, deg B ≤ D and A(x_j) = v_j B(x_j)
+    at the 2D + 1 points (x_j, v_j), or None when there is none (the values are not those
+    of such a fraction).  The first remainder of degree ≤ D in Euclid's algorithm on
+    (Π (t − x_j), f), f interpolating the values, with its cofactor (Cauchy interpolation:
+    von zur Gathen & Gerhard, *Modern Computer Algebra*, 5.7); with A and B, B monic.
+
+    >>> d, A, B = cauchy_degree([1, 2, 3, 4, 5], [51, 41, 68, 44, 26], 101, 2)  # (t + 1)/(t + 3) mod 101
+    >>> d, A, B
+    (1, x + 1, x + 3)
+    """
+    f, m = interpolate(xs, vs, p)
+    r0, r1 = m, f
+    t0, t1 = flint.nmod_poly([], p), flint.nmod_poly([1], p)
+    while r1.degree() > D:
+        q, r = divmod(r0, r1)
+        r0, r1, t0, t1 = r1, r, t1, t0 - q * t1
+    if t1.is_zero() or t1.degree() > D or any(t1(x) == 0 for x in xs):
+        return None
+    g = r1.gcd(t1)
+    A, B = r1 // g, t1 // g
+    c = B.leading_coefficient() ** -1  # B monic
+    return max(A.degree(), B.degree()), A * c, B * c
+
+
+def valued_line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None, hand_over=False):
+    """:func:`line_degrees` from values: the orbits of points ℓ(s) = a + s b of the line,
+    for random distinct s in F_p, one ``nmod_mat`` solve per step, give the values at s of
+    R_k = L₁(G)/L₂(G) for two random forms L₁, L₂ of the homogeneous point G = Φ^k(ℓ).
+    R_k has degree d_k unless L₁(G), L₂(G) share a factor — the event the module
+    docstring's Schwartz–Zippel bound already counts — and Cauchy interpolation
+    (:func:`cauchy_degree`) at 2D + 1 points finds it exactly whenever D ≥ d_k; D is
+    doubled until the fit passes :data:`CHECK_POINTS` further points.  So it never
+    overcounts; it undercounts besides that event only if a fit at D < d_k passes the
+    check (probability ≤ (4d_k/p)^CHECK_POINTS per fit: the check points are random among
+    at least p/2 unused ones, and the difference of two fractions of degree ≤ d_k vanishes
+    at most at 2d_k of them).  Points whose orbit meets a singular step or a pole of R_k are dropped
+    (finitely many: they are roots of nonzero polynomials unless the line is
+    degenerate, which raises :class:`_Degenerate`).  It stops before a step whose
+    degree passes ``max_degree`` (no fit at D = ``max_degree``); that step is not
+    reported.  ``hand_over``: return None once the growth is geometric
+    (:func:`_geometric`).  Cost: about 2d_k + 5 solves at step k, and k for each new
+    point, against O(N³) products of polynomials of degree ~N·d_k by
+    :func:`polynomial_line_degrees`.
+    """
+    V, R = kahan_rows(fld, eps)
+    N = fld.dim
+    # M(x) = Σ_l w_l A_l and r(x) = Σ_l w_l r_l for w = (x, 1): N + 1 matrices
+    A = [flint.nmod_mat(N, N, [V[i * N + j][l] % p for i in range(N) for j in range(N)], p) for l in range(N + 1)]
+    r = [flint.nmod_mat(N, 1, [R[i][l] % p for i in range(N)], p) for l in range(N + 1)]
+    a, b = [rng.randrange(p) for _ in range(N)], [rng.randrange(p) for _ in range(N)]
+    u, w = [rng.randrange(p) for _ in range(N + 1)], [rng.randrange(p) for _ in range(N + 1)]
+    one = flint.nmod(1, p)
+
+    def step(x):  # ZeroDivisionError when the step matrix is singular there
+        xs = list(x) + [one]
+        M, rhs = A[N] * one, r[N] * one
+        for l in range(N):
+            if x[l]:
+                M, rhs = M + A[l] * xs[l], rhs + r[l] * xs[l]
+        return M.solve(rhs).entries()
+
+    def value(x):  # R_k at the point, None at a pole
+        num = sum((c * t for c, t in zip(u, x)), one * u[N])
+        den = sum((c * t for c, t in zip(w, x)), one * w[N])
+        return None if den == 0 else num / den
+
+    used, lost = set(), [0]
+    points = []  # [s, Φ^k(ℓ(s))]
+
+    def grow(count, k):  # more points, their orbits taken to step k
+        while len(points) < count:
+            if lost[0] > 64 + 2 * count:
+                raise _Degenerate("singular step matrix along the line")
+            s = rng.randrange(p)
+            if s in used:
+                continue
+            used.add(s)
+            x = [flint.nmod(ai + s * bi, p) for ai, bi in zip(a, b)]
+            try:
+                for _ in range(k):
+                    x = step(x)
+            except ZeroDivisionError:
+                lost[0] += 1
+                continue
+            points.append([s, x])
+
+    degs, D = [1], 1
+    for k in range(1, steps + 1):
+        kept = []
+        for pt in points:
+            try:
+                pt[1] = step(pt[1])
+                kept.append(pt)
+            except ZeroDivisionError:
+                lost[0] += 1
+        points[:] = kept
+        while True:
+            need = 2 * D + 1 + CHECK_POINTS
+            grow(need, k)
+            vals = [(s, v) for s, v in ((s, value(x)) for s, x in points) if v is not None]
+            if len(vals) < need:  # poles: more points
+                lost[0] += need - len(vals)
+                grow(len(points) + need - len(vals), k)
+                continue
+            fit = cauchy_degree([s for s, _ in vals[:2 * D + 1]], [v for _, v in vals[:2 * D + 1]], p, D)
+            if fit is not None:
+                d, F, G = fit
+                if all(F(s) == v * G(s) for s, v in vals[2 * D + 1:need]):
+                    break
+            if max_degree is not None and D >= max_degree:
+                return degs  # d_k > max_degree
+            D = 2 * D if max_degree is None else min(2 * D, max_degree)
+        degs.append(d)
+        if hand_over and _geometric(degs):
+            return None
+        if progress is not None:
+            progress(k)
+        # the next degree, extrapolated linearly, or geometrically where the growth is at
+        # least geometric (d_k d_(k-2) ≥ d_(k-1)²); doubled while short
+        D = max(1, 2 * d - degs[-2] + 1)
+        if k >= 2 and d * degs[-3] >= degs[-2] ** 2:
+            D = max(D, d * d // degs[-2] + 1)
+        if max_degree is not None:
+            D = min(D, max_degree)
     return degs
 
 
@@ -300,6 +531,7 @@ class DegreeSequence:
     seconds: float
     heights: object = None
     notes: tuple = dc_field(default=())
+    routes: tuple = ()     # the route of each run ('values' or 'polynomials', line_run)
 
     @property
     def disagreeing(self) -> tuple:
@@ -309,7 +541,9 @@ class DegreeSequence:
     def to_json(self) -> dict:
         return {"field": self.label, "dim": self.dim, "eps": str(self.eps), "degrees": list(self.degrees),
                 "degree_kind": "projective degree of Phi^k (max degree of numerators and common denominator)",
-                "runs": [{"prime": p, "line": i, "degrees": list(d)} for p, i, d in self.runs],
+                "runs": [{"prime": p, "line": i, "degrees": list(d),
+                          "route": self.routes[j] if j < len(self.routes) else None}
+                         for j, (p, i, d) in enumerate(self.runs)],
                 "disagreeing_runs": [list(t) for t in self.disagreeing], "failed_runs": self.failed_runs,
                 "exact_degrees": list(self.exact), "undercount_bound": self.undercount_bound,
                 "fit": self.fit.to_json(), "seconds": self.seconds,
@@ -321,7 +555,9 @@ class DegreeSequence:
                  "  " + ", ".join(map(str, self.degrees)),
                  f"  {len(self.runs)} run(s) over F_p on random lines (primes "
                  f"{', '.join(str(p) for p in sorted({p for p, _, _ in self.runs}))}); "
-                 f"P(undercount) <= {self.undercount_bound:.3g} at good primes (Schwartz–Zippel, 2d(d+1)/p per run)"]
+                 f"P(undercount) <= {self.undercount_bound:.3g} at good primes (Schwartz–Zippel, 2d(d+1)/p per run"
+                 + (f"; + (bits(d) + 1)(4d/p)^{CHECK_POINTS} for runs from values at points of the line)"
+                    if "values" in self.routes else ")")]
         if self.disagreeing:
             lines.append("  runs undercounting (bad prime or line): " + ", ".join(f"p={p} line {i}" for p, i in self.disagreeing))
         if self.exact:
@@ -364,7 +600,7 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     if fld.dim > MAX_DIM:
         raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")
     primes = check_primes(primes, seed=seed)
-    runs, failed, reported = [], 0, [0]
+    runs, routes, failed, reported = [], [], 0, [0]
 
     def report(k):  # increasing only: the steps of a degenerate line, taken again, count once
         if progress is not None and k > reported[0]:
@@ -375,8 +611,10 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
             rng = random.Random(f"line-{seed}-{p}")
         for _attempt in range(5):
             try:
-                runs.append((p, i, tuple(line_degrees(fld, eps, p, steps, rng, max_degree,
-                                                      lambda k, base=line * steps: report(base + k)))))
+                degs, route = line_run(fld, eps, p, steps, rng, max_degree,
+                                       lambda k, base=line * steps: report(base + k))
+                runs.append((p, i, tuple(degs)))
+                routes.append(route)
                 break
             except _Degenerate:
                 failed += 1
@@ -386,7 +624,8 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
                          "tried: choose other primes)")
     length = min(len(r[2]) for r in runs)
     degs = tuple(max(r[2][k] for r in runs) for k in range(length))
-    bound = max((math.prod(min(1.0, 2 * d * (d + 1) / p) for p, _, _ in runs) for d in degs), default=0.0)
+    bound = max((math.prod(run_bound(d, p, route) for (p, _, _), route in zip(runs, routes)) for d in degs),
+                default=0.0)
     ex = tuple(exact_degrees(fld, eps, exact, exact_terms)) if exact else ()
     notes = []
     if length < steps + 1:
@@ -407,4 +646,4 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     except InputError as exc:
         fit = too_short(degs, str(exc))
     return DegreeSequence(label, fld.dim, eps, degs, tuple(runs), ex, failed, bound,
-                          fit, time.perf_counter() - t0, hts, tuple(notes))
+                          fit, time.perf_counter() - t0, hts, tuple(notes), tuple(routes))

@@ -29,6 +29,12 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
                                 N ≤ :data:`EXACT_INVERSE_MAX_N`, else estimated
                                 (``linalg.dense.solve``)
+degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly``)
+(``diagnostics.degrees``)       below dimension :data:`DEGREES_BY_VALUES_MIN_DIM`;
+                                values at points of the line from it, handing
+                                over to polynomial arithmetic once the degrees
+                                grow geometrically (``degrees._geometric``) below
+                                dimension :data:`DEGREES_HAND_OVER_BELOW_DIM`
 =============================  ==================================================
 """
 
@@ -70,6 +76,17 @@ EXACT_INVERSE_MAX_N = 5
 BINARY64_CONDITION_MAX = 2.0 ** 32
 #: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
 HTILDE_STRUCTURED_MIN_N = 3
+
+#: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
+#: from values at points of the line (one N×N solve per point and step) instead of
+#: polynomial arithmetic (O(N³) products of degree ~N·d_k per step).  20 steps of the
+#: Lie–Poisson family (linear growth), polynomials / values: 0.3×, 1.1×, 3.4×, 5.6×, 7.9×,
+#: 27×, > 23× at N = 4, 6, 8, 10, 12, 16, 32 (scripts/bench_degrees.py) ...
+DEGREES_BY_VALUES_MIN_DIM = 8
+#: ... but for geometric growth (the cyclic fields, d_k = N^k to max_degree 20 000) values
+#: are slower below this dimension: polynomials / values 0.6×, 0.6× at N = 8, 12, 1.1× at
+#: 13, 1.8× at 14, 3.3× at 16; there the run hands over (1.0× the polynomial route at 8, 12)
+DEGREES_HAND_OVER_BELOW_DIM = 13
 
 
 def auto_path(n: int, kernel: str, splits: bool, circulant: bool):

@@ -346,7 +346,7 @@ def _degrees(inp: TaskInput) -> dict:
                         "minimal_polynomial": dd.minimal_polynomial if dd else None,
                         "recurrence": fit.characteristic_text(), "last_degree": res.degrees[-1],
                         "degrees": list(res.degrees), "disagreeing_runs": len(res.disagreeing),
-                        "undercount_bound": res.undercount_bound,
+                        "undercount_bound": res.undercount_bound, "routes": sorted(set(res.routes)),
                         "height_growth": res.heights.growth if res.heights is not None else None}}
 
 
