@@ -214,6 +214,23 @@ def test_liouville_exact_all_involutions(n, pairs, steps):
     _check(liouville_at_points(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=steps, pairs=pairs))
 
 
+def test_liouville_singular_step_names_the_map_and_the_point(capsys):
+    """exact-khk liouville --n 4 --seed 1 stops with exit 3 because Phi_f is singular at
+    Phi_g[++-+](x_0); the message names that step, and the claim is re-checked directly."""
+    from exact_khk.cli.main import main
+    from exact_khk.errors import SingularStepError
+
+    assert main(["liouville", "--n", "4", "--seed", "1", "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "at the orbit point x = x_0 of Phi_f: a step of Phi_f at Phi_g[++-+](x)" in err
+    system, ar = LiePoissonSystem.random(4, 1), get_arith("cyclo:4")
+    x0 = random_point(4, 1, system=system)
+    y = KahanMap(system.field_for_signs("++-+"), "1/10", ar).step(x0)
+    with pytest.raises(SingularStepError):
+        KahanMap(system.field("f"), "1/10", ar).step(y)
+    KahanMap(system.field("f"), "1/10", ar).step(x0)  # x_0 itself is regular for Phi_f
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("n", [5, 6, 7, 8])
 def test_liouville_exact_all_involutions_large_n(n):

@@ -126,19 +126,23 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
     pats = _patterns(system, patterns)
     maps = {"f": KahanMap(system.field("f"), eps, ar)}
     maps.update((f"g[{s}]", KahanMap(system.field_for_signs(s), eps, ar)) for s in pats)
-    control = KahanMap(system.field("control"), eps, ar)
+    maps_c = {**maps, "c": KahanMap(system.field("control"), eps, ar)}
     e = maps["f"].eps
     x = maps["f"].point(x)
 
-    def step(m, pt):
+    def step(a, pt, where="x"):  # Phi_a(pt), pt = ``where``; a singular step names both
         cnt.add()
-        return m.step(pt)
+        try:
+            return maps_c[a].step(pt)
+        except SingularStepError as exc:
+            raise SingularStepError(exc.x, exc.eps, condition=exc.condition,
+                                    detail=f"a step of Phi_{a} at {where} (f' is that map's field)") from None
 
     def integral(fld, pt):
         cnt.add()
         return Htilde(fld, pt, e, ar)
 
-    images = {k: step(m, x) for k, m in maps.items()}
+    images = {k: step(k, x) for k in maps}
     ints = [system.field_for_signs(s) for s in integral_patterns(n)]
     K0 = [integral(fld, x) for fld in ints]
     out = {name: [] for name in CLAIMS if name != "rank"}
@@ -149,7 +153,7 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
     for i, a in enumerate(names):
         for b in names[i + 1:]:
             if pairs == "all" or a == "f":
-                ab, ba = step(maps[a], images[b]), step(maps[b], images[a])
+                ab, ba = step(a, images[b], f"Phi_{b}(x)"), step(b, images[a], f"Phi_{a}(x)")
                 out["commutation"].append((f"Phi_{a} o Phi_{b}", [p - q for p, q in zip(ab, ba)]))
     cnt.add(2 * (n + 1))
     gH = grad_Htilde(system.field("f"), x, e, ar)
@@ -164,9 +168,9 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
             for j in range(i + 1, n):
                 br = sum((p * q for p, q in zip(Pg, grads[j])), ar.zero)
                 out[f"involutivity:{label}"].append((f"{{K~_{i}, K~_{j}}}_{label}", br))
-    cf, yc = step(control, images["f"]), step(control, x)
+    cf, yc = step("c", images["f"], "Phi_f(x)"), step("c", x)
     out["control:commutation"].append(("Phi_c o Phi_f - Phi_f o Phi_c",
-                                       [p - q for p, q in zip(cf, step(maps["f"], yc))]))
+                                       [p - q for p, q in zip(cf, step("f", yc, "Phi_c(x)"))]))
     hf = system.field("f")
     out["control:conservation"].append(("H~ o Phi_c - H~", integral(hf, yc) - integral(hf, x)))
     out["rank"] = rank(ar, grads)
@@ -266,8 +270,8 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
             per_point.append(residuals_at(system, x, eps, ar, patterns, pairs, cnt))
         except SingularStepError as exc:  # a map Φ_g (or Φ_c) undefined at the orbit point x_k
             raise SingularStepError(exc.x, exc.eps, condition=exc.condition,
-                                    detail=f"at the orbit point x_{k} of Phi_f (an associated map's step)"
-                                    + (f"; {exc.detail}" if exc.detail else "")) from None
+                                    detail=f"at the orbit point x = x_{k} of Phi_f"
+                                    + (f": {exc.detail}" if exc.detail else "")) from None
     where = f"exact in {_field_name(ar)} at {len(pts)} orbit points"
     if isinstance(ar, GFArith):
         where += " (mod P: a nonzero residual refutes, zero residuals do not prove)"
