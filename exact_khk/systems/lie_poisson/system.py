@@ -514,8 +514,10 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
     * x is an equilibrium (Hs x = 0: every map of the family fixes it);
     * H̃(x, ε) has a pole, or the first step of Φ_f or of Φ_g (the commuting
       flow's map, which certificates step too) is singular;
-    * Φ_f(x) has X(u) singular (x on the critical set of Φ_f, which Φ_f maps
-      into the invariant singular set, where Φ_f⁻¹ is undefined).
+    * Φ_f(x) or Φ_g(x) has X(u) singular (x on the critical set of Φ_f or Φ_g,
+      which the map sends into the invariant singular set, where its inverse and
+      the other map's step are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
+      steps Φ_f at Φ_g(x)).
 
     A draw that is not rejected is the same as before these rules, so points
     that were fine stay the same.  After 200 draws the system-dependent rules
@@ -564,10 +566,10 @@ def _degenerate_for(system, x, eps) -> bool:
     try:
         Htilde(system.field("f"), x, eps, ar)
         y = first_step(system.field("f"))
-        first_step(system.field("g"))  # the commuting flow's map, which certificates step too
+        z = first_step(system.field("g"))  # the commuting flow's map, which certificates step too
     except (PoleError, SingularMatrix):
         return True
-    return hankel_singular(y[:system.n])
+    return hankel_singular(y[:system.n]) or hankel_singular(z[:system.n])
 
 
 def b0_signs(n: int) -> str:
