@@ -231,6 +231,21 @@ def test_liouville_singular_step_names_the_map_and_the_point(capsys):
     KahanMap(system.field("f"), "1/10", ar).step(x0)  # x_0 itself is regular for Phi_f
 
 
+def test_liouville_pole_names_the_integral_and_the_point(capsys):
+    """exact-khk liouville --n 4 --seed 6 meets a pole of K~[-+++] at Phi_f(x_1) = x_2: exit 3,
+    and the message names the integral and the point; the pole is re-checked directly."""
+    from exact_khk.cli.main import main
+    from exact_khk.errors import PoleError
+
+    assert main(["liouville", "--n", "4", "--seed", "6", "--quiet"]) == 3
+    err = capsys.readouterr().err
+    assert "K~_0 = K~[-+++] at Phi_f(x) (x = x_1, the orbit point of Phi_f)" in err
+    system = LiePoissonSystem.random(4, 6)
+    x2 = KahanMap(system.field("f"), "1/10", "fraction").orbit(random_point(4, 6, system=system), 2)[2]
+    with pytest.raises(PoleError):
+        Htilde(system.field_for_signs("-+++"), x2, "1/10", "fraction")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("n", [5, 6, 7, 8])
 def test_liouville_exact_all_involutions_large_n(n):

@@ -138,17 +138,21 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
             raise SingularStepError(exc.x, exc.eps, condition=exc.condition,
                                     detail=f"a step of Phi_{a} at {where} (f' is that map's field)") from None
 
-    def integral(fld, pt):
+    def integral(fld, pt, name, where="x"):  # a pole names the integral and the point
         cnt.add()
-        return Htilde(fld, pt, e, ar)
+        try:
+            return Htilde(fld, pt, e, ar)
+        except PoleError as exc:
+            raise PoleError(f"{exc}; {name} at {where}") from None
 
     images = {k: step(k, x) for k in maps}
     ints = [system.field_for_signs(s) for s in integral_patterns(n)]
-    K0 = [integral(fld, x) for fld in ints]
+    knames = [f"K~_{j} = K~[{s}]" for j, s in enumerate(integral_patterns(n))]
+    K0 = [integral(fld, x, knames[j]) for j, fld in enumerate(ints)]
     out = {name: [] for name in CLAIMS if name != "rank"}
     for k, y in images.items():
         for j, fld in enumerate(ints):
-            out["conservation"].append((f"K~_{j} o Phi_{k}", integral(fld, y) - K0[j]))
+            out["conservation"].append((f"K~_{j} o Phi_{k}", integral(fld, y, knames[j], f"Phi_{k}(x)") - K0[j]))
     names = list(maps)
     for i, a in enumerate(names):
         for b in names[i + 1:]:
@@ -172,7 +176,8 @@ def residuals_at(system, x, eps, ar, patterns=None, pairs="all", counter=None):
     out["control:commutation"].append(("Phi_c o Phi_f - Phi_f o Phi_c",
                                        [p - q for p, q in zip(cf, step("f", yc, "Phi_c(x)"))]))
     hf = system.field("f")
-    out["control:conservation"].append(("H~ o Phi_c - H~", integral(hf, yc) - integral(hf, x)))
+    out["control:conservation"].append(("H~ o Phi_c - H~", integral(hf, yc, "H~", "Phi_c(x)")
+                                        - integral(hf, x, "H~")))
     out["rank"] = rank(ar, grads)
     return out
 
@@ -272,6 +277,8 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
             raise SingularStepError(exc.x, exc.eps, condition=exc.condition,
                                     detail=f"at the orbit point x = x_{k} of Phi_f"
                                     + (f": {exc.detail}" if exc.detail else "")) from None
+        except PoleError as exc:
+            raise PoleError(f"{exc} (x = x_{k}, the orbit point of Phi_f)") from None
     where = f"exact in {_field_name(ar)} at {len(pts)} orbit points"
     if isinstance(ar, GFArith):
         where += " (mod P: a nonzero residual refutes, zero residuals do not prove)"
