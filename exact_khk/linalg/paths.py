@@ -80,12 +80,13 @@ HTILDE_STRUCTURED_MIN_N = 3
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
 #: from values at points of the line (one N×N solve per point and step) instead of
 #: polynomial arithmetic (O(N³) products of degree ~N·d_k per step).  20 steps of the
-#: Lie–Poisson family (linear growth), polynomials / values: 0.3×, 1.1×, 3.4×, 5.6×, 7.9×,
-#: 27×, > 23× at N = 4, 6, 8, 10, 12, 16, 32 (scripts/bench_degrees.py) ...
+#: Lie–Poisson family (linear growth), polynomials / values: 0.3×, 0.9×, 2.5×, 5.6×, 10×,
+#: 34×, > 23× at N = 4, 6, 8, 10, 12, 16, 32 (scripts/bench_degrees.py, docs/benchmarks.md) ...
 DEGREES_BY_VALUES_MIN_DIM = 8
 #: ... but for geometric growth (the cyclic fields, d_k = N^k to max_degree 20 000) values
 #: are slower below this dimension: polynomials / values 0.6×, 0.6× at N = 8, 12, 1.1× at
-#: 13, 1.8× at 14, 3.3× at 16; there the run hands over (1.0× the polynomial route at 8, 12)
+#: 13, 1.8× at 14 (a separate run), 3.3× at 16; below it the run hands over (then
+#: polynomials / the rule: 1.0× and 0.9× at N = 8, 12)
 DEGREES_HAND_OVER_BELOW_DIM = 13
 
 
