@@ -387,9 +387,9 @@ def valued_line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None,
     overcounts; it undercounts besides that event only if a fit at D < d_k passes the
     check (probability ≤ (4d_k/p)^CHECK_POINTS per fit: the check points are random among
     at least p/2 unused ones, and the difference of two fractions of degree ≤ d_k vanishes
-    at most at 2d_k of them).  Points whose orbit meets a singular step or a pole of R_k are dropped
-    (finitely many: they are roots of nonzero polynomials unless the line is
-    degenerate, which raises :class:`_Degenerate`).  It stops before a step whose
+    at most at 2d_k of them).  Points whose orbit meets a singular step or a pole of R_k
+    are dropped (finitely many: they are roots of nonzero polynomials unless the line
+    is degenerate, which raises :class:`_Degenerate`).  It stops before a step whose
     degree passes ``max_degree`` (no fit at D = ``max_degree``); that step is not
     reported.  ``hand_over``: return None once the growth is geometric
     (:func:`_geometric`).  Cost: about 2d_k + 5 solves at step k, and k for each new
@@ -406,11 +406,10 @@ def valued_line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None,
     one = flint.nmod(1, p)
 
     def step(x):  # ZeroDivisionError when the step matrix is singular there
-        xs = list(x) + [one]
-        M, rhs = A[N] * one, r[N] * one
-        for l in range(N):
-            if x[l]:
-                M, rhs = M + A[l] * xs[l], rhs + r[l] * xs[l]
+        M, rhs = A[N], r[N]
+        for l, t in enumerate(x):
+            if t:
+                M, rhs = M + A[l] * t, rhs + r[l] * t
         return M.solve(rhs).entries()
 
     def value(x):  # R_k at the point, None at a pole
