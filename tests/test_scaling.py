@@ -121,6 +121,72 @@ def test_precision_needed_is_minimal_and_confirmed():
     assert max(x.error_log10 for x in below.rows if x.error_log10 is not None) > -D
 
 
+def _search(monkeypatch, model, digits=10):
+    """precision_needed over a model of the runs: ``model(P)`` -> (passed, worst log10 or None)."""
+    from exact_khk.studies import scaling
+    probes = []
+
+    def passes(system, x0, eps, steps, D, kind, P, exact):
+        probes.append(P)
+        return model(P)
+
+    monkeypatch.setattr(scaling, "_passes", passes)
+    r = precision_needed(default_system(), DEFAULT_X0, EPS, 1, digits, exact=[DEFAULT_X0])
+    assert len(set(probes)) == len(probes)  # never the same precision twice
+    tried = dict(r.tried)
+    assert tried[r.bits] is True and (r.bits == 2 or tried[r.bits - 1] is False)
+    return r.bits, probes
+
+
+def _scaling(T, undecided_below=0):
+    """Runs whose worst error is 10^-10.01 · 2^(T - P): P >= T passes."""
+    def model(P):
+        w = None if P < undecided_below else -10.01 - (P - T) * LOG10_2
+        return w is not None and w <= -10, w
+    return model
+
+
+def test_precision_search_follows_the_error_model(monkeypatch):
+    # the long-orbit case's ball search: runs below 4352 bits undecided, so the search
+    # doubles to 8704, predicts 7869 and confirms 7868 fails (bisection: 12 more probes)
+    bits, probes = _search(monkeypatch, _scaling(7869, undecided_below=4353))
+    assert bits == 7869 and probes == [34 << k for k in range(9)] + [7869, 7868]
+    # a first probe that passes is walked down; a failing one up
+    assert _search(monkeypatch, _scaling(20)) == (20, [34, 20, 19])
+    assert _search(monkeypatch, _scaling(50)) == (50, [34, 50, 49])
+
+
+def test_precision_search_survives_a_wrong_model(monkeypatch):
+    # every exact threshold T is found although the reported errors mislead the predictions
+    # (too optimistic, too pessimistic, no information): bisection takes over
+    for T in (2, 3, 35, 100, 1000, 5000):
+        for lie in (-1000.0, 1000.0, None, -10.5, -9.5):
+            bits, probes = _search(monkeypatch, lambda P, T=T, lie=lie: (P >= T, lie))
+            # up: steps of at least 1, 2, 4, ...; then at most 3 probes per halving of (lo, hi)
+            assert bits == T and len(probes) <= T.bit_length() + 3 * max(T, 34).bit_length() + 2
+    # passing not monotone in P: the answer is still a boundary (bits passes, bits - 1 fails)
+    _search(monkeypatch, lambda P: (P >= 60 or P % 7 == 0, -11.0 if P >= 60 or P % 7 == 0 else -5.0))
+
+
+def test_errors_from_logarithms_match_exact_rationals():
+    from exact_khk.studies.scaling import vs_exact
+    import mpmath
+    import random
+    rng = random.Random(5)
+    for h in (3, 80, 3000, 9000):
+        for _ in range(40):
+            ex = [flint.fmpq(rng.getrandbits(h) * rng.choice([-1, 0, 1]), rng.getrandbits(h) | 1) for _ in range(3)]
+            xs = [e + flint.fmpq(rng.getrandbits(20) * rng.choice([-1, 0, 1]), 1 << rng.randrange(300)) for e in ex]
+            err, rad = vs_exact(xs, ex)
+            gap = max(abs(x - e) for x, e in zip(xs, ex))
+            ref = max(abs(e) for e in ex)
+            assert rad is None and (err is None) == (gap == 0)
+            if err is not None:  # the exact ratio's log10 at 200 bits
+                q = gap / ref if ref != 0 else gap
+                with mpmath.workprec(200):
+                    assert abs(err - float(mpmath.log10(mpmath.mpf(int(q.p)) / int(q.q)))) < 1e-13
+
+
 def test_precision_rule_fit():
     rule = precision_rule(default_system(), DEFAULT_X0, EPS, 8, 10, kind="ball")
     assert math.isfinite(rule.c) and rule.c > 0          # ball radii grow: more bits per step

@@ -244,6 +244,16 @@ def test_long_orbit_stops_where_the_reference_is_out_of_reach(monkeypatch):
     assert r.exact_status == "ok" and r.outcomes[0].status == "ok" and not r.outcomes[0].silent_failure
 
 
+def test_long_orbit_case_carries_its_reference(monkeypatch):
+    # system_cases computed the exact orbit to choose the steps: run_case reuses it
+    long = system_cases(SYSTEM, long_steps=6, distances=())[-1]
+    pts, seconds = long.reference
+    assert list(pts) == KahanMap(SYSTEM.field("f"), EPS, "flint").orbit(X0, 6) and seconds >= 0
+    monkeypatch.setattr(hard, "exact_prefix", lambda *a, **k: pytest.fail("the reference was computed again"))
+    r = run_case(long, ["mp:64"], precision=False)
+    assert r.exact_status == "ok" and r.exact_seconds == seconds and r.outcomes[0].status == "ok"
+
+
 # --- the command line ----------------------------------------------------------------------------
 
 

@@ -478,8 +478,7 @@ def scale_run(system, x0, eps, steps, spec, exact, diagnostics=True, progress=No
     """The Lohner enclosure as an :class:`~exact_khk.studies.scaling.ArithRun` of a scaling
     study: midpoint error and radius against the exact orbit, containment decided
     exactly, the integrals' drift enclosed (I(X_k) − I(X_0): |mid| + rad)."""
-    from exact_khk.arith.ball import ball_mid, ball_rad
-    from exact_khk.studies.scaling import LOG10_2, ArithRun, StepRow, _norm, _rel, _slope as slope, declared
+    from exact_khk.studies.scaling import LOG10_2, ArithRun, StepRow, _slope as slope, declared, vs_exact
 
     integrals = declared(system)[0] if diagnostics else None
     run = enclose(system, [str(t) for t in x0], str(eps), steps, spec.prec, "lohner", exact, integrals,
@@ -489,9 +488,7 @@ def scale_run(system, x0, eps, steps, spec, exact, diagnostics=True, progress=No
         if r.step >= len(exact):
             break
         ex = exact[r.step]
-        exn = _norm(ex)
-        err = _rel(max(abs(ball_mid(t) - q) for t, q in zip(X, ex)), exn)
-        rad = _rel(max(ball_rad(t) for t in X), exn)
+        err, rad = vs_exact(X, ex, ball=True)
         rows.append(StepRow(spec.name, r.step, err, rad, {k: v for k, (v, _) in r.drift.items()},
                             encloses=r.encloses and all(z for _, z in r.drift.values()), seconds=r.seconds))
     final = rows[-1].error_log10 if rows else None

@@ -3,8 +3,8 @@ and what precision buys at what cost.
 
 :func:`run_orbit` iterates one orbit in one arithmetic and compares it step by
 step with the exact orbit; :func:`scaling_study` does that for a list of
-arithmetics; :func:`precision_needed` finds the smallest precision keeping D
-correct digits over K steps and :func:`precision_rule` fits
+arithmetics; :func:`precision_needed` finds a precision keeping D correct
+digits over K steps (one less does not) and :func:`precision_rule` fits
 bits ≈ D·log2(10) + c·K + const.
 
 How every number is obtained (also stored in ``ScalingStudy.method``):
@@ -99,10 +99,15 @@ def to_fmpq(ar, e) -> flint.fmpq:
 
 def log10q(q) -> float | None:
     """log10 |q| of an exact rational (any size), None for 0."""
-    q = abs(flint.fmpq(q))
-    if q == 0:
-        return None
-    return math.log10(int(q.p)) - math.log10(int(q.q))
+    q = flint.fmpq(q)
+    return None if q == 0 else _log10_ratio(abs(int(q.p)), int(q.q))
+
+
+def _log10_ratio(a: int, b: int) -> float:
+    """log10(a/b) for positive integers of any size, to within about 10^-14: the binary
+    exponents are subtracted as integers, before the one multiplication by log10 2."""
+    sa, sb = max(a.bit_length() - 64, 0), max(b.bit_length() - 64, 0)
+    return (math.log2(a >> sa) - math.log2(b >> sb) + (sa - sb)) * LOG10_2
 
 
 def _norm(qs):
@@ -118,6 +123,29 @@ def _err_bound(ar, e, exact):
 def _rel(num, den):
     """log10 of num/den; of num when den = 0 (a relative size of a zero reference is meaningless)."""
     return log10q(num / den if den != 0 else num)
+
+
+def _log10_gap(x, e) -> float | None:
+    """log10 |x − e| of two rationals, None when they are equal.  The difference is not
+    reduced to lowest terms: against a reference thousands of bits high that gcd, and the
+    comparisons of a max over rationals, cost far more than the logarithms."""
+    num = x.p * e.q - e.p * x.q
+    return None if num == 0 else _log10_ratio(abs(int(num)), int(x.q * e.q))
+
+
+def vs_exact(xs, ex, ball=False) -> tuple:
+    """``(error, radius)``: log10 of max_i |mid(x_i) − e_i| / ‖e‖∞ and, for balls, of
+    max_i rad(x_i) / ‖e‖∞ (None: 0; relative to 1 when e = 0), as :func:`_rel` gives
+    them, from logarithms (``xs`` in any arithmetic, balls when ``ball``)."""
+    ref = max((v for v in map(log10q, ex) if v is not None), default=0.0)
+
+    def rel(logs):
+        logs = [v for v in logs if v is not None]
+        return max(logs) - ref if logs else None
+
+    mids = [ball_mid(t) if ball else t for t in xs]
+    err = rel(_log10_gap(m, e) for m, e in zip(mids, ex))
+    return err, (rel(log10q(ball_rad(t)) for t in xs) if ball else None)
 
 
 # --- what the diagnostics check ------------------------------------------------
@@ -315,9 +343,7 @@ def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progr
             if k >= len(exact):  # the exact orbit stopped (singular): nothing to compare
                 break
             ex = exact[k]
-            exn = _norm(ex)
-            err = _rel(max(abs(to_fmpq(ar, xi) - ei) for xi, ei in zip(x, ex)), exn)
-            rad = _rel(max(ball_rad(xi) for xi in x), exn) if ball else None
+            err, rad = vs_exact(x if ball else [to_fmpq(ar, xi) for xi in x], ex, ball)
             encl = all(contains_exact(xi, ei) for xi, ei in zip(x, ex)) if ball else None
             y, dt, cond = None, 0.0, None
             if k < steps:
@@ -466,7 +492,7 @@ def scaling_study(system, x0, eps, steps, ariths=DEFAULT_ARITHS, diagnostics=Tru
 
 @dataclass(frozen=True)
 class PrecisionResult:
-    """Smallest precision P (bits) with D correct digits over K steps.
+    """A precision P (bits) with D correct digits over K steps, P − 1 without.
 
     ``kind`` ``'mp'``: every point of the ``mp:P`` orbit has relative error
     ≤ 10^-D, confirmed against the exact orbit; ``'ball'``: every ``ball:P``
@@ -497,8 +523,17 @@ def _passes(system, x0, eps, steps, digits, kind, P, exact):
 
 
 def precision_needed(system, x0, eps, steps, digits, kind="mp", exact=None) -> PrecisionResult:
-    """The smallest P such that ``kind:P`` keeps ``digits`` correct digits at every
-    step 0..``steps`` (doubling from ⌈D·log2 10⌉, then bisection).
+    """A precision P (bits) such that ``kind:P`` keeps ``digits`` correct digits at every
+    step 0..``steps`` and ``kind:(P - 1)`` does not, both evaluated against the exact orbit.
+
+    The search starts at ⌈D·log2 10⌉ and keeps a failing ``lo`` below a passing ``hi``.
+    Each probe is the precision the last run predicts, if errors and radii scale like
+    2^−P (P + ⌈(w + D)/log10 2⌉ from its worst log10 w), clamped into (lo, hi).  While
+    nothing has passed, the j-th probe up is clamped to [P + 2^(j−1), 2P] and a run
+    without a worst value (undecided, singular) doubles P; once lo and hi exist, after two
+    predictions that did not halve the interval a probe bisects it (so about one probe
+    per doubling and at most 3 per halving).  Where passing is not monotone in P (rounding), the
+    answer is a boundary of that kind, not necessarily the least P that passes.
 
     >>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
     >>> r = precision_needed(default_system(), DEFAULT_X0, "1/10", 10, 20)
@@ -515,25 +550,27 @@ def precision_needed(system, x0, eps, steps, digits, kind="mp", exact=None) -> P
     if exact is None:
         exact, _ = exact_orbit(fld, x0, eps, steps)
     tried = {}
-
-    def test(P):
-        if P not in tried:
-            tried[P] = _passes(system, x0, eps, steps, digits, kind, P, exact)
-        return tried[P][0]
-
-    lo, hi = 1, max(2, math.ceil(digits / LOG10_2))
-    while not test(hi):
-        lo, hi = hi, 2 * hi
-        if hi > 1 << 20:
-            raise InputError(f"digits: {digits} digits over {steps} steps need more than 2^20 bits")
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if test(mid):
-            hi = mid
-        else:
-            lo = mid
-    if lo >= 2:
-        test(lo)
+    # P = 1 counts as failing; guessed: P came from a prediction; misses: predictions since
+    # the last bisection that did not halve the interval; grow: the least step up
+    lo, hi, P, guessed, misses, grow = 1, None, max(2, math.ceil(digits / LOG10_2)), False, 0, 1
+    while True:
+        ok, worst = tried[P] = _passes(system, x0, eps, steps, digits, kind, P, exact)
+        width = None if hi is None else hi - lo
+        lo, hi = (lo, P) if ok else (P, hi)
+        if hi is not None and hi - lo <= 1:
+            break
+        informative = worst is not None and (ok or worst > -digits)
+        guess = P + math.ceil((worst + digits) / LOG10_2) if informative else None
+        if hi is None:  # nothing passed yet: up by at least 1, 2, 4, ... and at most doubling
+            guessed = guess is not None
+            P, grow = (min(2 * P, max(guess, P + grow)) if guessed else 2 * P), 2 * grow
+            if P > 1 << 20:
+                raise InputError(f"digits: {digits} digits over {steps} steps need more than 2^20 bits")
+            continue
+        misses += guessed and width is not None and 2 * (hi - lo) > width
+        guessed = guess is not None and misses < 2
+        P = min(max(guess, lo + 1), hi - 1) if guessed else (lo + hi) // 2
+        misses = misses if guessed else 0
     return PrecisionResult(kind, digits, steps, hi, tuple(sorted((p, r[0]) for p, r in tried.items())),
                            tried[hi][1])
 
