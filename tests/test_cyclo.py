@@ -327,3 +327,38 @@ def test_expresses_omega_is_whether_every_entry_of_an_involution_converts(n):
         except (TypeError, ValueError, ArithmeticError):
             every = False
         assert expresses_omega(ar, n) is every, (n, name)
+
+
+@pytest.mark.parametrize("N", [1, 2, 3, 4, 5, 7, 12])
+def test_native_solve_over_q_zeta(N):
+    # the rational system of φ(N) times the size solves M X = B: checked by the residual
+    # M X - B = 0 over Q(ζ_N) and against elimination over Q(ζ_N) itself
+    import random
+
+    import flint
+
+    from exact_khk.linalg import dense
+    ar, rng = get_arith(f"cyclo:{N}"), random.Random(N)
+    K = ar.K
+
+    def rnd():
+        return K.element(flint.fmpq_poly([flint.fmpq(rng.randint(-9, 9), rng.randint(1, 9))
+                                          for _ in range(K.degree)]))
+
+    M = [[rnd() for _ in range(4)] for _ in range(4)]
+    B = [[rnd(), Fraction(-1, 3)] for _ in range(4)]              # a rational column too
+    X = ar.native_solve(M, B)
+    assert all(sum((M[i][k] * X[k][j] for k in range(4)), K.zero) == B[i][j] for i in range(4) for j in range(2))
+    LU, perm = dense.lu_factor(ar, M)
+    assert X == dense.lu_solve(LU, perm, B)
+
+
+def test_native_solve_refuses_a_matrix_singular_over_q_zeta_only():
+    from exact_khk.errors import SingularMatrix
+    from exact_khk.linalg import dense
+    ar = get_arith("cyclo:5")
+    z = ar.gen
+    with pytest.raises(SingularMatrix):                            # det = ζ·ζ − ζ²·1 = 0
+        dense.solve(ar, [[z, z * z], [1, z]], [[1], [2]])
+    X, _ = dense.solve(ar, [[z, z * z], [1, z + 1]], [[1], [2]])      # det = ζ: x_2 = 2 − ζ⁻¹
+    assert X[1][0] == 2 - 1 / z and X[0][0] == (1 - z * z * X[1][0]) / z

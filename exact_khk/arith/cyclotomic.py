@@ -82,11 +82,24 @@ class CyclotomicField:
         self.N = N
         self.modulus = flint.fmpq_poly(flint.fmpz_poly.cyclotomic(N).coeffs())
         self.degree = self.modulus.degree()
+        self._companion = None
         self.gen = self.element(flint.fmpq_poly([0, 1]))
         self.zero = self.element(flint.fmpq_poly([0]))
 
     def element(self, poly) -> "CycloNumber":
         return CycloNumber(self, poly % self.modulus)
+
+    def companion_powers(self) -> list:
+        """Cᵏ for k < φ(N) as lists of integer rows, cached: C is the matrix of
+        multiplication by ζ_N on the basis 1, ζ, …, ζ^(φ−1) (column c: ζ^(c+k) mod Φ_N)."""
+        if self._companion is None:
+            phi, z = self.degree, flint.fmpq_poly([0, 1])
+            cols = [[flint.fmpq_poly([0] * c + [1]) for c in range(phi)]]  # cols[k][c] = ζ^(c+k)
+            for _ in range(1, phi):
+                cols.append([(p * z) % self.modulus for p in cols[-1]])
+            self._companion = [[[int(cols[k][c][r]) for c in range(phi)] for r in range(phi)]
+                               for k in range(phi)]
+        return self._companion
 
     def zeta_power(self, k: int) -> "CycloNumber":
         """ζ_N^k (k any integer)."""
@@ -294,6 +307,36 @@ class CycloArith(Arith):
     def magnitude(self, e) -> float:
         """|e| as a float, with ζ_N = e^{2πi/N} (display only; pivoting is exact)."""
         return abs(sum(float(c) * cmath.exp(2j * cmath.pi * k / self.N) for k, c in enumerate(e.p.coeffs())))
+
+    def native_solve(self, M, B):
+        """M X = B over Q(ζ_N) as one rational system φ(N) times larger, solved by FLINT
+        (``fmpq_mat.solve``).  With the unknowns ordered by power of ζ, block (r, c) of
+        that system is Σ_k (Cᵏ)_rc A_k: A_k the matrix of the ζᵏ-coefficients of M's
+        entries, C the companion matrix of Φ_N (multiplication by ζ).  Its determinant
+        is the norm of det M, so it is singular exactly when M is (ZeroDivisionError)."""
+        K, phi, n, m = self.K, self.K.degree, len(M), len(B[0]) if B else 0
+        q, zero = flint.fmpq_mat, flint.fmpq(0)
+
+        def coefficients(rows):  # [k][i][j]: the ζᵏ-coefficient of rows[i][j]
+            cs = [[self.convert(e).p.coeffs() for e in row] for row in rows]
+            return [[[c[k] if k < len(c) else zero for c in row] for row in cs] for k in range(phi)]
+
+        A = [q(n, n, [v for row in Ak for v in row]) for Ak in coefficients(M)]
+        rhs = q(n * phi, m, [v for Bk in coefficients(B) for row in Bk for v in row])
+        blocks = [[None] * phi for _ in range(phi)]
+        for k, Ck in enumerate(K.companion_powers()):
+            for r in range(phi):
+                for c in range(phi):
+                    if Ck[r][c]:
+                        term = A[k] * Ck[r][c]
+                        blocks[r][c] = term if blocks[r][c] is None else blocks[r][c] + term
+        zeros = [zero] * n
+        flat = [[b.entries() if b is not None else None for b in row] for row in blocks]
+        big = q(n * phi, n * phi, [v for r in range(phi) for i in range(n) for c in range(phi)
+                                   for v in (zeros if flat[r][c] is None else flat[r][c][i * n:(i + 1) * n])])
+        X = big.solve(rhs)
+        return [[K.element(flint.fmpq_poly([X[k * n + i, j] for k in range(phi)])) for j in range(m)]
+                for i in range(n)]
 
 
 # --- prime fields -------------------------------------------------------------
