@@ -362,3 +362,19 @@ def test_native_solve_refuses_a_matrix_singular_over_q_zeta_only():
         dense.solve(ar, [[z, z * z], [1, z]], [[1], [2]])
     X, _ = dense.solve(ar, [[z, z * z], [1, z + 1]], [[1], [2]])      # det = ζ: x_2 = 2 − ζ⁻¹
     assert X[1][0] == 2 - 1 / z and X[0][0] == (1 - z * z * X[1][0]) / z
+
+
+@pytest.mark.parametrize("n, signs, N", [(3, "+-+", 3), (4, "+-++", 8), (5, "-+-++", 5)])
+def test_jacobian_by_linear_forms_is_the_generic_one(n, signs, N, monkeypatch):
+    # f'(x) of a field with coefficients in Q(ω) at a point of Q(ζ_N) \\ Q: the fmpq_mat
+    # products of CycloArith.apply_forms against the loops over CycloNumbers
+    from exact_khk.arith.cyclotomic import CycloArith
+    ar = get_arith(f"cyclo:{N}")
+    system = default_system() if n == 3 else LiePoissonSystem.random(n, seed=n)
+    fld = system.field("g", signs, cyclotomic=True)
+    z = ar.gen
+    x = [ar.convert(Fraction(k + 1, 3)) + (k - 2) * z ** (k % N) / 7 for k in range(2 * n)]
+    fast = fld.jacobian(ar, x)
+    monkeypatch.setattr(CycloArith, "linear_forms", None)
+    slow = fld.jacobian(ar, x)
+    assert fast == slow and any(not t.is_rational() for row in fast for t in row)

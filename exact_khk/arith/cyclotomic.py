@@ -308,6 +308,38 @@ class CycloArith(Arith):
         """|e| as a float, with ζ_N = e^{2πi/N} (display only; pivoting is exact)."""
         return abs(sum(float(c) * cmath.exp(2j * cmath.pi * k / self.N) for k, c in enumerate(e.p.coeffs())))
 
+    def _coefficient_rows(self, values, zero=flint.fmpq(0)):
+        """The ζᵏ-coefficients (k < φ) of each value, as one flat list, row by row."""
+        phi = self.K.degree
+        return [c[k] if k < len(c) else zero for c in (self.convert(v).p.coeffs() for v in values)
+                for k in range(phi)]
+
+    def linear_forms(self, rows, consts, dim):
+        """The forms c_r + Σ_k a_rk x_k for :meth:`apply_forms`: for each power ζᵃ that
+        occurs, the matrix of the ζᵃ-coefficients of the a_rk (fmpq_mat, R × dim), with
+        (Cᵃ)ᵀ; the constants' coefficients (R × φ)."""
+        q, phi, R = flint.fmpq_mat, self.K.degree, len(rows)
+        H = [[flint.fmpq(0)] * (R * dim) for _ in range(phi)]
+        for r, row in enumerate(rows):
+            for k, a in row:
+                for e, c in enumerate(self.convert(a).p.coeffs()):
+                    H[e][r * dim + k] += c
+        powers = self.K.companion_powers()
+        terms = [(q(R, dim, H[e]), q(phi, phi, [powers[e][c][r] for r in range(phi) for c in range(phi)]) if e
+                  else None) for e in range(phi) if any(H[e])]
+        return terms, q(R, phi, self._coefficient_rows(consts)), dim
+
+    def apply_forms(self, prepared, x):
+        """[c_r + Σ_k a_rk x_k] for forms from :meth:`linear_forms`: a few fmpq_mat
+        products, (Σ_a H_a X (Cᵃ)ᵀ) with X the coefficients of x."""
+        terms, P, dim = prepared
+        phi = self.K.degree
+        X = flint.fmpq_mat(dim, phi, self._coefficient_rows(x))
+        for H, CT in terms:
+            P = P + (H * X if CT is None else H * X * CT)
+        E, K = P.entries(), self.K
+        return [CycloNumber(K, flint.fmpq_poly(E[r * phi:(r + 1) * phi])) for r in range(P.nrows())]
+
     def native_solve(self, M, B):
         """M X = B over Q(ζ_N) as one rational system φ(N) times larger, solved by FLINT
         (``fmpq_mat.solve``).  With the unknowns ordered by power of ζ, block (r, c) of
@@ -317,12 +349,10 @@ class CycloArith(Arith):
         K, phi, n, m = self.K, self.K.degree, len(M), len(B[0]) if B else 0
         q, zero = flint.fmpq_mat, flint.fmpq(0)
 
-        def coefficients(rows):  # [k][i][j]: the ζᵏ-coefficient of rows[i][j]
-            cs = [[self.convert(e).p.coeffs() for e in row] for row in rows]
-            return [[[c[k] if k < len(c) else zero for c in row] for row in cs] for k in range(phi)]
-
-        A = [q(n, n, [v for row in Ak for v in row]) for Ak in coefficients(M)]
-        rhs = q(n * phi, m, [v for Bk in coefficients(B) for row in Bk for v in row])
+        Mc = self._coefficient_rows([e for row in M for e in row])  # entry (i, j), power k: [(i n + j) φ + k]
+        A = [q(n, n, Mc[k::phi]) for k in range(phi)]
+        Bc = self._coefficient_rows([e for row in B for e in row])
+        rhs = q(n * phi, m, [Bc[(i * m + j) * phi + k] for k in range(phi) for i in range(n) for j in range(m)])
         blocks = [[None] * phi for _ in range(phi)]
         for k, Ck in enumerate(K.companion_powers()):
             for r in range(phi):

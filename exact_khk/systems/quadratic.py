@@ -142,8 +142,21 @@ class QuadraticField:
         return out
 
     def jacobian(self, ar, x):
-        """f'(x) as a list of rows of elements of ``ar``."""
+        """f'(x) as a list of rows of elements of ``ar`` (N² linear forms in x, all at once
+        where the arithmetic offers ``linear_forms``: e.g. fmpq_mat products for ``cyclo:N``)."""
         _, jterms, lin, _ = self._converted(ar)
+        N = self.dim
+        if ar.linear_forms is not None:
+            key = ("jacobian forms", ar.name)
+            if key not in self._cache:
+                consts = [[ar.zero] * N for _ in range(N)]
+                for i in range(N):
+                    for j, c in lin[i]:
+                        consts[i][j] = consts[i][j] + c
+                self._cache[key] = ar.linear_forms([jterms[i][j] for i in range(N) for j in range(N)],
+                                                   [c for row in consts for c in row], N)
+            vals = ar.apply_forms(self._cache[key], x)
+            return [vals[i * N:(i + 1) * N] for i in range(N)]
         rows = []
         for i in range(self.dim):
             row = []
