@@ -378,3 +378,21 @@ def test_jacobian_by_linear_forms_is_the_generic_one(n, signs, N, monkeypatch):
     monkeypatch.setattr(CycloArith, "linear_forms", None)
     slow = fld.jacobian(ar, x)
     assert fast == slow and any(not t.is_rational() for row in fast for t in row)
+
+
+@pytest.mark.parametrize("N", [1, 2, 3, 5, 8, 12])
+def test_native_matmul_is_the_generic_product(N):
+    import random
+
+    import flint
+
+    from exact_khk.linalg import dense
+    ar, rng = get_arith(f"cyclo:{N}"), random.Random(N)
+
+    def rnd():
+        return ar.K.element(flint.fmpq_poly([flint.fmpq(rng.randint(-9, 9), rng.randint(1, 9))
+                                             for _ in range(ar.K.degree)]))
+
+    A = [[rnd() for _ in range(3)] for _ in range(2)]
+    B = [[rnd(), 0, Fraction(1, 2), rnd()] for _ in range(3)]           # plain rationals mixed in
+    assert dense.matmul(A, B, ar) == dense.matmul(A, [[ar.convert(t) for t in row] for row in B])

@@ -142,6 +142,9 @@ class Arith:
     # A context may provide a fast exact solver: native_solve(M, B) -> X or
     # raise ZeroDivisionError when M is singular.  None means "use linalg".
     native_solve = None
+    # A context may multiply matrices natively: native_matmul(A, B) -> A B (lists of
+    # rows); None means the generic sums (:func:`exact_khk.linalg.dense.matmul`).
+    native_matmul = None
     # A context may evaluate many linear forms at one point at once:
     # linear_forms(rows, consts, dim) prepares rows [(k, a_rk), ...] and constants c_r
     # (the caller caches it), apply_forms(prepared, x) -> [c_r + Σ_k a_rk x_k].  None

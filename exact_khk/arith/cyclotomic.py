@@ -340,6 +340,28 @@ class CycloArith(Arith):
         E, K = P.entries(), self.K
         return [CycloNumber(K, flint.fmpq_poly(E[r * phi:(r + 1) * phi])) for r in range(P.nrows())]
 
+    def native_matmul(self, A, B):
+        """A B over Q(ζ_N) from the rational matrices of the coefficients: T_s = Σ_(a+b=s)
+        A_a B_b (fmpq_mat products), then ζ^s reduced modulo Φ_N."""
+        q, phi, K = flint.fmpq_mat, self.K.degree, self.K
+        n, m, p = len(A), len(B), len(B[0]) if B else 0
+        Ac = self._coefficient_rows([e for row in A for e in row])
+        Bc = self._coefficient_rows([e for row in B for e in row])
+        As = [q(n, m, Ac[k::phi]) for k in range(phi)]
+        Bs = [q(m, p, Bc[k::phi]) for k in range(phi)]
+        R = [q(n, p) for _ in range(phi)]
+        for s in range(2 * phi - 1):
+            T = None
+            for a in range(max(0, s - phi + 1), min(s, phi - 1) + 1):
+                t = As[a] * Bs[s - a]
+                T = t if T is None else T + t
+            for r, c in enumerate(K.zeta_power(s).p.coeffs()):  # ζ^s = Σ_r c_r ζ^r
+                if c:
+                    R[r] = R[r] + T * c
+        E = [Rr.entries() for Rr in R]
+        return [[CycloNumber(K, flint.fmpq_poly([E[r][i * p + j] for r in range(phi)])) for j in range(p)]
+                for i in range(n)]
+
     def native_solve(self, M, B):
         """M X = B over Q(ζ_N) as one rational system φ(N) times larger, solved by FLINT
         (``fmpq_mat.solve``).  With the unknowns ordered by power of ζ, block (r, c) of

@@ -177,7 +177,7 @@ def poisson_map_items(phi, Pi_at, pts, ks):
     """(k, dΦ(x_k) Π(x_k) dΦ(x_k)ᵀ vs Π(x_{k+1})) for k in ``ks``."""
     def sides(k):
         D = phi.jacobian(pts[k])
-        return matmul(matmul(D, Pi_at(k)), transpose(D)), Pi_at(k + 1)
+        return matmul(matmul(D, Pi_at(k), phi.arith), transpose(D), phi.arith), Pi_at(k + 1)
 
     for k in ks:
         yield k, lambda k=k: sides(k)

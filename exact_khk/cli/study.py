@@ -56,8 +56,8 @@ def register(sub):
     p.add_argument("--ariths", default=",".join(scaling.DEFAULT_ARITHS),
                    help="comma-separated floating/ball arithmetics, and lohner:P for the Lohner enclosure at P "
                         "bits (see 'exact-khk enclose'; default: %(default)s)")
-    p.add_argument("--digits", type=int, help="also find mp:P and ball:P keeping D correct digits over K steps (P - 1 not) "
-                   "and fit bits = D*log2(10) + c*K + const")
+    p.add_argument("--digits", type=int, help="also find mp:P and ball:P keeping D correct digits over K "
+                   "steps (P - 1 not) and fit bits = D*log2(10) + c*K + const")
     p.add_argument("--out", help="directory for scaling.csv, scaling.json, work_precision.png, "
                    "error_vs_step.png (and enclosure.json with --digits)")
     p.add_argument("--no-plots", action="store_true", help="with --out: skip the PNG figures")

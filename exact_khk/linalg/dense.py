@@ -24,8 +24,11 @@ def identity(ar, n):
     return [[ar.one if i == j else ar.zero for j in range(n)] for i in range(n)]
 
 
-def matmul(A, B):
-    """Product of two matrices given as lists of rows (any ring elements)."""
+def matmul(A, B, ar=None):
+    """Product of two matrices given as lists of rows (any ring elements); by the
+    arithmetic ``ar``'s ``native_matmul`` when it has one."""
+    if ar is not None and ar.native_matmul is not None and A and B and B[0]:
+        return ar.native_matmul(A, B)
     cols = list(zip(*B))
     return [[sum((a * b for a, b in zip(row, col)), start=row[0] * 0) for col in cols] for row in A]
 

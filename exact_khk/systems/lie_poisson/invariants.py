@@ -164,8 +164,8 @@ def _htilde_floating(ar, field, x, e):
     ep = _ldexp(ar, e, k)
     M = hessian_in(ar, field)
     N = len(y)
-    S = matmul(M, field.system.J(y))
-    S2 = matmul(S, S)
+    S = matmul(M, field.system.J(y), ar)
+    S2 = matmul(S, S, ar)
     My = [[sum((M[i][j] * y[j] for j in range(N)), ar.zero)] for i in range(N)]
     small = ar.magnitude(ep) <= 1
     if small:
@@ -191,8 +191,8 @@ def _htilde(ar, field, x, e):
         return _htilde_floating(ar, field, x, e)
     M = hessian_in(ar, field)
     x = list(x)
-    S = matmul(M, field.system.J(x))
-    S2 = matmul(S, S)
+    S = matmul(M, field.system.J(x), ar)
+    S2 = matmul(S, S, ar)
     e2 = e * e
     N = len(x)
     R = [[(ar.one if i == j else ar.zero) - e2 * S2[i][j] for j in range(N)] for i in range(N)]
@@ -215,8 +215,8 @@ def q_coefficients(system, x, arith=None):
     ar = get_arith(arith)
     n = system.n
     x = _point(ar, x, system.dim)
-    S = matmul(system.J(x), hessian_in(ar, system.field("f")))
-    S2 = matmul(S, S)
+    S = matmul(system.J(x), hessian_in(ar, system.field("f")), ar)
+    S2 = matmul(S, S, ar)
     two_n = ar.convert(2 * n)
     return [sum((S2[i][s] for i, s in enumerate(shift_index(n, l))), ar.zero) / two_n for l in range(n)]
 
@@ -226,8 +226,8 @@ def Pi(system, x, eps, arith=None):
     ar = get_arith(arith)
     e = _eps(ar, eps)
     J = system.J(_point(ar, x, system.dim))
-    JH = matmul(J, hessian_in(ar, system.field("f")))
-    T = matmul(matmul(JH, JH), J)
+    JH = matmul(J, hessian_in(ar, system.field("f")), ar)
+    T = matmul(matmul(JH, JH, ar), J, ar)
     e2 = e * e
     return [[a - e2 * b for a, b in zip(ra, rb)] for ra, rb in zip(J, T)]
 
@@ -278,8 +278,8 @@ def grad_Htilde(field, x, eps, arith=None):
         return _grad_htilde_flint(field, x, e)
     M = hessian_in(ar, field)
     n, N = field.system.n, len(M)
-    S = matmul(M, field.system.J(x))
-    S2 = matmul(S, S)
+    S = matmul(M, field.system.J(x), ar)
+    S2 = matmul(S, S, ar)
     e2 = e * e
     R = [[(ar.one if i == j else ar.zero) - e2 * S2[i][j] for j in range(N)] for i in range(N)]
     with ar.local():
