@@ -288,6 +288,8 @@ class CycloArith(Arith):
         self.zero, self.one = self.K.zero, self.K.zeta_power(0)
         self.gen = self.K.gen
         self.evidence = f"exact in Q(zeta_{N})"
+        #: rational coefficients per element (φ(N)): the size of its linear algebra over Q
+        self.coefficient_degree = self.K.degree
 
     def owns(self, e) -> bool:
         """Whether ``e`` is an element of this field (not of another Q(ζ_M))."""
@@ -367,10 +369,17 @@ class CycloArith(Arith):
         (``fmpq_mat.solve``).  With the unknowns ordered by power of ζ, block (r, c) of
         that system is Σ_k (Cᵏ)_rc A_k: A_k the matrix of the ζᵏ-coefficients of M's
         entries, C the companion matrix of Φ_N (multiplication by ζ).  Its determinant
-        is the norm of det M, so it is singular exactly when M is (ZeroDivisionError)."""
+        is the norm of det M, so it is singular exactly when M is (ZeroDivisionError).
+        A rational M is solved over Q directly.  (``linalg.dense.solve`` calls this only
+        for sizes within ``linalg.paths.coefficients_native``.)"""
         K, phi, n, m = self.K, self.K.degree, len(M), len(B[0]) if B else 0
         q, zero = flint.fmpq_mat, flint.fmpq(0)
-
+        M = [[self.convert(e) for e in row] for row in M]
+        if all(e.is_rational() for row in M for e in row):  # M X_k = B_k for each power k: one solve over Q
+            X = q(n, n, [e.p[0] for row in M for e in row]).solve(
+                q(n, m * phi, self._coefficient_rows([e for row in B for e in row])))
+            return [[CycloNumber(K, flint.fmpq_poly([X[i, j * phi + k] for k in range(phi)])) for j in range(m)]
+                    for i in range(n)]
         Mc = self._coefficient_rows([e for row in M for e in row])  # entry (i, j), power k: [(i n + j) φ + k]
         A = [q(n, n, Mc[k::phi]) for k in range(phi)]
         Bc = self._coefficient_rows([e for row in B for e in row])

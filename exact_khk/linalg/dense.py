@@ -17,7 +17,7 @@ uses it instead of the generic elimination.
 from __future__ import annotations
 
 from exact_khk.errors import SingularMatrix
-from exact_khk.linalg.paths import EXACT_INVERSE_MAX_N
+from exact_khk.linalg.paths import EXACT_INVERSE_MAX_N, coefficients_native
 
 
 def identity(ar, n):
@@ -27,7 +27,7 @@ def identity(ar, n):
 def matmul(A, B, ar=None):
     """Product of two matrices given as lists of rows (any ring elements); by the
     arithmetic ``ar``'s ``native_matmul`` when it has one."""
-    if ar is not None and ar.native_matmul is not None and A and B and B[0]:
+    if ar is not None and ar.native_matmul is not None and A and B and B[0] and coefficients_native(ar):
         return ar.native_matmul(A, B)
     cols = list(zip(*B))
     return [[sum((a * b for a, b in zip(row, col)), start=row[0] * 0) for col in cols] for row in A]
@@ -188,7 +188,7 @@ def solve(ar, M, B, condition=None):
     estimated (:func:`inverse_norm1_estimate`, O(N²), LAPACK's method).
     Raises :class:`SingularMatrix` if ``M`` is (exactly) singular.
     """
-    if ar.native_solve is not None:
+    if ar.native_solve is not None and coefficients_native(ar, len(M)):
         try:
             return ar.native_solve(M, B), None
         except ZeroDivisionError as exc:

@@ -29,6 +29,7 @@ from math import lcm
 
 from ..arith import _as_fraction
 from ..errors import InputError
+from ..linalg.paths import coefficients_native
 
 
 def certainly_zero(c) -> bool:
@@ -146,7 +147,7 @@ class QuadraticField:
         where the arithmetic offers ``linear_forms``: e.g. fmpq_mat products for ``cyclo:N``)."""
         _, jterms, lin, _ = self._converted(ar)
         N = self.dim
-        if ar.linear_forms is not None:
+        if ar.linear_forms is not None and coefficients_native(ar):
             key = ("jacobian forms", ar.name)
             if key not in self._cache:
                 consts = [[ar.zero] * N for _ in range(N)]
