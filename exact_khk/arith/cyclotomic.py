@@ -326,9 +326,10 @@ class CycloArith(Arith):
             for k, a in row:
                 for e, c in enumerate(self.convert(a).p.coeffs()):
                     H[e][r * dim + k] += c
-        powers = self.K.companion_powers()
+        used = [e for e in range(phi) if any(H[e])]
+        powers = self.K.companion_powers() if any(used) else None  # rational forms: none needed
         terms = [(q(R, dim, H[e]), q(phi, phi, [powers[e][c][r] for r in range(phi) for c in range(phi)]) if e
-                  else None) for e in range(phi) if any(H[e])]
+                  else None) for e in used]
         return terms, q(R, phi, self._coefficient_rows(consts)), dim
 
     def apply_forms(self, prepared, x):
