@@ -526,14 +526,14 @@ def precision_needed(system, x0, eps, steps, digits, kind="mp", exact=None) -> P
     """A precision P (bits) such that ``kind:P`` keeps ``digits`` correct digits at every
     step 0..``steps`` and ``kind:(P - 1)`` does not, both evaluated against the exact orbit.
 
-    The search starts at ⌈D·log2 10⌉ and keeps a failing ``lo`` below a passing ``hi``.
-    Each probe is the precision the last run predicts, if errors and radii scale like
-    2^−P (P + ⌈(w + D)/log10 2⌉ from its worst log10 w), clamped into (lo, hi).  While
-    nothing has passed, the j-th probe up is clamped to [P + 2^(j−1), 2P] and a run
-    without a worst value (undecided, singular) doubles P; once lo and hi exist, after two
-    predictions that did not halve the interval a probe bisects it (so about one probe
-    per doubling and at most 3 per halving).  Where passing is not monotone in P (rounding), the
-    answer is a boundary of that kind, not necessarily the least P that passes.
+    The search starts at ⌈D·log2 10⌉ and keeps a failing ``lo`` below a passing ``hi``. Each
+    probe is the precision the last run predicts, if errors and radii scale like 2^−P (P +
+    ⌈(w + D)/log10 2⌉ from its worst log10 w), clamped into (lo, hi). While nothing has
+    passed, the j-th probe up is clamped to [P + 2^(j−1), 2P] and a run without a worst
+    value (undecided, singular) doubles P; once lo and hi exist, after two predictions that
+    did not halve the interval a probe bisects it (so about one probe per doubling and at
+    most 3 per halving). Where passing is not monotone in P (rounding), the answer is a
+    boundary of that kind, not necessarily the least P that passes.
 
     >>> from exact_khk.systems.lie_poisson import default_system, DEFAULT_X0
     >>> r = precision_needed(default_system(), DEFAULT_X0, "1/10", 10, 20)
