@@ -3,6 +3,7 @@
 from fractions import Fraction
 
 import pytest
+from hypothesis import given, settings, strategies as st
 
 from exact_khk import KahanMap, LiePoissonSystem, get_arith
 from exact_khk.certification.proofs import (RationalFunctionArith, prove_all, prove_commutation, prove_conservation,
@@ -21,6 +22,47 @@ def test_rational_function_arithmetic():
     with pytest.raises(ZeroDivisionError):
         x / (y - y)
     assert ar.format(1 / (2 * x + 2)) == "(1/2)/(x + 1)"
+    # Henrici's sum: the common factor x + 1 of the denominators cancels with the sum
+    s = 1 / (x * (x + 1)) + 1 / (x + 1)
+    assert s.den == x.num and s.num == ar.one.num and s == 1 / x
+    assert 3 / (x - y) - 3 / (x - y) == 0 and (3 / (x - y) - 3 / (x - y)).den == ar.one.den
+
+
+_FACTORS = [lambda x, y: x, lambda x, y: y, lambda x, y: x + 1, lambda x, y: x - y,
+            lambda x, y: 2 * x * y + 3, lambda x, y: y * y + x, lambda x, y: x + y + 1]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.lists(st.integers(0, 6), max_size=3), st.lists(st.integers(0, 6), max_size=3),
+                          st.integers(-3, 3).filter(bool)), min_size=2, max_size=2),
+       st.sampled_from("+-*/"))
+def test_rational_function_operations_stay_canonical(parts, op):
+    """Henrici's sums and products (gcds of parts only) give the canonical form:
+    lowest terms, monic denominator, 0 as 0/1, and the same value as the
+    unreduced cross-multiplied result (checked as a polynomial identity)."""
+    from exact_khk.certification.proofs import RatFunc
+
+    ar = RationalFunctionArith(["x", "y"])
+    x, y = ar.ctx.gens()
+    one = ar.one.num
+
+    def poly(idx):
+        p = one
+        for i in idx:
+            p = p * _FACTORS[i](x, y)
+        return RatFunc(p, one, reduce=False)
+
+    (n1, d1, c1), (n2, d2, c2) = parts
+    u, v = ar.one * c1 * poly(n1) / poly(d1), ar.one * c2 * poly(n2) / poly(d2)
+    if op == "/" and ar.is_zero(v):
+        return
+    r = {"+": lambda: u + v, "-": lambda: u - v, "*": lambda: u * v, "/": lambda: u / v}[op]()
+    assert r.den.leading_coefficient() == 1
+    assert r.num.gcd(r.den).is_one() or r.num.is_zero() and r.den.is_one()
+    num, den = {"+": (u.num * v.den + v.num * u.den, u.den * v.den),
+                "-": (u.num * v.den - v.num * u.den, u.den * v.den),
+                "*": (u.num * v.num, u.den * v.den), "/": (u.num * v.den, u.den * v.num)}[op]
+    assert r.num * den == num * r.den
 
 
 def test_kahan_step_over_rational_functions_specialises_to_the_rational_step():

@@ -68,12 +68,21 @@ class RatFunc:
         return None
 
     def __add__(self, other):
+        # Henrici's addition: gcds of the denominators' parts, never of the sum's
+        # numerator with the product of the denominators
         o = self._lift(other)
         if o is None:
             return NotImplemented
-        if self.den == o.den:
-            return RatFunc(self.num + o.num, self.den)
-        return RatFunc(self.num * o.den + o.num * self.den, self.den * o.den)
+        a, b, c, d = self.num, self.den, o.num, o.den
+        if b == d:
+            return RatFunc(a + c, b)
+        g = _gcd(b, d)
+        if g is None or g.is_one():  # (ad + cb)/(bd) is in lowest terms, bd monic
+            return _canonical(a * d + c * b, b * d)
+        b1, d1 = b / g, d / g
+        t = a * d1 + c * b1
+        g2 = t.gcd(g)
+        return _canonical(t / g2, b1 * (d / g2))
 
     __radd__ = __add__
 
@@ -92,7 +101,7 @@ class RatFunc:
         o = self._lift(other)
         if o is None:
             return NotImplemented
-        return RatFunc(self.num * o.num, self.den * o.den)
+        return _product(self.num, self.den, o.num, o.den)
 
     __rmul__ = __mul__
 
@@ -102,7 +111,8 @@ class RatFunc:
             return NotImplemented
         if o.num.is_zero():
             raise ZeroDivisionError("division by the zero rational function")
-        return RatFunc(self.num * o.den, self.den * o.num)
+        lc = o.num.leading_coefficient()  # d/c with c made monic
+        return _product(self.num, self.den, o.den / lc, o.num / lc)
 
     def __rtruediv__(self, other):
         o = self._lift(other)
@@ -123,6 +133,27 @@ class RatFunc:
         return str(self.num) if self.den.is_one() else f"({self.num})/({self.den})"
 
     __repr__ = __str__
+
+
+def _canonical(num, den):
+    """num/den already in lowest terms with den monic; 0 as 0/1."""
+    return RatFunc(num, den if not num.is_zero() else den.context().from_dict({}) + 1, reduce=False)
+
+
+def _gcd(p, q):
+    """gcd(p, q), monic (1 when either is a nonzero constant)."""
+    return p.gcd(q) if not (p.is_constant() or q.is_constant()) else None
+
+
+def _product(a, b, c, d):
+    """(a/b)·(c/d) for fractions in lowest terms with monic denominators (Henrici:
+    the cross gcds gcd(a, d), gcd(c, b) only)."""
+    g1, g2 = _gcd(a, d), _gcd(c, b)
+    if g1 is not None and not g1.is_one():
+        a, d = a / g1, d / g1
+    if g2 is not None and not g2.is_one():
+        c, b = c / g2, b / g2
+    return _canonical(a * c, b * d)
 
 
 class RationalFunctionArith(Arith):
