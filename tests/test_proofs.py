@@ -145,6 +145,18 @@ def test_cli_prove(capsys):
     assert out.count("symbolic proof") == 3 and out.count("symbolic disproof") == 3
 
 
+def test_cli_prove_takes_a_system_by_its_vectors_without_a_point(capsys):
+    """--a/--b/--c name a system; prove needs no --x0 (and refuses one): it used to demand
+    it, so a system given by its vectors could not be proved at all."""
+    from exact_khk.cli.main import main
+
+    assert main(["prove", "--a", "1,0", "--b", "2,1", "--c", "1,3"]) == 0
+    out = capsys.readouterr().out
+    assert "a=(1, 0), b=(2, 1), c=(1, 3)" in out and out.count("holds=True") == 3
+    assert main(["orbit", "--a", "1,0", "--b", "2,1", "--c", "1,3"]) == 2   # a point command still needs --x0
+    assert "--x0 is required" in capsys.readouterr().err
+
+
 def test_evidence_doc_examples_run(capsys):
     """The Python examples of docs/evidence.md run and print what they claim."""
     import pathlib

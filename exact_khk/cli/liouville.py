@@ -131,5 +131,5 @@ def cmd_prove(args):
 
         system = LiePoissonSystem.from_vectors(*PROVE_DEFAULT_VECTORS)
     else:
-        system, _, _ = system_from_args(args)
+        system, _, _ = system_from_args(args, point=False)
     return _report(args, system, prove_all(system), {})

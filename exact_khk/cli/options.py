@@ -126,8 +126,10 @@ def field_name(system, args) -> str:
     return f"g[{args.signs}]"
 
 
-def system_from_args(args, reals=None):
+def system_from_args(args, reals=None, point=True):
     """(system, x0, eps) from parsed options, with typed errors naming the option.
+    ``point=False`` (a command without a point or step size, ``prove``): the system
+    only, (system, None, None).
 
     ``reals``: a precision P, for a command that reads ``--x0`` and ``--eps`` as reals
     itself (``enclose``): a given ``--x0``/``--eps`` is then not read here (it comes back
@@ -158,7 +160,7 @@ def system_from_args(args, reals=None):
         a = parse_vector(args.a, "--a", args.n)
         check_n(len(a), "--a")
         system = LiePoissonSystem(a, parse_vector(args.b, "--b", len(a)), parse_vector(args.c, "--c", len(a)))
-        if args.x0 is None:
+        if args.x0 is None and point:
             raise InputError("--x0 is required with --a/--b/--c")
     elif args.seed is not None:
         if args.n is None:
@@ -168,6 +170,8 @@ def system_from_args(args, reals=None):
         if args.n not in (None, 3):
             raise InputError("--n other than 3 needs --a/--b/--c or --seed")
         system = LiePoissonSystem.from_vectors(*DEFAULT_VECTORS)
+    if not point:
+        return system, None, None
     # a seeded point is off the degenerate sets (random_point), also those of this system and eps
     return _point_and_eps(args, system, reals, DEFAULT_EPS, DEFAULT_X0,
                           lambda eps: random_point(system.n, args.seed, system=system, eps=eps))
