@@ -67,6 +67,19 @@ def test_commands_import_only_what_they_use(argv, needs):
     assert "exact_khk.cli.study" not in mods and "exact_khk.cli.sweep" not in mods, mods
 
 
+def test_catalogue_systems_and_their_kahan_maps_import_no_sympy():
+    """Reading a system file (the safe parser's exact arithmetic is flint's fmpq_mpoly) and
+    stepping its Kahan map import no heavy library: every command that takes --system NAME."""
+    mods = _imported_after("from exact_khk.systems.catalogue import names, resolve\n"
+                           "from exact_khk.kahan.map import KahanMap\n"
+                           "for name in names():\n"
+                           "    s = resolve(name)\n"
+                           "    KahanMap(s.field('f'), '1/10', 'flint').step(s.default_x0)\n"
+                           "import exact_khk.systems.real_expressions")
+    assert "exact_khk.systems.expressions" in mods and "exact_khk.systems.real_expressions" in mods, mods
+    assert _heavy(mods) == [], mods
+
+
 def test_mp_imports_mpmath_when_asked():
     mods = _imported_after("from exact_khk.arith import get_arith\nget_arith('mp:64')")
     assert "mpmath" in mods

@@ -5,15 +5,16 @@ expression may contain only the names it is given (variables, parameters,
 ``eps``), integer and decimal literals (exact: 0.1 = 1/10, 1e-5 = 1/100000), ``+ - * / **`` and
 parentheses, with Python's precedence; an exponent is an integer literal with
 |e| <= 64, and towers such as ``x**10**9`` are refused.  The value is computed
-exactly as a quotient num/den of two polynomials in SymPy's sparse polynomial
-ring Q[x_0, ..., x_{N-1}, eps] (``sympy.polys.rings``) and reduced to lowest terms
-with SymPy's gcd.  The work spent expanding and the size of the numbers are
+exactly as a quotient num/den of two polynomials in python-flint's sparse
+polynomial ring Q[x_0, ..., x_{N-1}, eps] (``flint.fmpq_mpoly``, lex order; see
+:func:`ring`) and reduced to lowest terms with flint's gcd (:func:`cancel`; SymPy
+is not imported).  The work spent expanding and the size of the numbers are
 budgeted as it goes (:data:`MAX_WORK`, :data:`MAX_BITS`), so a huge power of a
 long sum is refused in seconds instead of hanging.  Every refusal is an
 :class:`~exact_khk.errors.InputError` naming the field and the offending token.
 
->>> from sympy.polys.rings import ring
->>> R, x, eps = ring("x, eps", sympy.QQ)
+>>> R = ring(["x", "eps"])
+>>> x, eps = R.gens()
 >>> Parser("(x**2 - 1)/(x - 1) + 0.5*eps", "demo", R, {"x": x, "eps": eps}, {}, "x, eps").value
 (2*x + eps + 2, 2)
 >>> Parser("x**10**9", "demo", R, {"x": x}, {}, "x").value
@@ -28,8 +29,6 @@ import re
 from fractions import Fraction
 
 import flint
-import sympy
-from sympy.polys.rings import ring
 
 from ..errors import InputError
 from ..parsing import MAX_EXPONENT as MAX_DECIMAL_EXPONENT
@@ -41,8 +40,16 @@ MAX_DEPTH = 100           # nested parentheses
 MAX_WORK = 3_000_000      # term products (weighted by number size) spent on one expression
 MAX_BITS = 2_000_000      # size of the numbers
 _TOKEN = re.compile(r"\s*(?:((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
+
+
+def ring(names):
+    """The polynomial ring Q[names] (a ``flint.fmpq_mpoly_ctx``, lex order in the order of
+    ``names``: the order in which terms are printed and leading coefficients are taken)."""
+    return flint.fmpq_mpoly_ctx.get(tuple(names), "lex")
+
+
 #: the ring of constants, for parameter values
-CONSTANTS = ring([], sympy.QQ)[0]
+CONSTANTS = ring(())
 
 
 # --- numbers and printing without Python's 4300-digit int <-> str limit ------------
@@ -54,8 +61,8 @@ def to_int(digits: str) -> int:
 
 
 def frac(c) -> Fraction:
-    """A Fraction from a SymPy QQ element (gmpy2, flint or pure-Python ground types)."""
-    return Fraction(int(c.numerator), int(c.denominator))
+    """A Fraction from a ring coefficient (a ``flint.fmpq``; ``int(fmpz)`` has no digit limit)."""
+    return Fraction(int(c.p), int(c.q))
 
 
 def number_text(q) -> str:
@@ -82,9 +89,10 @@ def short(text: str) -> str:
 
 
 def text_of(p) -> str:
-    """A ring polynomial for a message (never fails on huge coefficients)."""
+    """A ring polynomial for a message, with ``**`` for powers as in the file syntax
+    (e.g. 'x1**2 - 2*x2'; never fails on huge coefficients)."""
     try:
-        return short(str(p))
+        return short(str(p).replace("^", "**"))
     except ValueError:  # a coefficient beyond the int -> str limit
         return "<a polynomial with very large coefficients>"
 
@@ -100,7 +108,45 @@ def term_text(c, m, names) -> str:
 
 def bits_of(p) -> int:
     """The size in bits of the largest coefficient of a ring polynomial."""
-    return max((int(c.numerator).bit_length() + int(c.denominator).bit_length() for c in p.values()), default=0)
+    return max((c.p.bit_length() + c.q.bit_length() for c in p.coeffs()), default=0)
+
+
+# --- ring polynomials ------------------------------------------------------------------
+
+
+def terms(p) -> list:
+    """The terms of a ring polynomial as [(exponent tuple of ints, fmpq coefficient)], leading
+    term first (flint's exponents are fmpz)."""
+    return [(tuple(map(int, m)), c) for m, c in zip(p.monoms(), p.coeffs())]
+
+
+def lc(p):
+    """The leading coefficient (lex order) of a ring polynomial, 0 for the zero polynomial."""
+    return p.leading_coefficient()
+
+
+def cancel(num, den) -> tuple:
+    """num/den in lowest terms, in the canonical form SymPy's ``cancel`` gives over Q:
+    num and den coprime, with integer coefficients whose common gcd is 1, and den's
+    leading coefficient positive; (0, 1) if num = 0.
+
+    >>> R = ring(["x", "y"])
+    >>> x, y = R.gens()
+    >>> cancel((x**2 - y**2) / 6, (2*y - 2*x) / 9)
+    (-3*x - 3*y, 4)
+    """
+    R = num.context()
+    if not num:
+        return num, R.constant(1)
+    g = num.gcd(den)
+    if not g.is_one():
+        num, den = num / g, den / g  # exact divisions
+    cs = num.coeffs() + den.coeffs()
+    q, p = flint.fmpz(1), flint.fmpz(0)
+    for c in cs:
+        q, p = q.lcm(c.q), p.gcd(c.p)
+    scale = flint.fmpq(q, p) if lc(den) > 0 else -flint.fmpq(q, p)
+    return (num, den) if scale == 1 else (num * scale, den * scale)
 
 
 # --- the safe parser ---------------------------------------------------------------
@@ -108,7 +154,7 @@ def bits_of(p) -> int:
 
 class Parser:
     """Recursive descent over whitelisted tokens; every value is a pair (num, den) of
-    elements of the polynomial ring ``R``.
+    elements of the polynomial ring ``R`` (a ``flint.fmpq_mpoly_ctx``, see :func:`ring`).
 
     ``names`` maps each allowed name to a ring element (a generator, or a
     parameter's value); ``refused`` maps names declared but not allowed here to
@@ -118,6 +164,7 @@ class Parser:
 
     def __init__(self, text: str, where: str, R, names: dict, refused: dict, allowed: str):
         self.where, self.text, self.R, self.names, self.work = where, text, R, names, 0
+        self.one = R.constant(1)
         if not isinstance(text, str):
             self.fail(f"expected a string, got {text!r}")
         if len(text) > MAX_LENGTH:
@@ -157,7 +204,7 @@ class Parser:
             _, tok, pos = self.tokens[self.i]
             self.fail(f"unexpected {tok!r} at position {pos}" + (
                 " (chained ** is not allowed; use parentheses)" if tok == "**" else ""))
-        return num.cancel(den)
+        return cancel(num, den)
 
     # --- grammar: sum := product (('+'|'-') product)*, product := unary (('*'|'/') unary)*,
     #     unary := ('+'|'-')* power, power := atom ('**' integer)?, atom := number | name | '(' sum ')'
@@ -209,7 +256,7 @@ class Parser:
             self.fail(f"the exponent at position {pos} must be an integer literal")
         e = int(tok)
         value = self.inverse(value) if sign < 0 else value
-        result = (self.R.one, self.R.one)
+        result = (self.one, self.one)
         while e:  # binary powering, every product budgeted
             if e & 1:
                 result = self.times(result, value)
@@ -228,9 +275,9 @@ class Parser:
             whole, _, frac = mantissa.partition(".")
             shift = int(exp or 0) - len(frac)
             num, den = to_int(whole + frac) * 10 ** max(shift, 0), 10 ** max(-shift, 0)
-            return self.R(sympy.QQ(num, den)), self.R.one
+            return self.R.constant(flint.fmpq(num, den)), self.one
         if kind == "name":
-            return self.names[tok], self.R.one
+            return self.names[tok], self.one
         if tok != "(":
             self.fail(f"unexpected {tok!r} at position {pos}")
         if depth >= MAX_DEPTH:
@@ -268,7 +315,7 @@ class Parser:
         for (p, P), (q, Q) in ((a, b), (b, a)):
             if len(Q) <= len(P):
                 self.cost(P, Q)
-                quo, rem = P.div(Q)
+                quo, rem = divmod(P, Q)
                 if not rem:  # p/P + q/Q = (p + q·(P/Q))/P
                     return p + self.mul(q, quo), P
         return self.mul(a[0], b[1]) + self.mul(b[0], a[1]), self.mul(a[1], b[1])
@@ -287,18 +334,18 @@ class Parser:
 
 def to_polynomial(p, nx: int) -> Polynomial:
     """A ring polynomial in (x_0, ..., x_{nx-1}, eps) as an exact :class:`Polynomial`."""
-    return Polynomial(nx, {m: frac(c) for m, c in p.items()})
+    return Polynomial(nx, {m: frac(c) for m, c in terms(p)})
 
 
 def checked_polynomial(parsed: Parser, names, max_degree: int, where: str, why: str):
     """The value of ``parsed`` as one ring polynomial; InputError naming the first term that
     is not a polynomial, or has degree > max_degree in the variables ``names``."""
     num, den = parsed.value
-    if not den.is_ground:
-        bad = next((t for t, (n, d) in parsed.summands if not n.cancel(d)[1].is_ground), parsed.text)
+    if not den.is_constant():
+        bad = next((t for t, (n, d) in parsed.summands if not cancel(n, d)[1].is_constant()), parsed.text)
         raise InputError(f"{where}: term {short(bad)} is not a polynomial in the variables; {why}")
-    p = num.quo_ground(den.LC)
-    for m, c in sorted(p.items(), reverse=True):
+    p = num / lc(den)
+    for m, c in sorted(terms(p), reverse=True):
         if sum(m[:len(names)]) > max_degree:
             raise InputError(f"{where}: term {term_text(c, m, names)} has degree {sum(m[:len(names)])}; {why}")
     return p

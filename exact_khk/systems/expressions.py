@@ -30,8 +30,7 @@ import re
 from decimal import Decimal
 from fractions import Fraction
 
-import sympy
-from sympy.polys.rings import ring
+import flint
 
 try:
     import tomllib
@@ -42,7 +41,8 @@ from ..arith import _as_fraction, get_arith
 from ..errors import InputError
 from ..parsing import read_text_file
 from .base import System
-from .expression_parser import CONSTANTS, Parser, checked_polynomial, frac, number_text, short, text_of, to_polynomial
+from .expression_parser import (CONSTANTS, Parser, checked_polynomial, frac, lc, number_text, ring, short, terms,
+                                text_of, to_polynomial)
 from .functions import PolynomialTensor, RationalFunction
 from .quadratic import QuadraticField
 
@@ -55,7 +55,7 @@ _SYSTEM_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*\Z")
 
 def _quadratic_field(polys, label: str) -> QuadraticField:
     """The QuadraticField with f_i = polys[i] (ring polynomials of degree <= 2, no ε)."""
-    return quadratic_field_from_terms([[(m[:-1], frac(c)) for m, c in p.items()] for p in polys], label)
+    return quadratic_field_from_terms([[(m[:-1], frac(c)) for m, c in terms(p)] for p in polys], label)
 
 
 def quadratic_field_from_terms(rows, label: str) -> QuadraticField:
@@ -78,6 +78,12 @@ def quadratic_field_from_terms(rows, label: str) -> QuadraticField:
     return QuadraticField(len(rows), tuple(quad), tuple(lin), tuple(const), label)
 
 
+def _fmpq(q) -> flint.fmpq:
+    """An exact rational (int or Fraction) as a flint fmpq."""
+    q = Fraction(q)
+    return flint.fmpq(q.numerator, q.denominator)
+
+
 def _rational(value, where: str) -> Fraction:
     """An exact rational from an int, Fraction, TOML decimal or a constant expression string."""
     if isinstance(value, (int, Fraction)) and not isinstance(value, bool):
@@ -88,7 +94,7 @@ def _rational(value, where: str) -> Fraction:
         return Fraction(value)
     if isinstance(value, str):
         num, den = Parser(value, where, CONSTANTS, {}, {}, "a rational number is expected here").value
-        return frac(num.LC) / frac(den.LC)
+        return frac(lc(num)) / frac(lc(den))
     if isinstance(value, float):
         raise InputError(f"{where}: {value!r} is a binary float; write it as a string such as '1/10'")
     raise InputError(f"{where}: expected a rational number (a string such as '1/3'), got {value!r}")
@@ -198,9 +204,11 @@ class ExpressionSystem(System):
         self.parameters = {p: _rational(v, at(f"parameters {p}")) for p, v in params.items()}
         if params:
             spec["parameters"] = {p: _spec_value(v, at(f"parameters {p}")) for p, v in params.items()}
-        self._ring, *gens = ring([sympy.Symbol(v) for v in (*variables, EPS)], sympy.QQ)
+        self._ring = ring((*variables, EPS))
+        gens = self._ring.gens()
         self._eps = gens[-1]
-        self._values = {p: self._ring(sympy.QQ(q.numerator, q.denominator)) for p, q in self.parameters.items()}
+        self._values = {p: self._ring.constant(flint.fmpq(q.numerator, q.denominator))
+                        for p, q in self.parameters.items()}
         self._names = dict(zip(variables, gens), **self._values)
 
         self._fields, self._hamiltonian = {}, None
@@ -283,7 +291,7 @@ class ExpressionSystem(System):
         self._spec["hamiltonian"] = {"K": Ks, "H": Htext}
         K = [[self._parse(e, f"hamiltonian K[{i}][{j}]", constant=True).value for j, e in enumerate(row)]
              for i, row in enumerate(Ks)]
-        K = [[frac(num.LC) / frac(den.LC) for num, den in row] for row in K]
+        K = [[frac(lc(num)) / frac(lc(den)) for num, den in row] for row in K]
         for i in range(self.dim):
             for j in range(i, self.dim):
                 if K[i][j] + K[j][i] != 0:
@@ -293,8 +301,9 @@ class ExpressionSystem(System):
                                 self._at("hamiltonian H"), "H must be a polynomial of degree <= 3")
         self._hamiltonian = (tuple(map(tuple, K)),
                              RationalFunction(to_polynomial(H, self.dim), name="H", text=Htext))
-        R, grad = self._ring, [H.diff(x) for x in self._ring.gens[:-1]]
-        return [sum((grad[j] * R(sympy.QQ(k.numerator, k.denominator)) for j, k in enumerate(row)), R.zero)
+        grad = [H.derivative(i) for i in range(self.dim)]
+        return [sum((grad[j] * flint.fmpq(k.numerator, k.denominator) for j, k in enumerate(row)),
+                    self._ring.from_dict({}))
                 for row in K]
 
     def _read_defaults(self, table):
@@ -350,8 +359,8 @@ class ExpressionSystem(System):
         for seed in range(200):
             x = self.random_point(seed)
             if all(not fn.den.evaluate(fr, x, eps) == 0 for fn in fns) and all(
-                    sympy.Matrix([[int(i == j) - eps * t for j, t in enumerate(row)]
-                                  for i, row in enumerate(g.jacobian(fr, x))]).det() != 0
+                    flint.fmpq_mat([[_fmpq(int(i == j) - eps * t) for j, t in enumerate(row)]
+                                    for i, row in enumerate(g.jacobian(fr, x))]).det() != 0
                     for g in self._fields.values()):
                 return x
         return self.random_point(0)

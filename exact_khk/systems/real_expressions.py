@@ -49,13 +49,11 @@ import re
 from fractions import Fraction
 
 import flint
-import sympy
-from sympy.polys.rings import ring
 
 from ..arith import check_precision, get_arith
 from ..errors import InputError
 from .base import System
-from .expression_parser import Parser, frac, short, text_of
+from .expression_parser import Parser, cancel, frac, ring, short, terms, text_of
 from .expressions import EPS, ExpressionSystem, quadratic_field_from_terms
 from .quadratic import ParameterFields, certainly_zero
 
@@ -121,10 +119,10 @@ class RealExpressionSystem(System):
         the names a text may use (x, p, and the other parameters at their rational values) and
         the refused ones (ε)."""
         N = self.dim
-        self._R, *gens = ring([sympy.Symbol(v) for v in (*self.variables, EPS, *self.values)], sympy.QQ)
-        self._pgens = gens[N + 1:]
-        self._table = dict(zip(self.variables, gens[:N]), **dict(zip(self.values, self._pgens)))
-        self._table.update({p: self._R(sympy.QQ(q.numerator, q.denominator))
+        self._R = ring((*self.variables, EPS, *self.values))
+        gens = self._R.gens()
+        self._table = dict(zip(self.variables, gens[:N]), **dict(zip(self.values, gens[N + 1:])))
+        self._table.update({p: self._R.constant(flint.fmpq(q.numerator, q.denominator))
                             for p, q in self.base.parameters.items() if p not in self.values})
         self._refused = {EPS: "eps is not allowed here: it is the step size, and a vector field does not depend "
                               "on it"}
@@ -135,7 +133,7 @@ class RealExpressionSystem(System):
 
     def _free_of_x(self, poly, where, what):
         """Refuse a ring polynomial (a denominator, or an entry of K) that involves x."""
-        if any(any(m[:self.dim + 1]) for m in poly.monoms()):
+        if any(any(m[:self.dim + 1]) for m, _ in terms(poly)):
             raise InputError(f"{where}: with real {', '.join(self.values)}, {what} {text_of(poly)} depends on "
                              f"the variables")
 
@@ -144,11 +142,11 @@ class RealExpressionSystem(System):
         N, R = self.dim, self._R
         self._free_of_x(den, where, "the denominator")
         coefs = {}
-        for m, c in num.items():
+        for m, c in terms(num):
             if sum(m[:N]) > 2:
                 raise InputError(f"{where}: with real {', '.join(self.values)}, the field has a term of degree "
                                  f"{sum(m[:N])} in the variables (the file's values cancel it)")
-            coefs[m[:N]] = coefs.get(m[:N], R.zero) + R({(0,) * (N + 1) + m[N + 1:]: c})
+            coefs[m[:N]] = coefs.get(m[:N], R.from_dict({})) + R.from_dict({(0,) * (N + 1) + m[N + 1:]: c})
         return coefs, den
 
     def _read(self, texts):
@@ -173,20 +171,20 @@ class RealExpressionSystem(System):
                     raise InputError(f"{at} K: K[{j}][{i}] = {short(spec['K'][j][i])} is not minus K[{i}][{j}] = "
                                      f"{short(spec['K'][i][j])} for every {', '.join(self.values)} (K must be "
                                      f"skew-symmetric)")
-        grad = [h.diff(x) for x in R.gens[:N]]
+        grad = [h.derivative(i) for i in range(N)]
         rows = []
         for v, row in zip(self.variables, K):
-            num, den = R.zero, R.one  # Σ_j k_ij/e_ij ∂h/∂x_j over a common denominator
+            num, den = R.from_dict({}), R.constant(1)  # Σ_j k_ij/e_ij ∂h/∂x_j over a common denominator
             for (k, e), g in zip(row, grad):
                 if k and g:
-                    num, den = (num * e + k * g * den).cancel(den * e)
-            rows.append(self._row(*num.cancel(den * d), f"{self.name}: field {v} = (K grad H)_{v}"))
+                    num, den = cancel(num * e + k * g * den, den * e)
+            rows.append(self._row(*cancel(num, den * d), f"{self.name}: field {v} = (K grad H)_{v}"))
         return rows
 
     def _evaluate(self, poly, point, convert):
         """poly(p) at the point (arb balls or Fractions; ``convert`` maps a rational coefficient)."""
         out = convert(Fraction(0))
-        for m, c in poly.items():
+        for m, c in terms(poly):
             term = convert(frac(c))
             for t, k in zip(point, m[self.dim + 1:]):
                 for _ in range(k):  # not t ** k: arb's power of a ball with negative points is nan
@@ -236,13 +234,13 @@ class RealExpressionSystem(System):
 
             mid = self._fields(at_mids, "f")
 
-            def derivative(g):
+            def derivative(g):  # g: the index of the parameter's generator in the ring
                 def rule(_, den):  # (∂c·den − c·∂den)/den², the denominator's parts once per component
-                    dg, square = den.diff(g), self._evaluate(den ** 2, balls, ball)
-                    return lambda c: self._evaluate(c.diff(g) * den - c * dg, balls, ball) / square
+                    dg, square = den.derivative(g), self._evaluate(den ** 2, balls, ball)
+                    return lambda c: self._evaluate(c.derivative(g) * den - c * dg, balls, ball) / square
                 return rule
 
-            units = tuple(self._fields(derivative(self._pgens[j]), f"df/d{list(self.values)[j]}") for j in free)
+            units = tuple(self._fields(derivative(self.dim + 1 + j), f"df/d{list(self.values)[j]}") for j in free)
         if not all(c.is_finite() for u in units for terms in u.terms() for _, c in terms):
             return None  # a box so wide that a derivative is unbounded in balls: the ball field alone
         return ParameterFields(mid, units, tuple(flint.arb(balls[j].rad()) for j in free),
