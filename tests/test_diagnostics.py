@@ -234,6 +234,22 @@ def test_recurrence_refuses_short_sequences():
     assert fit_recurrence([1, 3, 9, 19, 33, 51, 73, 99, 129]).growth == "polynomial"
 
 
+def test_summary_states_no_recurrence_the_terms_do_not_determine():
+    """Five terms whose shortest recurrence has order 3 (6 terms determine it) printed a
+    made-up fit "(19/9)*d[k-1] - ..., fitted on 6 terms"; four terms printed "d[k] = 0"."""
+    from exact_khk.diagnostics.recurrence import too_short
+
+    five = fit_recurrence([1, 4, 7, 9, 11])
+    assert five.order == 3 and not five.determined and five.growth == "undetermined"
+    assert "d[k] =" not in five.summary() and "recurrence: not determined" in five.summary()
+    assert "order 3, which only 6 terms determine" in five.reason
+    four = too_short([1, 6, 12, 18], "4 terms are too short")
+    assert not four.determined and "d[k] =" not in four.summary()
+    six = fit_recurrence([1, 6, 12, 18, 24, 30])   # determined by its 6 terms, not yet confirmed
+    assert six.determined and "fitted on 6 terms, confirmed on 0 more" in six.summary()
+    assert fit_recurrence([0, 0, 0, 0, 0]).determined                    # d[k] = 0 is determined
+
+
 def test_recurrence_refuses_non_integer_fit():
     fit = fit_recurrence([1, 2, 3, 5, 7, 11, 13, 17, 19, 23])  # primes: no recurrence
     assert fit.growth == "undetermined"

@@ -124,6 +124,12 @@ class RecurrenceFit:
     def confirmed(self) -> bool:
         return self.growth != "undetermined"
 
+    @property
+    def determined(self) -> bool:
+        """Whether the terms determine the fitted recurrence (a recurrence of order L is
+        unique once 2L terms are known; :func:`too_short` fits nothing)."""
+        return self.fitted_on <= len(self.sequence) and (self.order > 0 or not any(self.sequence))
+
     def characteristic_text(self) -> str:
         return poly_text(self.characteristic)
 
@@ -136,6 +142,8 @@ class RecurrenceFit:
                 "reason": self.reason}
 
     def summary(self) -> str:
+        if not self.determined:  # no recurrence is stated that the terms do not determine
+            return f"recurrence: not determined\ngrowth: not classified ({self.reason})"
         terms = [(c, f"d[k-{i}]") for i, c in enumerate(self.coefficients, 1) if c]
         rec = _linear_text(terms)
         out = [f"recurrence d[k] = {rec} (order {self.order}; chi(x) = {self.characteristic_text()}), "
@@ -228,6 +236,11 @@ def fit_recurrence(sequence, confirm: int = 3) -> RecurrenceFit:
                 characteristic=tuple(int(c) if c.denominator == 1 else c for c in chi), fitted_on=fitted,
                 confirmed_on=max(confirmed_on, 0))
     undetermined = dict(growth="undetermined", polynomial_degree=None, polynomial=None, dynamical_degree=None)
+    if fitted > len(seq):
+        return RecurrenceFit(**base, **undetermined,
+                             reason=f"sequence too short: the shortest recurrence of its {len(seq)} terms has "
+                                    f"order {L}, which only {fitted} terms determine (need {fitted + confirm} "
+                                    f"terms to fit and confirm it)")
     if confirmed_on < confirm:
         return RecurrenceFit(**base, **undetermined,
                              reason=f"sequence too short: the order-{L} recurrence is determined by the first "
