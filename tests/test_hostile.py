@@ -92,8 +92,8 @@ ROWS += [
     row(["liouville", "--involutions", "+++"], 2), row(["liouville", "--involutions", "+-"], 2),
     row(["liouville", "--involutions", "x,y"], 2), row(["liouville", "--arith", "float"], 2),
     row(["liouville", "--arith", "flint"], 2, id="liouville flint cannot hold omega"),
-    row(["prove", "--n", "3", "--seed", "1"], 2, id="prove n = 3"), row(["certify", "--claims", "integrals"], 2),
-    row(["certify", "--prove"], 2, id="certify --prove at n = 3"),
+    row(["prove", "--n", "4", "--seed", "1"], 2, id="prove n = 4"), row(["certify", "--claims", "integrals"], 2),
+    row(["certify", "--prove", "--n", "4", "--seed", "1"], 2, id="certify --prove at n = 4"),
     row(["integrals", "--signs", "+-"], 2),
 ]
 # absurd sizes: refused at once, naming the limit

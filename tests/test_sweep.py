@@ -249,7 +249,7 @@ def test_a_task_that_kills_its_worker_is_recorded(tmp_path):
 
 
 def test_inline_errors_from_the_mathematics(tmp_path):
-    spec = parse_spec('task = "certify"\n[system]\nfamily = "lie-poisson"\nn = 3\nseeds = 1\n[options]\n'
+    spec = parse_spec('task = "certify"\n[system]\nfamily = "lie-poisson"\nn = 4\nseeds = 1\n[options]\n'
                       'prove = true\n', origin="p.toml")
     res = run_sweep(spec, tmp_path, workers=0, plots=False)
     (rec,) = lines(tmp_path)

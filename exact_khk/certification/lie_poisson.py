@@ -53,6 +53,7 @@ from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, jacobiator,
                                             conserved_items, lazy_orbit, poisson_map_items, rank,
                                             reversible_items, run_check)
+from exact_khk.certification.proofs import PROVE_MAX_N
 from exact_khk.certification.records import Certificate, Check, library_versions  # noqa: F401
 from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, _eps, grad_Htilde,
@@ -312,7 +313,8 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     ``gf:P`` name) adds the Schwartz–Zippel identity checks of
     :func:`exact_khk.certification.identities.liouville_identities` for every involution
     (probabilistic, with a stated failure bound); ``prove=True`` adds the
-    symbolic proofs of :func:`exact_khk.certification.proofs.prove_all` (n = 2 only).
+    symbolic proofs of :func:`exact_khk.certification.proofs.prove_all` (n = 2 in
+    seconds, n = 3 in minutes; refused before any work for other n).
     """
     t_start = time.perf_counter()
     system = default_system() if system is None else system
@@ -334,8 +336,8 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     if cyclotomic and not expresses_omega(ar, n):
         raise InputError(f"signs: {cyclotomic[0]!r} is not a rational involution; it needs an arithmetic "
                          f"containing omega = e^(2 pi i/{n}), e.g. --arith cyclo:{n}")
-    if prove and n != 2:
-        raise InputError(f"prove: symbolic proofs are available for n = 2 only (got n = {n})")
+    if prove and not 2 <= n <= PROVE_MAX_N:
+        raise InputError(f"prove: symbolic proofs are available for n = 2 and 3 only (got n = {n})")
     with ar.local():  # e.g. the working precision of a ball arithmetic
         checks, heights, (orbit, values, path) = _run_checks(system, x0, eps, steps, ar, signs,
                                                              poisson_points, progress)
@@ -349,9 +351,7 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     if prove:
         from exact_khk.certification.proofs import prove_all
 
-        if progress is not None:
-            progress("symbolic proofs")
-        checks += prove_all(system)
+        checks += prove_all(system, progress)
     return Certificate(system, tuple(x0), eps, steps, ar.name, tuple(signs), tuple(checks),
                        library_versions(), time.perf_counter() - t_start, heights,
                        orbit=orbit, values=values, path=path)

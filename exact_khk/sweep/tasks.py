@@ -400,7 +400,7 @@ register(TaskKind(
                                       "lie-poisson"),
              "identities": Option(_text, "a gf:P arithmetic for the Schwartz–Zippel identity checks",
                                   "lie-poisson"),
-             "prove": Option(_bool, "add the symbolic proofs (n = 2 only)", "lie-poisson"),
+             "prove": Option(_bool, "add the symbolic proofs (n = 2, 3)", "lie-poisson"),
              "claims": Option(_claims, "the claims to certify (system files)", "expressions")},
     verdicts=("VALID", "INVALID", "INCONCLUSIVE"), ok="VALID", figures=("height_bits", "false", "open")))
 register(TaskKind(
