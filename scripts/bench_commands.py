@@ -14,19 +14,16 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import shlex
 import statistics
 import subprocess
 import sys
 from pathlib import Path
 
+from script_io import child_cpu
+
 ROOT = Path(__file__).resolve().parent.parent
 
-
-def child_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
 
 
 def run(tree: Path, args: list) -> float:

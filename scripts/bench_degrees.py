@@ -28,11 +28,12 @@ import argparse
 import json
 import os
 import platform
-import resource
 import statistics
 import subprocess
 import sys
 from pathlib import Path
+
+from script_io import child_cpu
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -58,10 +59,6 @@ degs = fn(fld, Fraction(1, 10), 2749534618746033473, steps, random.Random(1), 20
 print(json.dumps({"cpu": time.process_time() - t, "degrees": degs}))
 """
 
-
-def child_cpu():
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
 
 
 def run_route(kind, size, steps, route, budget):

@@ -12,6 +12,14 @@ import pathlib
 import tempfile
 
 
+def child_cpu() -> float:
+    """CPU seconds (user + system) used so far by this process's finished children."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def write_atomic(path, text: str) -> None:
     """Write ``text`` (UTF-8) to ``path`` through a temporary file in the same folder,
     renamed into place: an interrupted run leaves the old file, never half a new one."""
