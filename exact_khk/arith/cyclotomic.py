@@ -82,7 +82,7 @@ class CyclotomicField:
         self.N = N
         self.modulus = flint.fmpq_poly(flint.fmpz_poly.cyclotomic(N).coeffs())
         self.degree = self.modulus.degree()
-        self._companion = None
+        self._companion = self._regular = None
         self.gen = self.element(flint.fmpq_poly([0, 1]))
         self.zero = self.element(flint.fmpq_poly([0]))
 
@@ -100,6 +100,16 @@ class CyclotomicField:
             self._companion = [[[int(cols[k][c][r]) for c in range(phi)] for r in range(phi)]
                                for k in range(phi)]
         return self._companion
+
+    def regular_map(self):
+        """The fmpz_mat G (φ × φ²) with G[k, r·φ + c] = (Cᵏ)_rc, cached: a row of
+        ζᵏ-coefficients times G lists the entries of Σ_k aₖ Cᵏ, the matrix of
+        multiplication by Σ_k aₖ ζᵏ."""
+        if self._regular is None:
+            phi = self.degree
+            self._regular = flint.fmpz_mat(phi, phi * phi, [v for Ck in self.companion_powers()
+                                                            for row in Ck for v in row])
+        return self._regular
 
     def zeta_power(self, k: int) -> "CycloNumber":
         """ζ_N^k (k any integer)."""
@@ -312,14 +322,19 @@ class CycloArith(Arith):
 
     def _coefficient_rows(self, values, zero=flint.fmpq(0)):
         """The ζᵏ-coefficients (k < φ) of each value, as one flat list, row by row."""
-        phi = self.K.degree
-        return [c[k] if k < len(c) else zero for c in (self.convert(v).p.coeffs() for v in values)
-                for k in range(phi)]
+        phi, K, out = self.K.degree, self.K, []
+        for v in values:
+            c = (v if type(v) is CycloNumber and v.K is K else self.convert(v)).p.coeffs()
+            out += c
+            if len(c) < phi:
+                out += [zero] * (phi - len(c))
+        return out
 
     def linear_forms(self, rows, consts, dim):
-        """The forms c_r + Σ_k a_rk x_k for :meth:`apply_forms`: for each power ζᵃ that
-        occurs, the matrix of the ζᵃ-coefficients of the a_rk (fmpq_mat, R × dim), with
-        (Cᵃ)ᵀ; the constants' coefficients (R × φ)."""
+        """The forms c_r + Σ_k a_rk x_k for :meth:`apply_forms`, over Z: for each power ζᵃ
+        that occurs, D_H times the matrix of the ζᵃ-coefficients of the a_rk (fmpz_mat,
+        R × dim; D_H their common denominator), with (Cᵃ)ᵀ; the constants' coefficients
+        (R × φ) as (integer matrix, denominator)."""
         q, phi, R = flint.fmpq_mat, self.K.degree, len(rows)
         H = [[flint.fmpq(0)] * (R * dim) for _ in range(phi)]
         for r, row in enumerate(rows):
@@ -328,41 +343,49 @@ class CycloArith(Arith):
                     H[e][r * dim + k] += c
         used = [e for e in range(phi) if any(H[e])]
         powers = self.K.companion_powers() if any(used) else None  # rational forms: none needed
-        terms = [(q(R, dim, H[e]), q(phi, phi, [powers[e][c][r] for r in range(phi) for c in range(phi)]) if e
-                  else None) for e in used]
-        return terms, q(R, phi, self._coefficient_rows(consts)), dim
+        Hz = [q(R, dim, H[e]).numer_denom() for e in used]
+        DH = flint.fmpz(1)
+        for _, d in Hz:
+            DH = DH.lcm(d)
+        terms = [(Z * (DH // d), flint.fmpz_mat(phi, phi, [powers[e][c][r] for r in range(phi) for c in range(phi)])
+                  if e else None) for (Z, d), e in zip(Hz, used)]
+        return terms, DH, q(R, phi, self._coefficient_rows(consts)).numer_denom(), dim
 
     def apply_forms(self, prepared, x):
-        """[c_r + Σ_k a_rk x_k] for forms from :meth:`linear_forms`: a few fmpq_mat
-        products, (Σ_a H_a X (Cᵃ)ᵀ) with X the coefficients of x."""
-        terms, P, dim = prepared
-        phi = self.K.degree
-        X = flint.fmpq_mat(dim, phi, self._coefficient_rows(x))
+        """[c_r + Σ_k a_rk x_k] for forms from :meth:`linear_forms`: a few fmpz_mat
+        products, (Σ_a H_a X (Cᵃ)ᵀ) with X the coefficients of x, over one denominator
+        (rational matrices with many denominators multiply 10× slower)."""
+        terms, DH, (P, dP), dim = prepared
+        phi, K = self.K.degree, self.K
+        X, dX = flint.fmpq_mat(dim, phi, self._coefficient_rows(x)).numer_denom()
+        S = P * (DH * dX)
         for H, CT in terms:
-            P = P + (H * X if CT is None else H * X * CT)
-        E, K = P.entries(), self.K
-        return [CycloNumber(K, flint.fmpq_poly(E[r * phi:(r + 1) * phi])) for r in range(P.nrows())]
+            S = S + (H * X if CT is None else H * X * CT) * dP
+        E, D = S.entries(), DH * dX * dP
+        return [CycloNumber(K, flint.fmpq_poly(E[r * phi:(r + 1) * phi]) / D) for r in range(S.nrows())]
 
     def native_matmul(self, A, B):
         """A B over Q(ζ_N) from the rational matrices of the coefficients: T_s = Σ_(a+b=s)
         A_a B_b (fmpq_mat products), then ζ^s reduced modulo Φ_N."""
-        q, phi, K = flint.fmpq_mat, self.K.degree, self.K
+        q, z, phi, K = flint.fmpq_mat, flint.fmpz_mat, self.K.degree, self.K
         n, m, p = len(A), len(B), len(B[0]) if B else 0
-        Ac = self._coefficient_rows([e for row in A for e in row])
-        Bc = self._coefficient_rows([e for row in B for e in row])
-        As = [q(n, m, Ac[k::phi]) for k in range(phi)]
-        Bs = [q(m, p, Bc[k::phi]) for k in range(phi)]
-        R = [q(n, p) for _ in range(phi)]
+        # over Z: A = Az/dA, B = Bz/dB (rational matrices with many denominators multiply slowly)
+        Ac, dA = q(n * m, phi, self._coefficient_rows([e for row in A for e in row])).numer_denom()
+        Bc, dB = q(m * p, phi, self._coefficient_rows([e for row in B for e in row])).numer_denom()
+        Ac, Bc = Ac.entries(), Bc.entries()
+        As = [z(n, m, Ac[k::phi]) for k in range(phi)]
+        Bs = [z(m, p, Bc[k::phi]) for k in range(phi)]
+        R = [z(n, p) for _ in range(phi)]
         for s in range(2 * phi - 1):
             T = None
             for a in range(max(0, s - phi + 1), min(s, phi - 1) + 1):
                 t = As[a] * Bs[s - a]
                 T = t if T is None else T + t
-            for r, c in enumerate(K.zeta_power(s).p.coeffs()):  # ζ^s = Σ_r c_r ζ^r
+            for r, c in enumerate(K.zeta_power(s).p.coeffs()):  # ζ^s = Σ_r c_r ζ^r (integers)
                 if c:
-                    R[r] = R[r] + T * c
-        E = [Rr.entries() for Rr in R]
-        return [[CycloNumber(K, flint.fmpq_poly([E[r][i * p + j] for r in range(phi)])) for j in range(p)]
+                    R[r] = R[r] + T * int(c)
+        E, D = [Rr.entries() for Rr in R], dA * dB
+        return [[CycloNumber(K, flint.fmpq_poly([E[r][i * p + j] for r in range(phi)]) / D) for j in range(p)]
                 for i in range(n)]
 
     def native_solve(self, M, B):
@@ -374,31 +397,32 @@ class CycloArith(Arith):
         A rational M is solved over Q directly.  (``linalg.dense.solve`` calls this only
         for sizes within ``linalg.paths.coefficients_native``.)"""
         K, phi, n, m = self.K, self.K.degree, len(M), len(B[0]) if B else 0
-        q, zero = flint.fmpq_mat, flint.fmpq(0)
-        M = [[self.convert(e) for e in row] for row in M]
-        if all(e.is_rational() for row in M for e in row):  # M X_k = B_k for each power k: one solve over Q
-            X = q(n, n, [e.p[0] for row in M for e in row]).solve(
-                q(n, m * phi, self._coefficient_rows([e for row in B for e in row])))
+        q = flint.fmpq_mat
+        Mc = self._coefficient_rows([e for row in M for e in row])  # entry (i, j), power k: [(i n + j) φ + k]
+        Bc = self._coefficient_rows([e for row in B for e in row])
+        if not any(c for k in range(1, phi) for c in Mc[k::phi]):  # rational M: M X_k = B_k for each power k
+            X = q(n, n, Mc[::phi]).solve(q(n, m * phi, Bc))
             return [[CycloNumber(K, flint.fmpq_poly([X[i, j * phi + k] for k in range(phi)])) for j in range(m)]
                     for i in range(n)]
-        Mc = self._coefficient_rows([e for row in M for e in row])  # entry (i, j), power k: [(i n + j) φ + k]
-        A = [q(n, n, Mc[k::phi]) for k in range(phi)]
-        Bc = self._coefficient_rows([e for row in B for e in row])
-        rhs = q(n * phi, m, [Bc[(i * m + j) * phi + k] for k in range(phi) for i in range(n) for j in range(m)])
-        blocks = [[None] * phi for _ in range(phi)]
-        for k, Ck in enumerate(K.companion_powers()):
-            for r in range(phi):
-                for c in range(phi):
-                    if Ck[r][c]:
-                        term = A[k] * Ck[r][c]
-                        blocks[r][c] = term if blocks[r][c] is None else blocks[r][c] + term
-        zeros = [zero] * n
-        flat = [[b.entries() if b is not None else None for b in row] for row in blocks]
-        big = q(n * phi, n * phi, [v for r in range(phi) for i in range(n) for c in range(phi)
-                                   for v in (zeros if flat[r][c] is None else flat[r][c][i * n:(i + 1) * n])])
-        X = big.solve(rhs)
+        # over Z (M = Mz/d, B = Bz/dB): the entries Σ_k (Cᵏ)_rc (A_k)_ij of every block, by one
+        # product, at [(i n + j) φ² + r φ + c]; then (big/d) X = Bz/dB
+        Mz, d = q(n * n, phi, Mc).numer_denom()
+        E = (Mz * K.regular_map()).entries()
+        big = flint.fmpz_mat(n * phi, n * phi, [E[t] for t in _regular_layout(n, phi)])
+        Bz, dB = q(n * phi, m, [Bc[(i * m + j) * phi + k] for k in range(phi) for i in range(n)
+                                for j in range(m)]).numer_denom()
+        X = big.solve(Bz) * (flint.fmpq(d) / dB)
         return [[K.element(flint.fmpq_poly([X[k * n + i, j] for k in range(phi)])) for j in range(m)]
                 for i in range(n)]
+
+
+@lru_cache(maxsize=8)
+def _regular_layout(n: int, phi: int) -> tuple:
+    """Where entry ((r, i), (c, j)) of the rational system of :meth:`CycloArith.native_solve`
+    (row-major, rows r φ… by power then row) sits in the product of its coefficient rows
+    with :meth:`CyclotomicField.regular_map`."""
+    return tuple((i * n + j) * phi * phi + r * phi + c for r in range(phi) for i in range(n)
+                 for c in range(phi) for j in range(n))
 
 
 # --- prime fields -------------------------------------------------------------

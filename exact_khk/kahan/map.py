@@ -197,9 +197,7 @@ class KahanMap:
         if not ar.exact and _floating().has_system_matrix(self.field, ar):
             M = _floating().system_matrix(self.field, ar, x, e)
             return M if ar.lapack else M.tolist()
-        Jf = self.field.jacobian(ar, x)
-        return [[(ar.one if i == j else ar.zero) - e * Jf[i][j] for j in range(len(x))]
-                for i in range(len(x))]
+        return self.field.step_matrix(ar, x, e)
 
     def _solve(self, M, B, x, eps):
         """Solve M X = B, turning singularity and ill-conditioning into our errors.

@@ -171,6 +171,27 @@ class QuadraticField:
             rows.append(row)
         return rows
 
+    def step_matrix(self, ar, x, e):
+        """I − e·f'(x), the matrix of a Kahan step with step size e (an element of ``ar``):
+        N² affine forms in x, all at once where the arithmetic offers ``linear_forms``
+        (prepared once per e), else from :meth:`jacobian` entry by entry."""
+        N = self.dim
+        if ar.linear_forms is not None and coefficients_native(ar):
+            key = ("step forms", ar.name, ar.format(e))
+            if key not in self._cache:
+                _, jterms, lin, _ = self._converted(ar)
+                consts = [[ar.one if i == j else ar.zero for j in range(N)] for i in range(N)]
+                for i in range(N):
+                    for j, c in lin[i]:
+                        consts[i][j] = consts[i][j] - e * c
+                self._cache[key] = ar.linear_forms([[(k, -e * c) for k, c in jterms[i][j]]
+                                                    for i in range(N) for j in range(N)],
+                                                   [c for row in consts for c in row], N)
+            vals = ar.apply_forms(self._cache[key], x)
+            return [vals[i * N:(i + 1) * N] for i in range(N)]
+        Jf = self.jacobian(ar, x)
+        return [[(ar.one if i == j else ar.zero) - e * Jf[i][j] for j in range(N)] for i in range(N)]
+
     def _rational_jacobian(self):
         """(H, L, c, den): H[i][j][k] = ∂²f_i/∂x_j∂x_k, L, c as Fractions, and den
         the common denominator of H and L (cached)."""
