@@ -375,9 +375,15 @@ def test_jacobian_by_linear_forms_is_the_generic_one(n, signs, N, monkeypatch):
     z = ar.gen
     x = [ar.convert(Fraction(k + 1, 3)) + (k - 2) * z ** (k % N) / 7 for k in range(2 * n)]
     fast = fld.jacobian(ar, x)
+    eps = [ar.convert(Fraction(1, 10)), ar.convert(Fraction(-1, 10)), Fraction(1, 3) - z / 5]
+    steps = [fld.step_matrix(ar, x, e) for e in eps]   # I − e f'(x) as affine forms per e
     monkeypatch.setattr(CycloArith, "linear_forms", None)
     slow = fld.jacobian(ar, x)
     assert fast == slow and any(not t.is_rational() for row in fast for t in row)
+    N2 = 2 * n
+    for e, M in zip(eps, steps):
+        assert M == [[(1 if i == j else 0) - e * slow[i][j] for j in range(N2)] for i in range(N2)]
+        assert M == fld.step_matrix(ar, x, e)                      # the generic route, forms off
 
 
 @pytest.mark.parametrize("N", [1, 2, 3, 5, 8, 12])
@@ -415,3 +421,20 @@ def test_coefficient_linear_algebra_within_its_memory_bounds(monkeypatch):
     M2 = [[z, ar.convert(1)], [ar.convert(2), z * z]]
     X2, _ = dense.solve(ar, M2, B)
     assert all(sum((M2[i][k] * X2[k][0] for k in range(2)), ar.zero) == B[i][0] for i in range(2))
+
+
+@pytest.mark.parametrize("name", ["lotka-volterra", "euler-top", "cmoq-cubic"])
+def test_step_matrix_forms_with_linear_terms(name, monkeypatch):
+    # fields with linear parts (lotka-volterra, cmoq-cubic) and without: the affine forms of
+    # I − ε f'(x) against the entrywise route, at a point and a step size of Q(ζ_3) \\ Q
+    from exact_khk.arith.cyclotomic import CycloArith
+    from exact_khk.systems.catalogue import resolve
+
+    ar = get_arith("cyclo:3")
+    fld, z = resolve(name).field("f"), ar.gen
+    x = [ar.convert(Fraction(k + 2, 5)) - k * z / 3 for k in range(fld.dim)]
+    e = Fraction(1, 7) + z / 2
+    fast = fld.step_matrix(ar, x, e)
+    monkeypatch.setattr(CycloArith, "linear_forms", None)
+    J = fld.jacobian(ar, x)
+    assert fast == [[(1 if i == j else 0) - e * J[i][j] for j in range(fld.dim)] for i in range(fld.dim)]
