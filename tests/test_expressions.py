@@ -464,3 +464,32 @@ def test_documentation_examples_run(tmp_path):
     for kind, block in blocks:
         if kind == "python":
             exec(compile(textwrap.dedent(block), str(DOCS), "exec"), {"__name__": "docs"})
+
+
+def test_polynomial_over_z_at_flint_points_is_the_rational_sum():
+    """At python-flint rationals a polynomial is summed over Z with one denominator
+    (Polynomial._evaluate_over_z): the same rational as Fraction arithmetic term by term,
+    checked against SymPy's exact evaluation too; mixed denominators, ε, negative and
+    zero coordinates."""
+    import flint
+
+    from exact_khk.systems.functions import Polynomial
+
+    rng = random.Random(7)
+    fl, fr = get_arith("flint"), get_arith("fraction")
+    syms = sympy.symbols("x0 x1 x2 eps")
+    for trial in range(40):
+        terms = {tuple(rng.randint(0, 4) for _ in range(4)): F(rng.randint(-50, 50), rng.randint(1, 30))
+                 for _ in range(rng.randint(2, 12))}
+        p = Polynomial(3, terms)
+        pt = [F(rng.randint(-10 ** 30, 10 ** 30), rng.randint(1, 10 ** 20)) for _ in range(3)]
+        pt[trial % 3] = F(0) if trial % 5 == 0 else pt[trial % 3]
+        eps = F(rng.randint(-9, 9) or 1, rng.randint(1, 99))
+        got = p.evaluate(fl, [flint.fmpq(q.numerator, q.denominator) for q in pt],
+                         flint.fmpq(eps.numerator, eps.denominator))
+        assert type(got) is flint.fmpq
+        want = p.evaluate(fr, pt, eps)
+        expr = sum(sympy.Rational(c.numerator, c.denominator) * sympy.Mul(*(s ** k for s, k in zip(syms, e)))
+                   for e, c in p.terms.items())
+        gold = expr.subs(dict(zip(syms, [sympy.Rational(q.numerator, q.denominator) for q in pt + [eps]])))
+        assert (int(got.p), int(got.q)) == (want.numerator, want.denominator) == (gold.p, gold.q)

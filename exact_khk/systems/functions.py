@@ -36,6 +36,10 @@ from __future__ import annotations
 from fractions import Fraction
 from itertools import combinations
 
+import flint
+
+from math import gcd as _gcd
+
 from ..arith import _as_fraction
 from ..errors import InputError, PoleError, UndecidedError
 from .base import Function, Tensor
@@ -160,9 +164,12 @@ class Polynomial:
 
     def evaluate(self, ar, x, eps):
         """p(x, ε) in ``ar`` (x a sequence of elements, ε an element); powers are
-        computed once per variable, then each term is one product."""
-        terms, top = self._compiled(ar)
+        computed once per variable, then each term is one product.  At a point of
+        python-flint rationals the sum is taken over Z (:meth:`_evaluate_over_z`)."""
         values = list(x) + [eps]
+        if len(self.terms) > 1 and all(type(v) is flint.fmpq for v in values):
+            return self._evaluate_over_z(values)
+        terms, top = self._compiled(ar)
         powers = {}
         for v, m in top.items():
             row = [ar.one, values[v]]
@@ -175,6 +182,48 @@ class Polynomial:
                 c = c * powers[v][k]
             total = total + c
         return total
+
+
+    def _evaluate_over_z(self, values):
+        """p at fmpq values over one denominator: with v_j = V_j/D and A the total degree,
+        p = Σ C_α V^α D^(A − |α|) / (L D^A), C_α = L c_α integers (L the coefficients'
+        common denominator): fmpz products and one reduction at the end, where the sum of
+        rationals took a gcd per operation (18.8 → 8.2 ms for a degree-12 integral of
+        lagrange-top with 58 terms at a 6000-bit point)."""
+        hit = self._cache.get("over Z")
+        if hit is None:
+            L = 1
+            for c in self.terms.values():
+                L = L * c.denominator // _gcd(L, c.denominator)
+            A = max(sum(e) for e in self.terms)
+            terms = [(flint.fmpz(c.numerator * (L // c.denominator)), tuple((v, k) for v, k in enumerate(e) if k),
+                      A - sum(e)) for e, c in self.terms.items()]
+            top = {}
+            for _, factors, _ in terms:
+                for v, k in factors:
+                    top[v] = max(top.get(v, 0), k)
+            hit = self._cache["over Z"] = (terms, top, A, flint.fmpz(L))
+        terms, top, A, L = hit
+        D = flint.fmpz(1)
+        for v in values:
+            D = D.lcm(v.q)
+        V = [v.p * (D // v.q) for v in values]
+        powers = {}
+        for v, m in top.items():
+            row = [flint.fmpz(1), V[v]]
+            for _ in range(m - 1):
+                row.append(row[-1] * V[v])
+            powers[v] = row
+        dpow = [flint.fmpz(1)]
+        for _ in range(A):
+            dpow.append(dpow[-1] * D)
+        total = flint.fmpz(0)
+        for C, factors, r in terms:
+            t = C * dpow[r]
+            for v, k in factors:
+                t = t * powers[v][k]
+            total += t
+        return flint.fmpq(total, L * dpow[A])
 
 
 def _show(ar, e) -> str:
