@@ -142,22 +142,30 @@ class QuadraticField:
             out.append(s)
         return out
 
+    def _forms(self, ar, x, e=None):
+        """The N² affine forms of f'(x) (``e`` None) or of I − e·f'(x), evaluated at x by the
+        arithmetic's ``linear_forms``/``apply_forms`` (prepared once per e, cached), as rows."""
+        N = self.dim
+        key = ("affine forms", ar.name, None if e is None else ar.format(e))
+        if key not in self._cache:
+            _, jterms, lin, _ = self._converted(ar)
+            scale = (lambda c: c) if e is None else (lambda c: -e * c)
+            consts = [[ar.zero if e is None or i != j else ar.one for j in range(N)] for i in range(N)]
+            for i in range(N):
+                for j, c in lin[i]:
+                    consts[i][j] = consts[i][j] + scale(c)
+            self._cache[key] = ar.linear_forms([[(k, scale(c)) for k, c in jterms[i][j]]
+                                                for i in range(N) for j in range(N)],
+                                               [c for row in consts for c in row], N)
+        vals = ar.apply_forms(self._cache[key], x)
+        return [vals[i * N:(i + 1) * N] for i in range(N)]
+
     def jacobian(self, ar, x):
         """f'(x) as a list of rows of elements of ``ar`` (N² linear forms in x, all at once
-        where the arithmetic offers ``linear_forms``: e.g. fmpq_mat products for ``cyclo:N``)."""
-        _, jterms, lin, _ = self._converted(ar)
-        N = self.dim
+        where the arithmetic offers ``linear_forms``: e.g. integer matrix products for ``cyclo:N``)."""
         if ar.linear_forms is not None and coefficients_native(ar):
-            key = ("jacobian forms", ar.name)
-            if key not in self._cache:
-                consts = [[ar.zero] * N for _ in range(N)]
-                for i in range(N):
-                    for j, c in lin[i]:
-                        consts[i][j] = consts[i][j] + c
-                self._cache[key] = ar.linear_forms([jterms[i][j] for i in range(N) for j in range(N)],
-                                                   [c for row in consts for c in row], N)
-            vals = ar.apply_forms(self._cache[key], x)
-            return [vals[i * N:(i + 1) * N] for i in range(N)]
+            return self._forms(ar, x)
+        _, jterms, lin, _ = self._converted(ar)
         rows = []
         for i in range(self.dim):
             row = []
@@ -175,21 +183,9 @@ class QuadraticField:
         """I − e·f'(x), the matrix of a Kahan step with step size e (an element of ``ar``):
         N² affine forms in x, all at once where the arithmetic offers ``linear_forms``
         (prepared once per e), else from :meth:`jacobian` entry by entry."""
-        N = self.dim
         if ar.linear_forms is not None and coefficients_native(ar):
-            key = ("step forms", ar.name, ar.format(e))
-            if key not in self._cache:
-                _, jterms, lin, _ = self._converted(ar)
-                consts = [[ar.one if i == j else ar.zero for j in range(N)] for i in range(N)]
-                for i in range(N):
-                    for j, c in lin[i]:
-                        consts[i][j] = consts[i][j] - e * c
-                self._cache[key] = ar.linear_forms([[(k, -e * c) for k, c in jterms[i][j]]
-                                                    for i in range(N) for j in range(N)],
-                                                   [c for row in consts for c in row], N)
-            vals = ar.apply_forms(self._cache[key], x)
-            return [vals[i * N:(i + 1) * N] for i in range(N)]
-        Jf = self.jacobian(ar, x)
+            return self._forms(ar, x, e)
+        N, Jf = self.dim, self.jacobian(ar, x)
         return [[(ar.one if i == j else ar.zero) - e * Jf[i][j] for j in range(N)] for i in range(N)]
 
     def _rational_jacobian(self):
