@@ -137,3 +137,17 @@ def test_a_failed_or_interrupted_command_leaves_no_new_empty_folder(capsys, tmp_
     # control: a command that succeeds keeps its new folder (and what it wrote)
     code, _, _ = run(capsys, "scale", "--steps", "2", "--ariths", "float", "--out", str(new))
     assert code == 0 and any(new.iterdir())
+
+
+def test_a_singular_orbit_from_a_seeded_point_says_where_the_point_came_from(capsys):
+    """n = 2, seed 4 (c = 0): the orbit of the seed's point reaches det(I − εf′(x)) = 0 at
+    step 5, exactly. The one-line error (exit 3) says the point was drawn for the seed and
+    how to get another; with the same point given by --x0 it does not."""
+    from exact_khk.cli.main import main
+
+    assert main(["orbit", "--n", "2", "--seed", "4", "--steps", "6"]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "step 5" in err and "drawn for --seed 4" in err
+    assert main(["orbit", "--n", "2", "--seed", "4", "--steps", "6", "--x0", "-3,2,3,-3"]) == 3
+    err = capsys.readouterr().err
+    assert "step 5" in err and "--seed" not in err

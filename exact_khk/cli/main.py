@@ -147,6 +147,7 @@ def main(argv=None) -> int:
 
 
 def _run(argv) -> int:
+    args = None
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         parser = build_parser([_command(argv)])
@@ -160,7 +161,10 @@ def _run(argv) -> int:
     except NumericalError as exc:
         return _fail("numerically undefined", exc, "singular")
     except (SingularStepError, PoleError) as exc:
-        return _fail("singular step" if isinstance(exc, SingularStepError) else "undefined", exc, "singular")
+        kind, seed = "singular step" if isinstance(exc, SingularStepError) else "undefined", getattr(args, "seed", None)
+        if seed is not None and getattr(args, "x0", None) is None:  # the point was drawn, not given
+            exc = f"{exc} (x0 is the point drawn for --seed {seed}: another --seed, or --x0, starts another orbit)"
+        return _fail(kind, exc, "singular")
     except UndecidedError as exc:
         return _fail("undecided", exc, "inconclusive")
     except BrokenPipeError:
