@@ -170,12 +170,7 @@ class Polynomial:
         if len(self.terms) > 1 and all(type(v) is flint.fmpq for v in values):
             return self._evaluate_over_z(values)
         terms, top = self._compiled(ar)
-        powers = {}
-        for v, m in top.items():
-            row = [ar.one, values[v]]
-            for _ in range(m - 1):
-                row.append(row[-1] * values[v])
-            powers[v] = row
+        powers = _powers(top, values, ar.one)
         total = ar.zero
         for c, factors in terms:
             for v, k in factors:
@@ -208,15 +203,8 @@ class Polynomial:
         for v in values:
             D = D.lcm(v.q)
         V = [v.p * (D // v.q) for v in values]
-        powers = {}
-        for v, m in top.items():
-            row = [flint.fmpz(1), V[v]]
-            for _ in range(m - 1):
-                row.append(row[-1] * V[v])
-            powers[v] = row
-        dpow = [flint.fmpz(1)]
-        for _ in range(A):
-            dpow.append(dpow[-1] * D)
+        powers = _powers(top, V, flint.fmpz(1))
+        dpow = _powers({0: A}, [D], flint.fmpz(1))[0]
         total = flint.fmpz(0)
         for C, factors, r in terms:
             t = C * dpow[r]
@@ -224,6 +212,17 @@ class Polynomial:
                 t = t * powers[v][k]
             total += t
         return flint.fmpq(total, L * dpow[A])
+
+
+def _powers(top, values, one) -> dict:
+    """{v: [1, values[v], …, values[v]^m]} for each (v, m) in ``top``, by repeated products."""
+    out = {}
+    for v, m in top.items():
+        row = [one, values[v]]  # the value itself, not one·value (a rounding in floating contexts)
+        for _ in range(m - 1):
+            row.append(row[-1] * values[v])
+        out[v] = row
+    return out
 
 
 def _show(ar, e) -> str:
