@@ -438,3 +438,21 @@ def test_step_matrix_forms_with_linear_terms(name, monkeypatch):
     monkeypatch.setattr(CycloArith, "linear_forms", None)
     J = fld.jacobian(ar, x)
     assert fast == [[(1 if i == j else 0) - e * J[i][j] for j in range(fld.dim)] for i in range(fld.dim)]
+
+
+def test_dft_is_the_sum_over_powers_of_omega():
+    """CycloArith.dft against the defining sums Σ_i w_i ω^(±ij), ω = ζ_N^(N/n), for every
+    n | N (random elements of Q(ζ_12)); an n not dividing N is refused."""
+    import random
+
+    ar = get_arith("cyclo:12")
+    rng = random.Random(3)
+    for n in (1, 2, 3, 4, 6, 12):
+        omega = ar.K.zeta_power(12 // n)
+        rows = [[ar(Fraction(rng.randint(-5, 5), rng.randint(1, 4))) + ar.gen ** rng.randint(0, 11) * rng.randint(-3, 3)
+                 for _ in range(n)] for _ in range(2)]
+        for sign in (1, -1):
+            want = [[sum((w[i] * omega ** (sign * i * j) for i in range(n)), ar.zero) for j in range(n)] for w in rows]
+            assert ar.dft(rows, n, sign) == want, (n, sign)
+    with pytest.raises(InputError, match="n must divide N"):
+        ar.dft([[1] * 5], 5)

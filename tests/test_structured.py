@@ -295,3 +295,81 @@ def test_exact_orbit_at_n_256_is_reversible():
     pts = phi.orbit(random_point(256, 1), 3)
     assert all(phi.inverse(pts[k + 1]) == pts[k] for k in range(3))
     assert len(set(pts)) == 4  # control: the orbit moves
+
+
+# --- the exact DFT over Q(ζ_N), n | N (linalg.circulant_dft) -------------------------------
+
+def _cyclo_fields(n, rng):
+    """f, the control and g for two rational and up to three non-rational sign patterns."""
+    s = LiePoissonSystem.random(n, seed=40 + n)
+    out = [s.field("f"), s.field("control")] + [s.field("g", sg) for sg in rational_sign_patterns(n)[:2]]
+    patterns = {"".join(rng.choice("+-") for _ in range(n)) for _ in range(6)} - {"+" * n}
+    return out + [s.field("g", p, cyclotomic=True) for p in sorted(patterns)[:3]]
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6])
+def test_cyclotomic_dft_step_and_htilde_equal_dense(n):
+    """At points of Q(ζ_N) with ε in Q(ζ_N) (N = n and 2n), the DFT step and H̃ equal the dense
+    solve over Q(ζ_N), for fields over Q and over Q(ω); ``auto`` takes the DFT."""
+    from exact_khk.linalg import circulant_dft
+
+    rng = random.Random(n)
+    for N in (n, 2 * n):
+        ar = get_arith(f"cyclo:{N}")
+        for fld in _cyclo_fields(n, rng):
+            st = fld.circulant_structure(cyclotomic=True)
+            assert st is not None, fld.label
+            x = [ar(rng.randint(-3, 3)) + ar.gen * rng.randint(-2, 2) for _ in range(2 * n)]
+            eps = ar(Fraction(1, rng.randint(3, 9))) + ar.gen / 11
+            auto, dense = (KahanMap(fld, eps, ar, method=m) for m in ("auto", "dense"))
+            assert auto.path == "structured" and dense.path == "dense"
+            assert auto.orbit(x, 2) == dense.orbit(x, 2), (n, N, fld.label)
+            assert circulant_dft.exact_step(st, x, eps, ar) == dense.step(x)
+            assert Htilde(fld, x, eps, ar) == Htilde(fld, x, eps, ar, method="dense"), (n, N, fld.label)
+
+
+def test_cyclotomic_dft_needs_the_roots_of_unity():
+    """cyclo:N holds the n-th roots of unity only for n | N: otherwise auto stays dense and
+    'structured' is refused; balls (whose == is no identity) are never read as a structure."""
+    fld = LiePoissonSystem.random(4, seed=1).field("f")
+    assert KahanMap(fld, "1/10", "cyclo:6").path == "dense"
+    assert KahanMap(fld, "1/10", "cyclo:8").path == "structured"
+    with pytest.raises(InputError, match="n [|] N"):
+        KahanMap(fld, "1/10", "cyclo:6", method="structured")
+    real = LiePoissonSystem.from_vectors("1,2,0,-1", "0,1,1,3", "1,0,2,-1")
+    assert real.field("f").circulant_structure(cyclotomic=True) is not None
+    import flint
+    from exact_khk.linalg.circulant import hankel_first_row
+    assert hankel_first_row([[flint.arb(1), flint.arb(2)], [flint.arb(2), flint.arb(1)]], cyclotomic=True) is None
+
+
+def test_cyclotomic_dft_singular_step_and_pole():
+    """The singular step of ``_singular_setup`` (a zero at the frequency t = 1) is found by
+    the DFT in cyclo:4 exactly as by the dense solve; a nearby ε is regular and equal."""
+    s, x, eps = _singular_setup()
+    fld = s.field("f")
+    for method in ("auto", "dense"):
+        phi = KahanMap(fld, eps, "cyclo:4", method=method)
+        with pytest.raises(SingularStepError) as info:
+            phi.orbit(x, 2)
+        assert info.value.step == 1, method
+    near = eps + Fraction(1, 1000)
+    assert KahanMap(fld, near, "cyclo:4").step(x) == KahanMap(fld, near, "cyclo:4", method="dense").step(x)
+
+
+
+def test_cyclotomic_dft_htilde_pole():
+    """A pole of H̃ at the frequency t = 1: there M J(x) acts on (𝟙, 0), (0, 𝟙) as
+    Σu·[[−Σb, Σa], [−Σc, Σb]], whose square is (Σu)²((Σb)² − ΣaΣc)·I = 4·I for the system
+    below and Σu = 1, so I − ε²(M J(x))² is singular at ε = 1/2 (SymPy confirms)."""
+    from exact_khk.errors import PoleError
+
+    s = LiePoissonSystem.from_vectors("1,0,0,0", "1,1,0,0", "1,-1,0,0")
+    fld, x = s.field("f"), [Fraction(t) for t in (2, -1, 0, 0, 1, 3, 0, -2)]
+    M, J = sp.Matrix(s.hessian), sp.Matrix(s.J(x))
+    assert (sp.eye(8) - sp.Rational(1, 4) * (M * J) ** 2).det() == 0  # independent check
+    for method in ("auto", "dense"):
+        with pytest.raises(PoleError):
+            Htilde(fld, x, Fraction(1, 2), "cyclo:4", method=method)
+    # negative control: at ε = 1/3 H̃ exists, and the DFT gives the dense value
+    assert Htilde(fld, x, Fraction(1, 3), "cyclo:4") == Htilde(fld, x, Fraction(1, 3), "cyclo:4", method="dense")

@@ -145,6 +145,12 @@ class Arith:
     # A context may multiply matrices natively: native_matmul(A, B) -> A B (lists of
     # rows); None means the generic sums (:func:`exact_khk.linalg.dense.matmul`).
     native_matmul = None
+    # A context may hold the n-th roots of unity exactly, for the n dividing
+    # ``roots_of_unity`` (cyclo:N: ζ_N): then dft(rows, n, sign) -> for each list w of
+    # n elements, [Σ_i w_i ω^(sign·i·j) for j < n], ω a primitive n-th root of unity,
+    # the exact DFT of the structured step (:mod:`exact_khk.linalg.circulant_dft`).
+    roots_of_unity = 0
+    dft = None
     # A context may evaluate many linear forms at one point at once:
     # linear_forms(rows, consts, dim) prepares rows [(k, a_rk), ...] and constants c_r
     # (the caller caches it), apply_forms(prepared, x) -> [c_r + Σ_k a_rk x_k].  None

@@ -300,6 +300,8 @@ class CycloArith(Arith):
         self.evidence = f"exact in Q(zeta_{N})"
         #: rational coefficients per element (φ(N)): the size of its linear algebra over Q
         self.coefficient_degree = self.K.degree
+        #: ζ_N: the n-th roots of unity for every n | N (the exact DFT, :meth:`dft`)
+        self.roots_of_unity = N
 
     def owns(self, e) -> bool:
         """Whether ``e`` is an element of this field (not of another Q(ζ_M))."""
@@ -363,6 +365,39 @@ class CycloArith(Arith):
             S = S + (H * X if CT is None else H * X * CT) * dP
         E, D = S.entries(), DH * dX * dP
         return [CycloNumber(K, flint.fmpq_poly(E[r * phi:(r + 1) * phi]) / D) for r in range(S.nrows())]
+
+    def dft(self, rows, n, sign=1):
+        """[Σ_i w_i ω^(sign·i·j) for j < n] for each list w of n elements in ``rows``,
+        ω = ζ_N^(N/n) (n | N): one fmpz_mat product of the rows' coefficients (over one
+        denominator) with the integer matrix of the transform on coefficients.
+
+        >>> ar = CycloArith(3)
+        >>> [str(t) for t in ar.dft([[1, 1, 0]], 3)[0]]   # 1 + ω^j
+        ['2', '1 + z', '-z']
+        """
+        phi, K = self.K.degree, self.K
+        W, den = flint.fmpq_mat(len(rows), n * phi, self._coefficient_rows([e for w in rows for e in w])
+                                ).numer_denom()
+        E = (W * self._transform(n, sign)).entries()
+        return [[CycloNumber(K, flint.fmpq_poly(E[(r * n + j) * phi:(r * n + j + 1) * phi]) / den) for j in range(n)]
+                for r in range(len(rows))]
+
+    @lru_cache(maxsize=16)
+    def _transform(self, n, sign):
+        """The fmpz_mat T (nφ × nφ) of :meth:`dft` on coefficients: row i·φ + a, column
+        j·φ + r holds the ζʳ-coefficient of ζ^(a + sign·(N/n)·i·j) reduced modulo Φ_N."""
+        N, phi = self.N, self.K.degree
+        if n < 1 or N % n:
+            raise InputError(f"arith cyclo:{N} holds no primitive {n}-th root of unity (n must divide N)")
+        powers = [[int(c) for c in self.K.zeta_power(e).p.coeffs()] for e in range(N)]
+        T = [[0] * (n * phi) for _ in range(n * phi)]
+        for i in range(n):
+            for a in range(phi):
+                row = T[i * phi + a]
+                for j in range(n):
+                    for r, c in enumerate(powers[(a + sign * (N // n) * i * j) % N]):
+                        row[j * phi + r] = c
+        return flint.fmpz_mat(T)
 
     def native_matmul(self, A, B):
         """A B over Q(ζ_N) from the rational matrices of the coefficients: T_s = Σ_(a+b=s)

@@ -39,7 +39,8 @@ python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
 are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
 plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.linalg.circulant`: exact in Q[t]/(tⁿ − 1), or
-by the DFT for ``float``/``mp:P``); ``'split'`` (exact, n < 16, ``flint`` or
+by the DFT for ``float``/``mp:P``, or by the exact DFT in ``cyclo:N`` with n | N, for the
+fields over Q(ω) too: :mod:`exact_khk.linalg.circulant_dft`); ``'split'`` (exact, n < 16, ``flint`` or
 ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
 (:mod:`exact_khk.linalg.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
 whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
@@ -49,6 +50,7 @@ structured path overtakes it, n = 7, 9, 14, 15 (:data:`~exact_khk.linalg.paths.A
 otherwise the structured path for exact ``flint`` steps when n ≥ 16
 (:data:`~exact_khk.linalg.paths.STRUCTURED_MIN_N`), and at n = 11, 13 once the
 point's height reaches :data:`~exact_khk.linalg.paths.STRUCTURED_MIN_BITS`;
+the exact DFT in ``cyclo:N`` when n | N (:func:`~exact_khk.linalg.paths.exact_dft_path`);
 otherwise dense.  The rules follow the crossovers
 measured along orbits (docs/benchmarks.md).  Every path gives the same
 rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
@@ -77,14 +79,14 @@ import math
 import warnings
 from fractions import Fraction
 
-from exact_khk.linalg import circulant
+from exact_khk.linalg import circulant, circulant_dft
 from exact_khk.arith import _is_element as _arith_is_element, as_point, get_arith, point_height as _height, to_element  # noqa: F401
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
 from exact_khk.parsing import MAX_STEPS, _short, parse_rational
 from exact_khk.linalg.split import split_system
 from exact_khk.systems.quadratic import QuadraticField
-from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, SPLIT_N, auto_path
+from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, SPLIT_N, auto_path, exact_dft_path
 
 METHODS = ("auto", "dense", "structured", "split")
 
@@ -245,8 +247,9 @@ class KahanMap:
         """The 2×2-over-circulants step (exact in Q[t]/(tⁿ − 1), or by the DFT)."""
         ar, eps = self.arith, self.eps
         if ar.exact:
+            exact = circulant_dft.exact_step if ar.dft is not None else circulant.exact_step
             try:
-                return circulant.exact_step(self.structure, x, eps, ar)
+                return exact(self.structure, x, eps, ar)
             except SingularMatrix:
                 raise self._singular(x, eps) from None
         z, cond, _ = circulant.numeric_step(self.structure, x, eps, ar)
@@ -416,19 +419,23 @@ def _choose_path(field, ar, method, eps):
                              "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
-    usable = ar.rational or ar.fourier
-    st = field.circulant_structure() if usable else None
+    n = field.dim // 2
+    dft = ar.exact and circulant_dft.applies(ar, n)  # e.g. cyclo:N with n | N
+    usable = ar.rational or ar.fourier or dft
+    st = field.circulant_structure(cyclotomic=dft) if usable else None
     # a declared structure splits for every n of SPLIT_N: built by the first split step, not here
     splits = K is not None and st is not None and field.dim // 2 in SPLIT_N
     if method == "structured":
         if st is None:
             raise InputError("method: 'structured' needs a field whose Jacobian blocks are circulant "
                              "(Lie–Poisson fields with cyclic Hankel Hessian blocks) and a rational, "
-                             "float or mp:P arithmetic")
+                             "float or mp:P arithmetic, or cyclo:N with n | N")
         return False, st, 0
+    if dft:
+        return False, (st if exact_dft_path(n) else None), 0
     if not ar.exact or K is None:
         return False, None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
-    split, structured, bits = auto_path(field.dim // 2, K.name, splits, st is not None)
+    split, structured, bits = auto_path(n, K.name, splits, st is not None)
     return split, (st if structured else None), bits
 
 

@@ -50,6 +50,7 @@ from functools import lru_cache
 from math import lcm
 
 from exact_khk.arith import _as_fraction
+from exact_khk.arith.cyclotomic import CycloNumber
 from exact_khk.linalg.dense import SingularMatrix
 
 try:  # python-flint is optional: without it the dense path is used
@@ -63,7 +64,8 @@ GUARD_BITS = 20
 
 @dataclass(frozen=True)
 class CirculantStructure:
-    """The Hankel first rows m11, m12, m21, m22 (Fractions) of a field's Hessian M."""
+    """The Hankel first rows m11, m12, m21, m22 of a field's Hessian M: Fractions, or
+    (from ``circulant_structure(field, cyclotomic=True)`` only) elements of Q(ζ_n)."""
 
     n: int
     m: tuple  # ((m11, m12), (m21, m22)), each a tuple of n Fractions
@@ -76,39 +78,48 @@ class CirculantStructure:
         return h
 
 
-def hankel_first_row(block):
+def hankel_first_row(block, cyclotomic=False):
     """w (as Fractions) if ``block[i][j] == w[(i + j) % n]`` for all i, j (a cyclic
-    Hankel matrix with rational entries), else None."""
+    Hankel matrix with rational entries), else None; with ``cyclotomic``, entries in
+    Q(ζ) (:class:`~exact_khk.arith.cyclotomic.CycloNumber`) too, kept as they are."""
     n = len(block)
-    try:
-        w = tuple(_as_fraction(t) for t in block[0])
-    except (TypeError, ValueError, ArithmeticError):  # e.g. cyclotomic entries
-        return None
+    if cyclotomic:
+        w = tuple(block[0])
+        if not all(isinstance(t, (int, Fraction, CycloNumber)) for t in w):
+            return None  # e.g. balls, whose == is no identity
+    else:
+        try:
+            w = tuple(_as_fraction(t) for t in block[0])
+        except (TypeError, ValueError, ArithmeticError):  # e.g. cyclotomic entries
+            return None
     if all(block[i][j] == w[(i + j) % n] for i in range(n) for j in range(n)):
         return w
     return None
 
 
-def circulant_structure(field):
+def circulant_structure(field, cyclotomic=False):
     """The :class:`CirculantStructure` of a Lie–Poisson field, or None.
 
     None for fields without a system and Hessian (a generic
     :class:`~exact_khk.systems.quadratic.QuadraticField`), non-homogeneous fields, or a
-    Hessian with a block that is not cyclic Hankel.  Cached on the field.
+    Hessian with a block that is not cyclic Hankel.  With ``cyclotomic``, also the
+    structure of a field over Q(ω) (an associated field of a non-rational involution),
+    for the exact DFT step (:mod:`exact_khk.linalg.circulant_dft`).  Cached on the field.
     """
+    key = "circulant over Q(zeta)" if cyclotomic else "circulant"
     cache = getattr(field, "_cache", None)
-    if cache is not None and "circulant" in cache:
-        return cache["circulant"]
-    out = None
+    if cache is not None and key in cache:
+        return cache[key]
+    out = circulant_structure(field) if cyclotomic else None
     system, M = getattr(field, "system", None), getattr(field, "hessian", None)
-    if system is not None and M and field.homogeneous and len(M) == 2 * system.n:
+    if out is None and system is not None and M and field.homogeneous and len(M) == 2 * system.n:
         n = system.n
-        rows = [[hankel_first_row([r[bj * n:(bj + 1) * n] for r in M[bi * n:(bi + 1) * n]])
+        rows = [[hankel_first_row([r[bj * n:(bj + 1) * n] for r in M[bi * n:(bi + 1) * n]], cyclotomic)
                  for bj in range(2)] for bi in range(2)]
         if all(w is not None for r in rows for w in r):
             out = CirculantStructure(n, tuple(tuple(r) for r in rows))
     if cache is not None:
-        cache["circulant"] = out
+        cache[key] = out
     return out
 
 

@@ -98,9 +98,10 @@ class QuadraticField:
         """The quadratic terms ``quad`` (subclasses may build them on demand)."""
         return self.quad
 
-    def circulant_structure(self):
+    def circulant_structure(self, cyclotomic=False):
         """The :class:`~exact_khk.linalg.circulant.CirculantStructure` of a field whose
-        step's four n×n blocks are circulant (declared by the field), or None."""
+        step's four n×n blocks are circulant (declared by the field), or None;
+        ``cyclotomic``: blocks with entries in Q(ζ) count too."""
         return None
 
     @property

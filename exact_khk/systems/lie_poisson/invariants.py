@@ -20,11 +20,11 @@ from __future__ import annotations
 import math
 import warnings
 
-from exact_khk.linalg import circulant
+from exact_khk.linalg import circulant, circulant_dft
 from exact_khk.arith import get_arith, as_point, to_element
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
-from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
+from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N, exact_dft_path
 
 
 def _eps(ar, eps):
@@ -70,7 +70,9 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.linalg.paths.HTILDE_STRUCTURED_MIN_N`
     (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
     40×, 160× faster than the dense solve); the result is the same rational
-    number.  ``method='dense'`` forces the 2n×2n solve.
+    number.  In ``cyclo:N`` with n | N (fields over Q(ω) included) it is n 2×2
+    systems over Q(ζ_N) by the exact DFT (:func:`exact_khk.linalg.circulant_dft.exact_htilde`).
+    ``method='dense'`` forces the 2n×2n solve.
     """
     ar = get_arith(arith)
     if not hasattr(field, "system") or field.system is None:
@@ -79,7 +81,15 @@ def Htilde(field, x, eps, arith=None, method="auto"):
         raise InputError(f"method: expected 'auto' or 'dense', got {method!r}")
     e = _eps(ar, eps)
     x = _point(ar, x, field.dim)
-    if method == "auto" and ar.rational and circulant.flint is not None and field.system.n >= HTILDE_STRUCTURED_MIN_N:
+    n = field.system.n
+    if method == "auto" and ar.exact and circulant_dft.applies(ar, n) and exact_dft_path(n):
+        st = field.circulant_structure(cyclotomic=True)
+        if st is not None:
+            try:
+                return circulant_dft.exact_htilde(st, x, e, ar)
+            except SingularMatrix:
+                raise _pole(ar, x, e) from None
+    if method == "auto" and ar.rational and circulant.flint is not None and n >= HTILDE_STRUCTURED_MIN_N:
         st = circulant.circulant_structure(field)
         if st is not None:
             try:

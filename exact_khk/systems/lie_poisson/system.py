@@ -619,11 +619,13 @@ class LiePoissonField(QuadraticField):
     hessian: tuple = ()
     signs: str | None = None
 
-    def circulant_structure(self):
-        """The circulant structure of the step's blocks (Hessian blocks cyclic Hankel), or None."""
+    def circulant_structure(self, cyclotomic=False):
+        """The circulant structure of the step's blocks (Hessian blocks cyclic Hankel), or
+        None; ``cyclotomic``: entries in Q(ω) count too (the associated fields of
+        non-rational involutions)."""
         from exact_khk.linalg.circulant import circulant_structure
 
-        return circulant_structure(self)
+        return circulant_structure(self, cyclotomic)
 
     def terms(self) -> tuple:
         """The quadratic terms of f(x) = J(x) M x, built once on first use:

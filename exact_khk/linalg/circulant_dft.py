@@ -1,0 +1,96 @@
+"""Exact Kahan steps and H̃ by the DFT, in an arithmetic that holds the n-th roots of unity.
+
+Over a field K with a primitive n-th root of unity ω (``cyclo:N`` with n | N: ω = ζ_N^(N/n)),
+tⁿ − 1 = Π_j (t − ωʲ) splits, so the ring R = K[t]/(tⁿ − 1) of the circulant blocks of
+I − εf'(x) (:mod:`exact_khk.linalg.circulant`) is Kⁿ by evaluation at the ωʲ — exactly,
+not only over C.  A Kahan step is then n independent 2×2 systems over K (the frequencies),
+between one exact DFT of the point and one inverse DFT of the answer; the floating step
+(:func:`~exact_khk.linalg.circulant.numeric_step`) is the same computation in balls.  This is
+what makes the associated fields of the non-rational involutions (Hessians over Q(ω),
+``liouville``) cheap: the dense alternative is a 2n·φ(N)-dimensional rational system.
+
+The step is undefined exactly when a frequency's determinant is 0 (det(I − εf'(x)) is the
+product of the n determinants): :class:`~exact_khk.linalg.dense.SingularMatrix`.
+
+>>> from exact_khk import LiePoissonSystem, get_arith
+>>> s = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
+>>> g = s.field("g", "+-+", cyclotomic=True)
+>>> ar = get_arith("cyclo:3")
+>>> st = g.circulant_structure(cyclotomic=True)
+>>> x = [ar(t) for t in (1, 0, 0, 0, 1, 0)]
+>>> z = exact_step(st, x, ar("1/10"), ar)
+>>> from exact_khk.linalg.dense import solve
+>>> M = g.step_matrix(ar, x, ar("1/10"))
+>>> z == tuple(row[0] for row in solve(ar, M, [[t] for t in x])[0])
+True
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from exact_khk.linalg.circulant import cramer, htilde_system, kahan_system, reflect
+from exact_khk.linalg.dense import SingularMatrix
+
+
+def applies(ar, n: int) -> bool:
+    """Whether ``ar`` holds the n-th roots of unity and their exact DFT."""
+    return ar.dft is not None and ar.roots_of_unity % n == 0
+
+
+@lru_cache(maxsize=64)
+def _hankel_values(st, ar, reflected):
+    """The four Hankel polynomials m_kl of ``st`` (reflected: m̂_kl) at the n powers of ω."""
+    rows = [reflect(list(w)) if reflected else list(w) for row in st.m for w in row]
+    return ar.dft(rows, st.n)
+
+
+def _frequencies(ar, n, a, r):
+    """Cramer's rule for the 2×2 systems (a, r) at every frequency j (a, r: lists over j);
+    SingularMatrix when a determinant is 0."""
+    def divide(det, rhs):
+        if ar.is_zero(det):
+            raise SingularMatrix("a frequency's 2x2 determinant is 0")
+        inv = ar.one / det
+        return tuple(inv * t for t in rhs)
+
+    return [cramer(a[j], r[j], _mul, divide) for j in range(n)]
+
+
+def _mul(a, b):
+    return a * b
+
+
+def exact_step(st, x, eps, ar):
+    """Φ_f(x, ε) = (I − εf'(x))⁻¹x in ``ar`` (exact, with the n-th roots of unity).
+
+    As :func:`~exact_khk.linalg.circulant.exact_step`: û, v̂ the reflected halves of x,
+    at each frequency the 2×2 system of :func:`~exact_khk.linalg.circulant.kahan_system`,
+    and the answer's reflected halves from the inverse DFT (divided by n)."""
+    n = st.n
+    m = _hankel_values(st, ar, False)
+    uh, vh = ar.dft([reflect(list(x[:n])), reflect(list(x[n:]))], n)
+    systems = [kahan_system(((m[0][j], m[1][j]), (m[2][j], m[3][j])), uh[j], vh[j], eps, _mul, ar.one)
+               for j in range(n)]
+    z = _frequencies(ar, n, [s[0] for s in systems], [s[1] for s in systems])
+    zu, zv = ar.dft([[t[0] for t in z], [t[1] for t in z]], n, -1)
+    inv_n = ar.one / ar.convert(n)
+    return tuple(t * inv_n for t in reflect(zu) + reflect(zv))
+
+
+def exact_htilde(st, x, eps, ar):
+    """H̃(x, ε) = xᵀ(I − ε²(M J(x))²)⁻¹ M x in ``ar`` (exact, with the n-th roots of unity).
+
+    As :func:`~exact_khk.linalg.circulant.exact_htilde` (reflected Hankel polynomials,
+    the plain halves u, v); xᵀz is the constant coefficient of u ẑ_u + v ẑ_v, the mean
+    over the frequencies of the products of their values."""
+    n = st.n
+    m = _hankel_values(st, ar, True)
+    u, v = ar.dft([list(x[:n]), list(x[n:])], n)
+    systems = [htilde_system(((m[0][j], m[1][j]), (m[2][j], m[3][j])), u[j], v[j], eps, _mul, ar.one)
+               for j in range(n)]
+    z = _frequencies(ar, n, [s[0] for s in systems], [s[1] for s in systems])
+    total = ar.zero
+    for j in range(n):
+        total = total + u[j] * z[j][0] + v[j] * z[j][1]
+    return total / ar.convert(n)
