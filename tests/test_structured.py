@@ -322,7 +322,7 @@ def test_cyclotomic_dft_step_and_htilde_equal_dense(n):
             x = [ar(rng.randint(-3, 3)) + ar.gen * rng.randint(-2, 2) for _ in range(2 * n)]
             eps = ar(Fraction(1, rng.randint(3, 9))) + ar.gen / 11
             auto, dense = (KahanMap(fld, eps, ar, method=m) for m in ("auto", "dense"))
-            assert auto.path == "structured" and dense.path == "dense"
+            assert auto.path == ("structured" if n >= 3 else "dense") and dense.path == "dense"
             assert auto.orbit(x, 2) == dense.orbit(x, 2), (n, N, fld.label)
             assert circulant_dft.exact_step(st, x, eps, ar) == dense.step(x)
             assert Htilde(fld, x, eps, ar) == Htilde(fld, x, eps, ar, method="dense"), (n, N, fld.label)

@@ -50,7 +50,7 @@ structured path overtakes it, n = 7, 9, 14, 15 (:data:`~exact_khk.linalg.paths.A
 otherwise the structured path for exact ``flint`` steps when n ≥ 16
 (:data:`~exact_khk.linalg.paths.STRUCTURED_MIN_N`), and at n = 11, 13 once the
 point's height reaches :data:`~exact_khk.linalg.paths.STRUCTURED_MIN_BITS`;
-the exact DFT in ``cyclo:N`` when n | N (:func:`~exact_khk.linalg.paths.exact_dft_path`);
+the exact DFT in ``cyclo:N`` when n | N and n ≥ 3 (:data:`~exact_khk.linalg.paths.EXACT_DFT_STEP_MIN_N`);
 otherwise dense.  The rules follow the crossovers
 measured along orbits (docs/benchmarks.md).  Every path gives the same
 rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
@@ -86,7 +86,7 @@ from exact_khk.linalg.dense import SingularMatrix, solve
 from exact_khk.parsing import MAX_STEPS, _short, parse_rational
 from exact_khk.linalg.split import split_system
 from exact_khk.systems.quadratic import QuadraticField
-from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, SPLIT_N, auto_path, exact_dft_path
+from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, SPLIT_N, auto_path, EXACT_DFT_STEP_MIN_N
 
 METHODS = ("auto", "dense", "structured", "split")
 
@@ -432,7 +432,7 @@ def _choose_path(field, ar, method, eps):
                              "float or mp:P arithmetic, or cyclo:N with n | N")
         return False, st, 0
     if dft:
-        return False, (st if exact_dft_path(n) else None), 0
+        return False, (st if n >= EXACT_DFT_STEP_MIN_N else None), 0
     if not ar.exact or K is None:
         return False, None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
     split, structured, bits = auto_path(n, K.name, splits, st is not None)

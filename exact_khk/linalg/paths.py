@@ -29,9 +29,10 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
                                 N ≤ :data:`EXACT_INVERSE_MAX_N`, else estimated
                                 (``linalg.dense.solve``)
-exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.linalg.circulant_dft`)
-with n | N                      for every n: n 2×2 systems over Q(ζ_N), including
-                                the fields over Q(ω) (:func:`exact_dft_path`)
+exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.linalg.circulant_dft`:
+with n | N                      n 2×2 systems over Q(ζ_N), the fields over Q(ω)
+                                included): steps for n ≥ :data:`EXACT_DFT_STEP_MIN_N`,
+                                H̃ for every n
 linear algebra over Q(ζ_N)      FLINT on the coefficients for φ(N) ≤
 (``cyclo:N``)                   :data:`CYCLO_REGULAR_MAX_DEGREE`, a solve as one
                                 rational system up to size
@@ -116,14 +117,12 @@ def coefficients_native(ar, m: int = 0) -> bool:
     return phi is None or (phi <= CYCLO_REGULAR_MAX_DEGREE and m * phi <= CYCLO_REGULAR_MAX_SIZE)
 
 
-def exact_dft_path(n: int) -> bool:
-    """Whether ``method='auto'`` (and H̃) take the exact DFT in an arithmetic that holds the
-    n-th roots of unity (``cyclo:N``, n | N), for a field with circulant blocks: at every
-    n ≥ 2.  Against the dense solve over Q(ζ_n) (FLINT on the rational system), at an
-    orbit point of g[+-+…+]: one step 1.7×, 2.0×, 3.0×, 2.8×, 4.5×, 6.6×, 7.2×, 14× faster
-    at n = 3, 4, 5, 6, 7, 8, 10, 12, H̃ 4.3–29× (docs/benchmarks.md).  Not a tuned rule:
-    no n where it loses was found."""
-    return n >= 2
+#: exact steps by the DFT in ``cyclo:N`` (n | N) from this n: against the dense solve over
+#: Q(ζ_n) at an orbit point of g[+-+…+] one step is 1.4×, 1.5×, 3.0×, 2.5×, 5.3×, 6.8×, 7.8×,
+#: 12× faster at n = 3, 4, 5, 6, 7, 8, 10, 12, but 0.7–0.85× at n = 2 (cyclo:2, 4, 6: the
+#: dense system is then only 4φ wide); H̃ by the DFT is faster at every n (1.8× at n = 2,
+#: 3.3–22× at n = 3..12), so it has no rule (scripts/bench_cyclo_dft.py, docs/benchmarks.md)
+EXACT_DFT_STEP_MIN_N = 3
 
 
 def auto_path(n: int, kernel: str, splits: bool, circulant: bool):

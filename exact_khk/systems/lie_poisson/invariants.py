@@ -24,7 +24,7 @@ from exact_khk.linalg import circulant, circulant_dft
 from exact_khk.arith import get_arith, as_point, to_element
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
-from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N, exact_dft_path
+from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
 
 
 def _eps(ar, eps):
@@ -82,7 +82,7 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     e = _eps(ar, eps)
     x = _point(ar, x, field.dim)
     n = field.system.n
-    if method == "auto" and ar.exact and circulant_dft.applies(ar, n) and exact_dft_path(n):
+    if method == "auto" and ar.exact and circulant_dft.applies(ar, n):
         st = field.circulant_structure(cyclotomic=True)
         if st is not None:
             try:
