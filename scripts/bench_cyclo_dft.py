@@ -1,14 +1,16 @@
 #!/usr/bin/env python3
-"""One Kahan step and one H̃ in ``cyclo:n``: the exact DFT against the dense solve over Q(ζ_n).
+"""One Kahan step and one H̃ in ``cyclo:n`` or ``gf:P``: the exact DFT against the dense solve.
 
 For each n, the associated field g of the sign pattern '+-+…+' (a non-rational involution
 for n ≥ 3; over Q(ω)) of ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10, at the third
 orbit point from a small integer point: ``KahanMap(method="structured")`` (the exact DFT,
-:mod:`exact_khk.linalg.circulant_dft`) against ``method="dense"`` (FLINT on the rational
-system of size 2n·φ(n)), and ``Htilde`` auto against ``method="dense"``; each pair checked
-equal (==) first; medians of interleaved rounds.
+:mod:`exact_khk.linalg.circulant_dft`) against ``method="dense"`` (in ``cyclo:n`` FLINT on
+the rational system of size 2n·φ(n); in ``gf:P``, P the default prime of
+:data:`exact_khk.arith.cyclotomic.DEFAULT_PRIME` (n | P − 1 for n ≤ 12), f'(x) entry by entry
+and an ``nmod_mat`` solve), and ``Htilde`` auto against ``method="dense"``; each pair
+checked equal (==) first; medians of interleaved rounds.
 
-Usage:  python3 scripts/bench_cyclo_dft.py [--ns 2,3,4,5,6,7,8,10,12] [--rounds 7]
+Usage:  python3 scripts/bench_cyclo_dft.py [--arith cyclo|gf] [--ns 2,3,4,5,6,7,8,10,12] [--rounds 7]
 No timing is asserted anywhere; this only measures.  Prints a Markdown table.
 """
 
@@ -26,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench import machine  # noqa: E402
 
 from exact_khk import KahanMap, LiePoissonSystem, get_arith  # noqa: E402
+from exact_khk.arith.cyclotomic import DEFAULT_PRIME  # noqa: E402
 from exact_khk.systems.lie_poisson.invariants import Htilde  # noqa: E402
 
 
@@ -41,11 +44,11 @@ def medians(fns, rounds):
 
 
 def fmt(t):
-    return f"{t * 1e3:.2f} ms"
+    return f"{t * 1e6:.0f} µs" if t < 1e-3 else f"{t * 1e3:.2f} ms"
 
 
-def row(n, rounds):
-    ar = get_arith(f"cyclo:{n}")
+def row(n, rounds, arith):
+    ar = get_arith(f"cyclo:{n}" if arith == "cyclo" else f"gf:{DEFAULT_PRIME}")
     g = LiePoissonSystem.random(n, seed=1).field("g", "+-" + "+" * (n - 2), cyclotomic=True)
     auto, dense = (KahanMap(g, "1/10", ar, method=m) for m in ("structured", "dense"))
     rng = random.Random(n)
@@ -63,6 +66,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ns", default="2,3,4,5,6,7,8,10,12")
     ap.add_argument("--rounds", type=int, default=7)
+    ap.add_argument("--arith", choices=("cyclo", "gf"), default="cyclo",
+                    help="cyclo: cyclo:n for each n; gf: gf:P, P the default prime")
     args = ap.parse_args(argv)
     try:
         ns = [int(t) for t in args.ns.split(",")]
@@ -70,12 +75,14 @@ def main(argv=None):
         ap.error(f"--ns: expected integers separated by commas, got {args.ns!r}")
     if args.rounds < 1 or any(n < 2 or n > 64 for n in ns):
         ap.error("--rounds must be positive and each n in 2..64")
+    if args.arith == "gf" and any((DEFAULT_PRIME - 1) % n for n in ns):
+        ap.error(f"--ns: gf:{DEFAULT_PRIME} holds the n-th roots of unity only for n | P - 1")
     t0 = time.perf_counter()
     print("Machine: " + ", ".join(f"{k} {v}" for k, v in machine().items()) + "\n")
     print("| n | step: DFT | step: dense | dense / DFT | H̃: DFT | H̃: dense | dense / DFT |")
     print("|---|---|---|---|---|---|---|")
     for n in ns:
-        print(row(n, args.rounds), flush=True)
+        print(row(n, args.rounds, args.arith), flush=True)
     print(f"\n({time.perf_counter() - t0:.0f} s)")
 
 

@@ -87,7 +87,7 @@ ROWS += [
     row(["certify", "--signs", "abc"], 2), row(["orbit", "--field", "g", "--signs", "+-+"], 2),
     row(["orbit", "--field", "h"], 2), row(["orbit", "--signs", "-++"], 2, id="orbit --signs without --field g"),
     row(["orbit", "--method", "split", "--arith", "float"], 2), row(["orbit", "--method", "fast"], 2),
-    row(["orbit", "--method", "structured", "--arith", "gf:7"], 2),
+    row(["orbit", "--method", "structured", "--arith", "gf:11"], 2, id="structured in gf:11 (3 does not divide 10)"),
     row(["orbit", "--method", "structured", "--arith", "ball:64"], 2),
     row(["liouville", "--involutions", "+++"], 2), row(["liouville", "--involutions", "+-"], 2),
     row(["liouville", "--involutions", "x,y"], 2), row(["liouville", "--arith", "float"], 2),

@@ -328,6 +328,44 @@ def test_cyclotomic_dft_step_and_htilde_equal_dense(n):
             assert Htilde(fld, x, eps, ar) == Htilde(fld, x, eps, ar, method="dense"), (n, N, fld.label)
 
 
+#: a prime with 2..12 | P − 1 (the library's default for gf:P)
+GF_PRIME = 4611686018420360881
+
+
+@pytest.mark.parametrize("n", [2, 3, 4, 5, 6, 7])
+def test_finite_field_dft_step_and_htilde_equal_dense(n):
+    """In gf:P with P ≡ 1 (mod n) the DFT over F_P gives the dense solve's step and H̃,
+    for fields over Q and over Q(ω) (ω mapped to the P-adic root of unity of gf:P)."""
+    from exact_khk.linalg import circulant_dft
+
+    rng, ar = random.Random(n), get_arith(f"gf:{GF_PRIME}")
+    for fld in _cyclo_fields(n, rng):
+        st = fld.circulant_structure(cyclotomic=True)
+        x = [ar(rng.randint(-10 ** 12, 10 ** 12)) for _ in range(2 * n)]
+        eps = ar(Fraction(rng.randint(1, 9), rng.randint(2, 20)))
+        auto, dense = (KahanMap(fld, eps, ar, method=m) for m in ("auto", "dense"))
+        assert auto.path == ("structured" if n >= 3 else "dense")
+        assert auto.orbit(x, 3) == dense.orbit(x, 3), (n, fld.label)
+        assert circulant_dft.exact_step(st, x, eps, ar) == dense.step(x)
+        assert Htilde(fld, x, eps, ar) == Htilde(fld, x, eps, ar, method="dense"), (n, fld.label)
+
+
+def test_finite_field_dft_is_the_sum_over_powers_of_omega():
+    """GFArith.dft against the defining sums; a prime without the n-th roots is refused."""
+    ar = get_arith(f"gf:{GF_PRIME}")
+    rng = random.Random(1)
+    for n in (1, 2, 3, 5, 12):
+        w = [ar(rng.randint(0, 10 ** 18)) for _ in range(n)]
+        omega = ar.root_of_unity(n)
+        for sign in (1, -1):
+            want = [sum((w[i] * omega ** ((sign * i * j) % n) for i in range(n)), ar.zero) for j in range(n)]
+            assert ar.dft([w], n, sign) == [want]
+    with pytest.raises(InputError, match="P ≡ 1"):
+        get_arith("gf:7").dft([[1, 2, 3, 4, 5]], 5)
+    fld = LiePoissonSystem.random(5, seed=1).field("f")
+    assert KahanMap(fld, "1/10", "gf:7").path == "dense"  # 5 ∤ 6
+
+
 def test_cyclotomic_dft_needs_the_roots_of_unity():
     """cyclo:N holds the n-th roots of unity only for n | N: otherwise auto stays dense and
     'structured' is refused; balls (whose == is no identity) are never read as a structure."""

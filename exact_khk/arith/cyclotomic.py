@@ -490,6 +490,8 @@ class GFArith(Arith):
         self.P = P
         self.name = f"gf:{P}"
         self.zero, self.one = flint.nmod(0, P), flint.nmod(1, P)
+        #: F_P holds the n-th roots of unity for every n | P − 1 (the exact DFT, :meth:`dft`)
+        self.roots_of_unity = P - 1
         # A nonzero residual mod P refutes a claim at a point; zero residuals
         # mod P do not prove the rational claim (P may divide the residual).
         self.evidence = f"modular: exact in F_{P} (zero mod P is evidence, not proof)"
@@ -525,6 +527,27 @@ class GFArith(Arith):
 
     def magnitude(self, e) -> float:  # no order on F_P; never used for exact pivoting
         return float(int(e) != 0)
+
+    def dft(self, rows, n, sign=1):
+        """[Σ_i w_i ω^(sign·i·j) for j < n] for each list w of n elements in ``rows``, ω =
+        :meth:`root_of_unity` (n) (n | P − 1): one ``nmod_mat`` product with the Vandermonde
+        matrix of the powers of ω.
+
+        >>> ar = GFArith(7)
+        >>> [int(t) for t in ar.dft([[1, 1, 0]], 3)[0]]   # 1 + ω^j, ω = 3^2 = 2
+        [2, 3, 5]
+        """
+        V = self._vandermonde(n, sign)
+        X = flint.nmod_mat([[self.convert(t) for t in w] for w in rows], self.P) * V
+        return [[X[r, j] for j in range(n)] for r in range(len(rows))]
+
+    @lru_cache(maxsize=16)
+    def _vandermonde(self, n, sign):
+        omega = self.root_of_unity(n) ** (1 if sign > 0 else n - 1)
+        powers = [self.one]
+        for _ in range(1, n):
+            powers.append(powers[-1] * omega)
+        return flint.nmod_mat([[powers[i * j % n] for j in range(n)] for i in range(n)], self.P)
 
     def native_solve(self, M, B):
         X = flint.nmod_mat(M, self.P).solve(flint.nmod_mat(B, self.P))

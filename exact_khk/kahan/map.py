@@ -39,8 +39,8 @@ python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
 are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
 plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.linalg.circulant`: exact in Q[t]/(tⁿ − 1), or
-by the DFT for ``float``/``mp:P``, or by the exact DFT in ``cyclo:N`` with n | N, for the
-fields over Q(ω) too: :mod:`exact_khk.linalg.circulant_dft`); ``'split'`` (exact, n < 16, ``flint`` or
+by the DFT for ``float``/``mp:P``, or by the exact DFT in ``cyclo:N`` with n | N and
+``gf:P`` with n | P − 1, for the fields over Q(ω) too: :mod:`exact_khk.linalg.circulant_dft`); ``'split'`` (exact, n < 16, ``flint`` or
 ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
 (:mod:`exact_khk.linalg.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
 whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
@@ -50,7 +50,8 @@ structured path overtakes it, n = 7, 9, 14, 15 (:data:`~exact_khk.linalg.paths.A
 otherwise the structured path for exact ``flint`` steps when n ≥ 16
 (:data:`~exact_khk.linalg.paths.STRUCTURED_MIN_N`), and at n = 11, 13 once the
 point's height reaches :data:`~exact_khk.linalg.paths.STRUCTURED_MIN_BITS`;
-the exact DFT in ``cyclo:N`` when n | N and n ≥ 3 (:data:`~exact_khk.linalg.paths.EXACT_DFT_STEP_MIN_N`);
+the exact DFT in ``cyclo:N`` (n | N) and ``gf:P`` (n | P − 1) when n ≥ 3
+(:data:`~exact_khk.linalg.paths.EXACT_DFT_STEP_MIN_N`);
 otherwise dense.  The rules follow the crossovers
 measured along orbits (docs/benchmarks.md).  Every path gives the same
 rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
@@ -420,7 +421,7 @@ def _choose_path(field, ar, method, eps):
                              "blocks are circulant (Lie–Poisson fields)")
         return True, None, 0
     n = field.dim // 2
-    dft = ar.exact and circulant_dft.applies(ar, n)  # e.g. cyclo:N with n | N
+    dft = ar.exact and circulant_dft.applies(ar, n)  # cyclo:N with n | N, gf:P with n | P − 1
     usable = ar.rational or ar.fourier or dft
     st = field.circulant_structure(cyclotomic=dft) if usable else None
     # a declared structure splits for every n of SPLIT_N: built by the first split step, not here
@@ -429,7 +430,7 @@ def _choose_path(field, ar, method, eps):
         if st is None:
             raise InputError("method: 'structured' needs a field whose Jacobian blocks are circulant "
                              "(Lie–Poisson fields with cyclic Hankel Hessian blocks) and a rational, "
-                             "float or mp:P arithmetic, or cyclo:N with n | N")
+                             "float or mp:P arithmetic, or cyclo:N with n | N or gf:P with n | P - 1")
         return False, st, 0
     if dft:
         return False, (st if n >= EXACT_DFT_STEP_MIN_N else None), 0

@@ -1,13 +1,15 @@
 """Exact Kahan steps and H̃ by the DFT, in an arithmetic that holds the n-th roots of unity.
 
-Over a field K with a primitive n-th root of unity ω (``cyclo:N`` with n | N: ω = ζ_N^(N/n)),
+Over a field K with a primitive n-th root of unity ω (``cyclo:N`` with n | N: ω = ζ_N^(N/n);
+``gf:P`` with n | P − 1),
 tⁿ − 1 = Π_j (t − ωʲ) splits, so the ring R = K[t]/(tⁿ − 1) of the circulant blocks of
 I − εf'(x) (:mod:`exact_khk.linalg.circulant`) is Kⁿ by evaluation at the ωʲ — exactly,
 not only over C.  A Kahan step is then n independent 2×2 systems over K (the frequencies),
 between one exact DFT of the point and one inverse DFT of the answer; the floating step
 (:func:`~exact_khk.linalg.circulant.numeric_step`) is the same computation in balls.  This is
 what makes the associated fields of the non-rational involutions (Hessians over Q(ω),
-``liouville``) cheap: the dense alternative is a 2n·φ(N)-dimensional rational system.
+``liouville``) cheap: the dense alternative is a 2n·φ(N)-dimensional rational system (in
+F_P, f'(x) entry by entry and a 2n×2n solve).
 
 The step is undefined exactly when a frequency's determinant is 0 (det(I − εf'(x)) is the
 product of the n determinants): :class:`~exact_khk.linalg.dense.SingularMatrix`.
@@ -27,8 +29,6 @@ True
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 from exact_khk.linalg.circulant import cramer, htilde_system, kahan_system, reflect
 from exact_khk.linalg.dense import SingularMatrix
 
@@ -38,11 +38,18 @@ def applies(ar, n: int) -> bool:
     return ar.dft is not None and ar.roots_of_unity % n == 0
 
 
-@lru_cache(maxsize=64)
 def _hankel_values(st, ar, reflected):
-    """The four Hankel polynomials m_kl of ``st`` (reflected: m̂_kl) at the n powers of ω."""
-    rows = [reflect(list(w)) if reflected else list(w) for row in st.m for w in row]
-    return ar.dft(rows, st.n)
+    """The four Hankel polynomials m_kl of ``st`` (reflected: m̂_kl) at the n powers of ω,
+    cached on the structure (a field's own: ``liouville`` steps 2ⁿ maps in turn)."""
+    cache = st.__dict__.get("_dft_values")
+    if cache is None:
+        cache = {}
+        object.__setattr__(st, "_dft_values", cache)
+    key = (ar.name, reflected)
+    if key not in cache:
+        rows = [reflect(list(w)) if reflected else list(w) for row in st.m for w in row]
+        cache[key] = ar.dft(rows, st.n)
+    return cache[key]
 
 
 def _frequencies(ar, n, a, r):

@@ -30,9 +30,9 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
                                 N ≤ :data:`EXACT_INVERSE_MAX_N`, else estimated
                                 (``linalg.dense.solve``)
 exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.linalg.circulant_dft`:
-with n | N                      n 2×2 systems over Q(ζ_N), the fields over Q(ω)
-                                included): steps for n ≥ :data:`EXACT_DFT_STEP_MIN_N`,
-                                H̃ for every n
+(n | N) and gf:P (n | P − 1)    n 2×2 systems over Q(ζ_N) or F_P, the fields over
+                                Q(ω) included): steps for n ≥
+                                :data:`EXACT_DFT_STEP_MIN_N`, H̃ for every n
 linear algebra over Q(ζ_N)      FLINT on the coefficients for φ(N) ≤
 (``cyclo:N``)                   :data:`CYCLO_REGULAR_MAX_DEGREE`, a solve as one
                                 rational system up to size
@@ -117,11 +117,11 @@ def coefficients_native(ar, m: int = 0) -> bool:
     return phi is None or (phi <= CYCLO_REGULAR_MAX_DEGREE and m * phi <= CYCLO_REGULAR_MAX_SIZE)
 
 
-#: exact steps by the DFT in ``cyclo:N`` (n | N) from this n: against the dense solve over
-#: Q(ζ_n) at an orbit point of g[+-+…+] one step is 1.4×, 1.5×, 3.0×, 2.5×, 5.3×, 6.8×, 7.8×,
-#: 12× faster at n = 3, 4, 5, 6, 7, 8, 10, 12, but 0.7–0.85× at n = 2 (cyclo:2, 4, 6: the
-#: dense system is then only 4φ wide); H̃ by the DFT is faster at every n (1.8× at n = 2,
-#: 3.3–22× at n = 3..12), so it has no rule (scripts/bench_cyclo_dft.py, docs/benchmarks.md)
+#: exact steps by the DFT in ``cyclo:N`` (n | N) and ``gf:P`` (n | P − 1) from this n: against
+#: the dense solve at an orbit point of g[+-+…+] one step is 1.5–13× faster in cyclo:n and
+#: 1.2–9× in gf:P at n = 3..12, but 0.7–0.85× at n = 2 in cyclo:2, 4, 6 (the dense system is
+#: then only 4φ wide) and 1.0× in gf:P; H̃ by the DFT is faster at every n (1.9× at n = 2,
+#: 3.5–33× at n = 3..12), so it has no rule (scripts/bench_cyclo_dft.py, docs/benchmarks.md)
 EXACT_DFT_STEP_MIN_N = 3
 
 

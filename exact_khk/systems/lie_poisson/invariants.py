@@ -70,8 +70,9 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.linalg.paths.HTILDE_STRUCTURED_MIN_N`
     (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
     40×, 160× faster than the dense solve); the result is the same rational
-    number.  In ``cyclo:N`` with n | N (fields over Q(ω) included) it is n 2×2
-    systems over Q(ζ_N) by the exact DFT (:func:`exact_khk.linalg.circulant_dft.exact_htilde`).
+    number.  In ``cyclo:N`` with n | N and ``gf:P`` with n | P − 1 (fields over Q(ω)
+    included) it is n 2×2 systems over Q(ζ_N) or F_P by the exact DFT
+    (:func:`exact_khk.linalg.circulant_dft.exact_htilde`).
     ``method='dense'`` forces the 2n×2n solve.
     """
     ar = get_arith(arith)
