@@ -88,6 +88,8 @@ ROWS += [
     row(["orbit", "--field", "h"], 2), row(["orbit", "--signs", "-++"], 2, id="orbit --signs without --field g"),
     row(["orbit", "--method", "split", "--arith", "float"], 2), row(["orbit", "--method", "fast"], 2),
     row(["orbit", "--method", "structured", "--arith", "gf:11"], 2, id="structured in gf:11 (3 does not divide 10)"),
+    row(["orbit", "--n", "20", "--arith", "cyclo:10000", "--seed", "1", "--steps", "1"], 0,
+        id="cyclo:10000 at n = 20: no (80000)^2 DFT transform"),
     row(["orbit", "--method", "structured", "--arith", "ball:64"], 2),
     row(["liouville", "--involutions", "+++"], 2), row(["liouville", "--involutions", "+-"], 2),
     row(["liouville", "--involutions", "x,y"], 2), row(["liouville", "--arith", "float"], 2),

@@ -428,7 +428,9 @@ def _choose_path(field, ar, method, eps):
     splits = K is not None and st is not None and field.dim // 2 in SPLIT_N
     if method == "structured":
         if st is None:
-            raise InputError("method: 'structured' needs a field whose Jacobian blocks are circulant "
+            why = circulant_dft.why_not(ar, n) if ar.dft is not None else None
+            raise InputError(f"method: 'structured' {why}" if why else
+                             "method: 'structured' needs a field whose Jacobian blocks are circulant "
                              "(Lie–Poisson fields with cyclic Hankel Hessian blocks) and a rational, "
                              "float or mp:P arithmetic, or cyclo:N with n | N or gf:P with n | P - 1")
         return False, st, 0

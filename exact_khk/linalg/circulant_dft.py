@@ -31,11 +31,25 @@ from __future__ import annotations
 
 from exact_khk.linalg.circulant import cramer, htilde_system, kahan_system, reflect
 from exact_khk.linalg.dense import SingularMatrix
+from exact_khk.linalg.paths import exact_dft_fits
 
 
 def applies(ar, n: int) -> bool:
-    """Whether ``ar`` holds the n-th roots of unity and their exact DFT."""
-    return ar.dft is not None and ar.roots_of_unity % n == 0
+    """Whether ``ar`` holds the n-th roots of unity and their exact DFT, within the memory
+    bounds of :func:`~exact_khk.linalg.paths.exact_dft_fits`."""
+    return ar.dft is not None and ar.roots_of_unity % n == 0 and exact_dft_fits(ar, n)
+
+
+def why_not(ar, n: int):
+    """Why an arithmetic with an exact DFT (``ar.dft``) cannot take it at this n, or None."""
+    if ar.roots_of_unity % n:
+        return (f"needs the {n}-th roots of unity, which {ar.name} does not hold "
+                f"({n} does not divide {ar.roots_of_unity})")
+    if not exact_dft_fits(ar, n):
+        return (f"in {ar.name} at n = {n} would need an exact DFT on n·φ = "
+                f"{n * (getattr(ar, 'coefficient_degree', None) or 1)} coefficients, beyond the memory "
+                f"bounds of exact_khk/linalg/paths.py (use a smaller N)")
+    return None
 
 
 def _hankel_values(st, ar, reflected):

@@ -32,7 +32,8 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
 exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.linalg.circulant_dft`:
 (n | N) and gf:P (n | P − 1)    n 2×2 systems over Q(ζ_N) or F_P, the fields over
                                 Q(ω) included): steps for n ≥
-                                :data:`EXACT_DFT_STEP_MIN_N`, H̃ for every n
+                                :data:`EXACT_DFT_STEP_MIN_N`, H̃ for every n; within
+                                the memory bounds below (n·φ as m·φ, φ = 1 for gf:P)
 linear algebra over Q(ζ_N)      FLINT on the coefficients for φ(N) ≤
 (``cyclo:N``)                   :data:`CYCLO_REGULAR_MAX_DEGREE`, a solve as one
                                 rational system up to size
@@ -123,6 +124,14 @@ def coefficients_native(ar, m: int = 0) -> bool:
 #: then only 4φ wide) and 1.0× in gf:P; H̃ by the DFT is faster at every n (1.9× at n = 2,
 #: 3.5–33× at n = 3..12), so it has no rule (scripts/bench_cyclo_dft.py, docs/benchmarks.md)
 EXACT_DFT_STEP_MIN_N = 3
+
+
+def exact_dft_fits(ar, n: int) -> bool:
+    """Whether the exact DFT of length n in ``ar`` (its transform: an (nφ)² integer matrix,
+    φ = 1 for ``gf:P``) is within the memory bounds of the ``cyclo:N`` row
+    (:func:`coefficients_native` with m = n; ``cyclo:10000`` at n = 20 would need
+    (80 000)² entries)."""
+    return coefficients_native(ar, n) and n * (getattr(ar, "coefficient_degree", None) or 1) <= CYCLO_REGULAR_MAX_SIZE
 
 
 def auto_path(n: int, kernel: str, splits: bool, circulant: bool):
