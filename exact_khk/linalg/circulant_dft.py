@@ -29,7 +29,7 @@ True
 
 from __future__ import annotations
 
-from exact_khk.linalg.circulant import cramer, htilde_system, kahan_system, reflect
+from exact_khk.linalg.circulant import _mul, cramer, htilde_system, kahan_system, reflect
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.paths import exact_dft_fits
 
@@ -76,10 +76,6 @@ def _frequencies(ar, n, a, r):
         return tuple(inv * t for t in rhs)
 
     return [cramer(a[j], r[j], _mul, divide) for j in range(n)]
-
-
-def _mul(a, b):
-    return a * b
 
 
 def exact_step(st, x, eps, ar):

@@ -131,7 +131,7 @@ def exact_dft_fits(ar, n: int) -> bool:
     φ = 1 for ``gf:P``) is within the memory bounds of the ``cyclo:N`` row
     (:func:`coefficients_native` with m = n; ``cyclo:10000`` at n = 20 would need
     (80 000)² entries)."""
-    return coefficients_native(ar, n) and n * (getattr(ar, "coefficient_degree", None) or 1) <= CYCLO_REGULAR_MAX_SIZE
+    return coefficients_native(ar, n) and n <= CYCLO_REGULAR_MAX_SIZE
 
 
 def auto_path(n: int, kernel: str, splits: bool, circulant: bool):

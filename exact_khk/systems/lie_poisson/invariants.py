@@ -82,21 +82,16 @@ def Htilde(field, x, eps, arith=None, method="auto"):
         raise InputError(f"method: expected 'auto' or 'dense', got {method!r}")
     e = _eps(ar, eps)
     x = _point(ar, x, field.dim)
-    n = field.system.n
+    n, st = field.system.n, None
     if method == "auto" and ar.exact and circulant_dft.applies(ar, n):
-        st = field.circulant_structure(cyclotomic=True)
-        if st is not None:
-            try:
-                return circulant_dft.exact_htilde(st, x, e, ar)
-            except SingularMatrix:
-                raise _pole(ar, x, e) from None
-    if method == "auto" and ar.rational and circulant.flint is not None and n >= HTILDE_STRUCTURED_MIN_N:
-        st = circulant.circulant_structure(field)
-        if st is not None:
-            try:
-                return circulant.exact_htilde(st, x, e, ar)
-            except SingularMatrix:
-                raise _pole(ar, x, e) from None
+        st, structured = field.circulant_structure(cyclotomic=True), circulant_dft.exact_htilde
+    elif method == "auto" and ar.rational and circulant.flint is not None and n >= HTILDE_STRUCTURED_MIN_N:
+        st, structured = circulant.circulant_structure(field), circulant.exact_htilde
+    if st is not None:
+        try:
+            return structured(st, x, e, ar)
+        except SingularMatrix:
+            raise _pole(ar, x, e) from None
     with ar.local():  # e.g. the working precision of ball:P
         return _htilde(ar, field, x, e)
 
