@@ -360,8 +360,16 @@ def test_finite_field_dft_is_the_sum_over_powers_of_omega():
         for sign in (1, -1):
             want = [sum((w[i] * omega ** ((sign * i * j) % n) for i in range(n)), ar.zero) for j in range(n)]
             assert ar.dft([w], n, sign) == [want]
-    with pytest.raises(InputError, match="P ≡ 1"):
+    with pytest.raises(InputError, match="no primitive 5-th root of unity"):
         get_arith("gf:7").dft([[1, 2, 3, 4, 5]], 5)
+    for arith in ("gf:7", "cyclo:6"):  # bad lengths and sizes: typed errors, never FLINT's abort
+        bad = get_arith(arith)
+        assert bad.dft([], 3) == []
+        for rows, n in (([[1, 2]], 3), ([[1, 2, 3]], -3), ([[1, 2, 3]], 0), ([[1, 2, 3]], True)):
+            with pytest.raises(InputError):
+                bad.dft(rows, n)
+        with pytest.raises(InputError, match="sign"):
+            bad.dft([[1, 2, 3]], 3, 2)
     fld = LiePoissonSystem.random(5, seed=1).field("f")
     assert KahanMap(fld, "1/10", "gf:7").path == "dense"  # 5 ∤ 6
 

@@ -375,6 +375,7 @@ class CycloArith(Arith):
         >>> [str(t) for t in ar.dft([[1, 1, 0]], 3)[0]]   # 1 + ω^j
         ['2', '1 + z', '-z']
         """
+        rows = _dft_rows(self, rows, n, sign)
         phi, K = self.K.degree, self.K
         W, den = flint.fmpq_mat(len(rows), n * phi, self._coefficient_rows([e for w in rows for e in w])
                                 ).numer_denom()
@@ -387,8 +388,6 @@ class CycloArith(Arith):
         """The fmpz_mat T (nφ × nφ) of :meth:`dft` on coefficients: row i·φ + a, column
         j·φ + r holds the ζʳ-coefficient of ζ^(a + sign·(N/n)·i·j) reduced modulo Φ_N."""
         N, phi = self.N, self.K.degree
-        if n < 1 or N % n:
-            raise InputError(f"arith cyclo:{N} holds no primitive {n}-th root of unity (n must divide N)")
         powers = [[int(c) for c in self.K.zeta_power(e).p.coeffs()] for e in range(N)]
         T = [[0] * (n * phi) for _ in range(n * phi)]
         for i in range(n):
@@ -449,6 +448,23 @@ class CycloArith(Arith):
         X = big.solve(Bz) * (flint.fmpq(d) / dB)
         return [[K.element(flint.fmpq_poly([X[k * n + i, j] for k in range(phi)])) for j in range(m)]
                 for i in range(n)]
+
+
+def _dft_rows(ar, rows, n, sign):
+    """``rows`` as lists of n elements for ``ar.dft``, after checking n (a positive
+    integer dividing ``ar.roots_of_unity``), the sign (±1) and every row's length
+    (InputError)."""
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise InputError(f"dft: n must be a positive integer, got {n!r}")
+    if sign not in (1, -1) or isinstance(sign, bool):
+        raise InputError(f"dft: sign must be 1 or -1, got {sign!r}")
+    if ar.roots_of_unity % n:
+        raise InputError(f"arith {ar.name} holds no primitive {n}-th root of unity "
+                         f"(n must divide {ar.roots_of_unity})")
+    rows = [list(w) for w in rows]
+    if any(len(w) != n for w in rows):
+        raise InputError(f"dft: every row needs n = {n} elements, got lengths {sorted({len(w) for w in rows})}")
+    return rows
 
 
 @lru_cache(maxsize=8)
@@ -537,6 +553,9 @@ class GFArith(Arith):
         >>> [int(t) for t in ar.dft([[1, 1, 0]], 3)[0]]   # 1 + ω^j, ω = 3^2 = 2
         [2, 3, 5]
         """
+        rows = _dft_rows(self, rows, n, sign)
+        if not rows:
+            return []
         V = self._vandermonde(n, sign)
         X = flint.nmod_mat([[self.convert(t) for t in w] for w in rows], self.P) * V
         return [[X[r, j] for j in range(n)] for r in range(len(rows))]
