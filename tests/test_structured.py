@@ -370,6 +370,10 @@ def test_finite_field_dft_is_the_sum_over_powers_of_omega():
                 bad.dft(rows, n)
         with pytest.raises(InputError, match="sign"):
             bad.dft([[1, 2, 3]], 3, 2)
+    with pytest.raises(InputError, match="DFT_MAX_SIZE"):  # refused before any allocation
+        get_arith("cyclo:10000").dft([[0] * 10000], 10000)
+    with pytest.raises(InputError, match="DFT_MAX_SIZE"):
+        get_arith(f"gf:{GF_PRIME}").dft([[0] * 5040], 5040)
     fld = LiePoissonSystem.random(5, seed=1).field("f")
     assert KahanMap(fld, "1/10", "gf:7").path == "dense"  # 5 ∤ 6
 

@@ -56,6 +56,11 @@ __all__ = ["CyclotomicField", "CycloNumber", "CycloArith", "GFArith", "BadReduct
 #: a prime P ≡ 1 (mod 720720) below 2^62: ω = e^{2πi/n} exists in F_P for every n ≤ 16
 DEFAULT_PRIME = 4611686018420360881
 
+#: the largest n·φ of ``dft`` (φ = 1 in gf:P): its transform holds (n·φ)² integers, built once
+#: (a memory bound: 4 million entries; the structured steps stay below 1024,
+#: ``linalg.paths.exact_dft_fits``)
+DFT_MAX_SIZE = 2048
+
 #: the largest N of ``cyclo:N``: an element is a polynomial of degree < φ(N) ≤ N − 1,
 #: so one product costs about N² coefficient operations and a 2n×2n solve
 #: (2n)³ of them; at N = 10⁴ a single Kahan step already takes minutes
@@ -461,6 +466,10 @@ def _dft_rows(ar, rows, n, sign):
     if ar.roots_of_unity % n:
         raise InputError(f"arith {ar.name} holds no primitive {n}-th root of unity "
                          f"(n must divide {ar.roots_of_unity})")
+    size = n * (getattr(ar, "coefficient_degree", None) or 1)
+    if size > DFT_MAX_SIZE:
+        raise InputError(f"dft: n·φ = {size} coefficients in {ar.name}, beyond the limit of {DFT_MAX_SIZE} "
+                         f"(DFT_MAX_SIZE; the transform would hold {size * size:.2g} integers)")
     rows = [list(w) for w in rows]
     if any(len(w) != n for w in rows):
         raise InputError(f"dft: every row needs n = {n} elements, got lengths {sorted({len(w) for w in rows})}")
