@@ -66,16 +66,21 @@ def _hankel_values(st, ar, reflected):
     return cache[key]
 
 
-def _frequencies(ar, n, a, r):
-    """Cramer's rule for the 2×2 systems (a, r) at every frequency j (a, r: lists over j);
-    SingularMatrix when a determinant is 0."""
+def _frequencies(ar, m, system, u, v, eps, scale=1):
+    """The answers z_j/scale of the 2×2 systems ``system`` (:func:`kahan_system` or
+    :func:`htilde_system`) at every frequency j, from the Hankel values m and the values
+    u, v of the point, by Cramer's rule; SingularMatrix when a determinant is 0."""
     def divide(det, rhs):
         if ar.is_zero(det):
             raise SingularMatrix("a frequency's 2x2 determinant is 0")
-        inv = ar.one / det
+        inv = ar.one / (det * scale)
         return tuple(inv * t for t in rhs)
 
-    return [cramer(a[j], r[j], _mul, divide) for j in range(n)]
+    out = []
+    for j in range(len(u)):
+        a, r = system(((m[0][j], m[1][j]), (m[2][j], m[3][j])), u[j], v[j], eps, _mul, ar.one)
+        out.append(cramer(a, r, _mul, divide))
+    return out
 
 
 def exact_step(st, x, eps, ar):
@@ -83,16 +88,13 @@ def exact_step(st, x, eps, ar):
 
     As :func:`~exact_khk.linalg.circulant.exact_step`: û, v̂ the reflected halves of x,
     at each frequency the 2×2 system of :func:`~exact_khk.linalg.circulant.kahan_system`,
-    and the answer's reflected halves from the inverse DFT (divided by n)."""
+    and the answer's reflected halves from the inverse DFT (its 1/n folded into the
+    frequencies' divisions)."""
     n = st.n
-    m = _hankel_values(st, ar, False)
     uh, vh = ar.dft([reflect(list(x[:n])), reflect(list(x[n:]))], n)
-    systems = [kahan_system(((m[0][j], m[1][j]), (m[2][j], m[3][j])), uh[j], vh[j], eps, _mul, ar.one)
-               for j in range(n)]
-    z = _frequencies(ar, n, [s[0] for s in systems], [s[1] for s in systems])
+    z = _frequencies(ar, _hankel_values(st, ar, False), kahan_system, uh, vh, eps, scale=n)
     zu, zv = ar.dft([[t[0] for t in z], [t[1] for t in z]], n, -1)
-    inv_n = ar.one / ar.convert(n)
-    return tuple(t * inv_n for t in reflect(zu) + reflect(zv))
+    return tuple(reflect(zu) + reflect(zv))
 
 
 def exact_htilde(st, x, eps, ar):
@@ -102,11 +104,8 @@ def exact_htilde(st, x, eps, ar):
     the plain halves u, v); xᵀz is the constant coefficient of u ẑ_u + v ẑ_v, the mean
     over the frequencies of the products of their values."""
     n = st.n
-    m = _hankel_values(st, ar, True)
     u, v = ar.dft([list(x[:n]), list(x[n:])], n)
-    systems = [htilde_system(((m[0][j], m[1][j]), (m[2][j], m[3][j])), u[j], v[j], eps, _mul, ar.one)
-               for j in range(n)]
-    z = _frequencies(ar, n, [s[0] for s in systems], [s[1] for s in systems])
+    z = _frequencies(ar, _hankel_values(st, ar, True), htilde_system, u, v, eps)
     total = ar.zero
     for j in range(n):
         total = total + u[j] * z[j][0] + v[j] * z[j][1]
