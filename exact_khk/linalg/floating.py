@@ -118,11 +118,9 @@ def system_matrix(field, ar, x, eps):
         return _matrix_builder(data, field.dim, ar, eps)(x)
 
 
-def _matrix_builder(data, N, ar, eps, reuse=False):
-    """``x ↦`` I − ε f'(x) for a numpy vector x of ``ar``'s elements, with what depends
-    on ε only computed once.  ``reuse`` (binary64 circulant data): every call of a thread
-    writes M into the same array, overwritten by the next call (LAPACK runs up to 1.4×
-    slower on a freshly allocated M of 0.5–2 MB, N = 256..512: glibc maps new pages for it)."""
+def _matrix_builder(data, N, ar, eps):
+    """``(x, out=None) ↦`` I − ε f'(x) for a numpy vector x of ``ar``'s elements, with what
+    depends on ε only computed once; written into ``out`` (an N×N binary64 array) if given."""
     one = ar.one
     if data[0] == "circulant":
         hankel, n, F = data[1], N // 2, data[2]
@@ -141,31 +139,29 @@ def _matrix_builder(data, N, ar, eps, reuse=False):
                 p = {k: x[n * (k % 2):][:n] @ hankel[k // 2] for k in (0, 2, 3, 4, 6, 7)}
                 return numpy.array([functools.reduce(operator.add, [p[k] * c for k, c in t]) for t in terms])
 
-        local = threading.local() if reuse else None
-
-        def build(x):
+        def build(x, out=None):
             w = first_rows(x)
             w[0, 0] += one  # the diagonals of the circulants f11, f22: w[., 0]
             w[3, 0] += one
             view = blocks(numpy.concatenate([w, w], axis=1))
-            if local is None:
+            if out is None:
                 return view.reshape(N, N)  # one copy
-            M = getattr(local, "M", None)
-            if M is None:
-                M = local.M = numpy.empty((N, N))
-            numpy.copyto(M.reshape(2, n, 2, n), view)
-            return M
+            numpy.copyto(out.reshape(2, n, 2, n), view)
+            return out
         return build
     _, rows, ks, coefs, L = data
 
-    def build(x):
+    def build(x, out=None):
         # float64 also when f has no quadratic term (bincount of no weights is int64)
         M = numpy.bincount(rows, weights=coefs * x[ks], minlength=N * N).astype(float, copy=False)
         M += L
         M *= -eps
         M = M.reshape(N, N)
         M.flat[::N + 1] += one
-        return M
+        if out is None:
+            return M
+        numpy.copyto(out, M)
+        return out
     return build
 
 
@@ -189,11 +185,13 @@ def _values_data(field, ar):
 
 def float_step(field, ar, x, eps):
     """``(z, κ)``: the dense Kahan step z = Φ_f(x, ε) in binary64 (a list of Python
-    floats) and κ from :func:`float_solve`; ``ar`` the ``float`` arithmetic.
+    floats) and κ as in :func:`float_solve`; ``ar`` the ``float`` arithmetic.
 
     Homogeneous f: (I − εf'(x)) z = x; otherwise z = x + 2ε (I − εf'(x))⁻¹ f(x)
-    (the same formulas as the generic dense step).  Raises
-    :class:`~exact_khk.linalg.dense.SingularMatrix` on an exactly zero pivot.
+    (the same formulas as the generic dense step).  Quiet: an exactly zero pivot
+    gives NaN in z and κ, an overflow inf or NaN, and the caller checks z and κ
+    (for ``float`` both mean a singular step; one error state for the whole step
+    instead of :func:`float_solve`'s second one is a tenth of a step at N ≤ 8).
     """
     return float_stepper(field, ar, eps)(x)
 
@@ -201,21 +199,34 @@ def float_step(field, ar, x, eps):
 def float_stepper(field, ar, eps):
     """``x ↦`` :func:`float_step` ``(field, ar, x, eps)``, with what depends on ε only
     computed once (a :class:`~exact_khk.kahan.map.KahanMap` keeps one)."""
-    build = _matrix_builder(_data(field, ar), field.dim, ar, eps, reuse=True)  # M is used within a step only
+    N = field.dim
+    build = _matrix_builder(_data(field, ar), N, ar, eps)
     data, two_eps = _values_data(field, ar), eps + eps
+    # M and M⁻¹ of a step are written into one array of each thread, overwritten by its next
+    # step: both norms of κ are then three ufunc calls in place (a tenth of a step at N ≤ 8, and
+    # no N×N temporaries), and LAPACK
+    # does not run on freshly allocated memory (up to 1.4× slower for 0.5–2 MB, N = 256..512:
+    # glibc maps new pages for it)
+    local = threading.local()
 
     def step(x):
         xv = numpy.array(x, dtype=float)
-        with numpy.errstate(all="ignore"):  # overflow gives inf, found by the caller's finiteness check
-            M = build(xv)
-        if not data:
-            z, cond = float_solve(M, xv[:, None])
-            return z[:, 0].tolist(), cond
-        i, j, k, c, lin, const = data
+        both = getattr(local, "both", None)
+        if both is None:
+            both = local.both = numpy.empty((2, N, N))
         with numpy.errstate(all="ignore"):
-            fx = numpy.bincount(i, weights=c * xv[j] * xv[k], minlength=field.dim) + lin @ xv + const
-            X, cond = float_solve(M, fx[:, None])
-            return (xv + two_eps * X[:, 0]).tolist(), cond
+            M = build(xv, both[0])
+            if not data:
+                X = _quiet_lapack(M, xv[:, None], both[1])
+                z = X[:, 0]
+            else:
+                i, j, k, c, lin, const = data
+                fx = numpy.bincount(i, weights=c * xv[j] * xv[k], minlength=N) + lin @ xv + const
+                X = _quiet_lapack(M, fx[:, None], both[1])
+                z = xv + two_eps * X[:, 0]
+            # ‖M‖₁, ‖M⁻¹‖₁ (inf·0 is nan without a warning); both are scratch by now
+            norms = _max(_add(numpy.abs(both, out=both), 1), 1)
+            return z.tolist(), float(norms[0]) * float(norms[1])
     return step
 
 
@@ -272,6 +283,21 @@ def _lapack(M, B=None):
             return None if B is None else _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
     except (FloatingPointError, numpy.linalg.LinAlgError):
         raise SingularMatrix("Singular matrix") from None
+
+
+def _quiet_lapack(M, B, inverse):
+    """X of M X = B, and M⁻¹ written into ``inverse``, as :func:`_lapack` computes them, but
+    NaN for an exactly zero pivot instead of an error (the caller's error state decides
+    what is reported)."""
+    if _gesv is not None:
+        _inv(M, signature="d->d", out=inverse)
+        return _gesv(M, B, signature="dd->d")
+    try:  # pragma: no cover  (numpy without its private module)
+        inverse[...] = numpy.linalg.inv(M)
+        return numpy.linalg.solve(M, B)
+    except numpy.linalg.LinAlgError:  # pragma: no cover
+        inverse[...] = numpy.nan
+        return numpy.full(B.shape, numpy.nan)
 
 
 def _norm1(A) -> float:
