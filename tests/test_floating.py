@@ -141,8 +141,9 @@ def test_float_solve_gives_the_bits_of_numpys_public_functions(monkeypatch):
 
 
 def test_float_steps_of_one_map_from_several_threads():
-    """The float step writes I − εf'(x) into one array per map and thread: steps of one
-    map taken concurrently from threads (LAPACK releases the GIL) equal serial steps."""
+    """The float step writes I − εf'(x) and its inverse into one array per map and thread:
+    steps of one map taken concurrently from threads (LAPACK releases the GIL) equal serial
+    steps (one array shared by the threads fails this test)."""
     import threading
 
     from exact_khk.systems.lie_poisson.system import random_point
