@@ -203,10 +203,9 @@ def float_stepper(field, ar, eps):
     build = _matrix_builder(_data(field, ar), N, ar, eps)
     data, two_eps = _values_data(field, ar), eps + eps
     # M and M⁻¹ of a step are written into one array of each thread, overwritten by its next
-    # step: both norms of κ are then three ufunc calls in place (a tenth of a step at N ≤ 8, and
-    # no N×N temporaries), and LAPACK
-    # does not run on freshly allocated memory (up to 1.4× slower for 0.5–2 MB, N = 256..512:
-    # glibc maps new pages for it)
+    # step: both norms of κ are then three ufunc calls in place (a tenth of a step at N ≤ 8,
+    # and no N×N temporaries), and LAPACK does not run on freshly allocated memory (up to
+    # 1.4× slower for 0.5–2 MB, N = 256..512: glibc maps new pages for it)
     local = threading.local()
 
     def step(x):
