@@ -40,7 +40,8 @@ are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
 plain-elimination reference); ``'structured'`` solves it as a 2×2
 system over circulants (:mod:`exact_khk.linalg.circulant`: exact in Q[t]/(tⁿ − 1), or
 by the DFT for ``float``/``mp:P``, or by the exact DFT in ``cyclo:N`` with n | N and
-``gf:P`` with n | P − 1, for the fields over Q(ω) too: :mod:`exact_khk.linalg.circulant_dft`); ``'split'`` (exact, n < 16, ``flint`` or
+``gf:P`` with n | P − 1, for the fields over Q(ω) too:
+:mod:`exact_khk.linalg.circulant_dft`); ``'split'`` (exact, n < 16, ``flint`` or
 ``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
 (:mod:`exact_khk.linalg.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
 whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
