@@ -50,7 +50,6 @@ from functools import lru_cache
 from math import lcm
 
 from exact_khk.arith import _as_fraction
-from exact_khk.arith.cyclotomic import CycloNumber
 from exact_khk.linalg.dense import SingularMatrix
 
 try:  # python-flint is optional: without it the dense path is used
@@ -84,6 +83,8 @@ def hankel_first_row(block, cyclotomic=False):
     Q(ζ) (:class:`~exact_khk.arith.cyclotomic.CycloNumber`) too, kept as they are."""
     n = len(block)
     if cyclotomic:
+        from exact_khk.arith.cyclotomic import CycloNumber  # needs python-flint, as Q(ζ) does
+
         w = tuple(block[0])
         if not all(isinstance(t, (int, Fraction, CycloNumber)) for t in w):
             return None  # e.g. balls, whose == is no identity

@@ -213,16 +213,16 @@ def float_stepper(field, ar, eps):
         both = getattr(local, "both", None)
         if both is None:
             both = local.both = numpy.empty((2, N, N))
-        with numpy.errstate(all="ignore"):
+        with numpy.errstate(all="ignore"):  # a zero pivot: NaN (see float_step)
             M = build(xv, both[0])
-            if not data:
-                X = _quiet_lapack(M, xv[:, None], both[1])
-                z = X[:, 0]
-            else:
+            if data:
                 i, j, k, c, lin, const = data
                 fx = numpy.bincount(i, weights=c * xv[j] * xv[k], minlength=N) + lin @ xv + const
-                X = _quiet_lapack(M, fx[:, None], both[1])
-                z = xv + two_eps * X[:, 0]
+            try:
+                X, _ = _gufuncs(M, (fx if data else xv)[:, None], both[1])
+            except numpy.linalg.LinAlgError:  # pragma: no cover  (the public functions: a zero pivot)
+                return None, float("inf")
+            z = xv + two_eps * X[:, 0] if data else X[:, 0]
             # ‖M‖₁, ‖M⁻¹‖₁ (inf·0 is nan without a warning); both are scratch by now
             norms = _max(_add(numpy.abs(both, out=both), 1), 1)
             return z.tolist(), float(norms[0]) * float(norms[1])
@@ -271,32 +271,28 @@ def binary64_condition(M):
 
 
 def _lapack(M, B=None):
-    """``(X, M⁻¹)`` in binary64 by the gufuncs of ``numpy.linalg.solve`` and ``inv``, in
-    their error state: an exactly zero pivot sets the invalid flag (and nothing else in
-    them does) and raises :class:`~exact_khk.linalg.dense.SingularMatrix`; X is None
-    without ``B``.  Without numpy's private module, the public functions."""
+    """:func:`_gufuncs` in their error state: an exactly zero pivot sets the invalid flag
+    (and nothing else in them does) and raises
+    :class:`~exact_khk.linalg.dense.SingularMatrix`."""
     try:
-        if _gesv is None:
-            return None if B is None else numpy.linalg.solve(M, B), numpy.linalg.inv(M)
         with numpy.errstate(invalid="raise", over="ignore", divide="ignore", under="ignore"):
-            return None if B is None else _gesv(M, B, signature="dd->d"), _inv(M, signature="d->d")
+            return _gufuncs(M, B)
     except (FloatingPointError, numpy.linalg.LinAlgError):
         raise SingularMatrix("Singular matrix") from None
 
 
-def _quiet_lapack(M, B, inverse):
-    """X of M X = B, and M⁻¹ written into ``inverse``, as :func:`_lapack` computes them, but
-    NaN for an exactly zero pivot instead of an error (the caller's error state decides
-    what is reported)."""
-    if _gesv is not None:
-        _inv(M, signature="d->d", out=inverse)
-        return _gesv(M, B, signature="dd->d")
-    try:  # pragma: no cover  (numpy without its private module)
-        inverse[...] = numpy.linalg.inv(M)
-        return numpy.linalg.solve(M, B)
-    except numpy.linalg.LinAlgError:  # pragma: no cover
-        inverse[...] = numpy.nan
-        return numpy.full(B.shape, numpy.nan)
+def _gufuncs(M, B=None, inverse=None):
+    """``(X, M⁻¹)`` in binary64 by the gufuncs of ``numpy.linalg.solve`` and ``inv`` (X None
+    without ``B``; M⁻¹ written into ``inverse`` if given).  An exactly zero pivot gives NaN
+    and sets the invalid flag: what that does is the caller's error state.  Without numpy's
+    private module, the public functions, which raise ``LinAlgError`` there instead."""
+    if _gesv is None:  # pragma: no cover
+        Y = numpy.linalg.inv(M)
+        if inverse is not None:
+            inverse[...], Y = Y, inverse
+        return None if B is None else numpy.linalg.solve(M, B), Y
+    Y = _inv(M, signature="d->d") if inverse is None else _inv(M, signature="d->d", out=inverse)
+    return None if B is None else _gesv(M, B, signature="dd->d"), Y
 
 
 def _norm1(A) -> float:
