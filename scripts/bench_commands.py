@@ -25,7 +25,6 @@ from script_io import child_cpu
 ROOT = Path(__file__).resolve().parent.parent
 
 
-
 def run(tree: Path, args: list) -> float:
     """CPU seconds of ``exact-khk args`` run from ``tree``."""
     before = child_cpu()

@@ -60,7 +60,6 @@ print(json.dumps({"cpu": time.process_time() - t, "degrees": degs}))
 """
 
 
-
 def run_route(kind, size, steps, route, budget):
     try:
         out = subprocess.run([sys.executable, "-c", CHILD, kind, str(size), str(steps), route],

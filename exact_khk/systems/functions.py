@@ -35,10 +35,9 @@ from __future__ import annotations
 
 from fractions import Fraction
 from itertools import combinations
+from math import lcm
 
 import flint
-
-from math import gcd as _gcd
 
 from ..arith import _as_fraction
 from ..errors import InputError, PoleError, UndecidedError
@@ -178,7 +177,6 @@ class Polynomial:
             total = total + c
         return total
 
-
     def _evaluate_over_z(self, values):
         """p at fmpq values over one denominator: with v_j = V_j/D and A the total degree,
         p = Σ C_α V^α D^(A − |α|) / (L D^A), C_α = L c_α integers (L the coefficients'
@@ -187,9 +185,7 @@ class Polynomial:
         lagrange-top with 58 terms at a 6000-bit point)."""
         hit = self._cache.get("over Z")
         if hit is None:
-            L = 1
-            for c in self.terms.values():
-                L = L * c.denominator // _gcd(L, c.denominator)
+            L = lcm(*(c.denominator for c in self.terms.values()))
             A = max(sum(e) for e in self.terms)
             terms = [(flint.fmpz(c.numerator * (L // c.denominator)), tuple((v, k) for v, k in enumerate(e) if k),
                       A - sum(e)) for e, c in self.terms.items()]
