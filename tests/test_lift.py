@@ -1,6 +1,6 @@
-"""The division in Z[t]/(tⁿ − 1) behind the structured exact step
+"""The division in Z[t]/(tⁿ ∓ 1) behind the structured exact step
 (:meth:`exact_khk.linalg.circulant.CirculantRing.solve`), against python-flint's dense
-``fmpz_mat.solve`` of the n×n circulant system (an independent algorithm)."""
+``fmpz_mat.solve`` of the n×n circulant (or negacirculant) system (an independent algorithm)."""
 
 import random
 
@@ -21,11 +21,12 @@ def _as_rational(W, delta):
 
 
 def _dense_reference(R, d, rhs):
-    """(W, δ) from python-flint's ``fmpz_mat.solve`` of the n×n circulant system C(d) W = δ r
-    (an algorithm independent of the ring's division)."""
+    """(W, δ) from python-flint's ``fmpz_mat.solve`` of the n×n system C(d) W = δ r of
+    multiplication by d mod tⁿ − s (tʲ·tᵏ = s·t^{j+k−n} past tⁿ): an algorithm independent
+    of the ring's division."""
     n = R.n
     c = d.coeffs() + [0] * (n - d.length())
-    C = flint.fmpz_mat(n, n, [c[(i - j) % n] for i in range(n) for j in range(n)])
+    C = flint.fmpz_mat(n, n, [c[(i - j) % n] * (R.sign if j > i else 1) for i in range(n) for j in range(n)])
     X = C.solve(flint.fmpz_mat(n, len(rhs), [r[i] for i in range(n) for r in rhs]))
     num, delta = X.numer_denom()
     cols = num.transpose().entries()
@@ -42,10 +43,11 @@ def _check(R, d, rhs):
     return W, delta
 
 
+@pytest.mark.parametrize("sign", [1, -1])
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 8, 12, 17])
-def test_solve_equals_dense_circulant_solve(n):
+def test_solve_equals_dense_circulant_solve(n, sign):
     rng = random.Random(n)
-    R = CirculantRing(n)
+    R = CirculantRing(n, sign)
     checked = 0
     for bits in (1, 8, 64, 300):
         for _ in range(3):
@@ -55,6 +57,40 @@ def test_solve_equals_dense_circulant_solve(n):
             _check(R, d, [_poly(rng, n, bits), _poly(rng, n, rng.randint(1, 2 * bits))])
             checked += 1
     assert checked >= 8
+
+
+def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
+    """Over Z[t]/(tⁿ + 1) (the factor the exact step splits off) the fixed-point division
+    starts from d's values at the roots of tⁿ + 1 (a twisted DFT): it answers without the
+    fallback, whatever the hint, and equals the dense negacirculant solve; the DFT of the
+    cyclic ring in its place does not converge to d⁻¹ (the negative control)."""
+    from exact_khk.linalg import circulant as C
+
+    rng = random.Random(12)
+    n = 16
+    d = _poly(rng, n, 300) + flint.fmpz_poly([2 ** 310])  # a unit: |d(ζ)| ≈ 2^310 everywhere
+    rhs = [_poly(rng, n, 300), _poly(rng, n, 200)]
+    assert C._hadamard_bits(n, d.height_bits(), 300) > C.DIVISION_BY_INVERSE_MAX_BITS
+    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", None)  # the fallback is not taken
+    answers = []
+    for ratio in (0.0, 1.0, 1e9, None):
+        R = CirculantRing(n, -1)
+        R.height_ratio = ratio
+        answers.append(_as_rational(*_check(R, d, rhs)))
+    assert answers[0] == answers[1] == answers[2] == answers[3]
+    # control: without the twist the start approximates the inverse mod tⁿ − 1, and Newton's
+    # iteration mod tⁿ + 1 does not converge from it
+    class FellBack(Exception):
+        pass
+
+    def fallback(self, d, rhs):
+        raise FellBack
+
+    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", fallback)
+    R = CirculantRing(n, -1)
+    R.twist = lambda prec: [flint.acb(1)] * n
+    with pytest.raises(FellBack):
+        R.solve(d, rhs)
 
 
 def test_precision_search_does_not_depend_on_the_hint():
@@ -168,9 +204,10 @@ def test_rational_reconstruction():
 def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     """Along an orbit the fixed-point division answers on its own: the division by d⁻¹
     over Q is a fallback for numerics out of reach (and the route of small Cramer bounds,
-    below :data:`DIVISION_BY_INVERSE_MAX_BITS`: never here), and a precision search that gives
-    up early (as a first step with answers of ~n·hd bits once did for n ≥ 32) would
-    send every first step there.  The first answer is checked against the fallback's."""
+    below :data:`DIVISION_BY_INVERSE_MAX_BITS`: here only the small factors of tⁿ − 1 the
+    step splits off), and a precision search that gives up early (as a first step with
+    answers of ~n·hd bits once did for n ≥ 32) would send every first step there.  The
+    first answer is checked against the fallback's."""
     from fractions import Fraction
 
     from exact_khk import get_arith
@@ -184,7 +221,9 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     calls = []
 
     def refuse(self, d, rhs):
-        calls.append(n)
+        hr = max(r.height_bits() for r in rhs)
+        if C._hadamard_bits(self.n, d.height_bits(), hr) > C.DIVISION_BY_INVERSE_MAX_BITS:
+            calls.append((self.n, self.sign))  # a fallback, not the route of small bounds
         return fallback(self, d, rhs)
 
     monkeypatch.setattr(C.CirculantRing, "_solve_inverse", refuse)
@@ -193,11 +232,13 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     for _ in range(2):
         x = C.exact_step(st, x, eps, ar)
     assert calls == []
-    # control: the first step again with the division forced onto the fallback
+    # control: the first step again with every division sent to the fixed-point one
+    # (no route of small bounds) and made to miss, so that it falls back
+    monkeypatch.setattr(C, "DIVISION_BY_INVERSE_MAX_BITS", 0)
     monkeypatch.setattr(C.CirculantRing, "_attempt", lambda *args: None)
     C.circulant_ring.cache_clear()
     x0 = [ar(t) for t in random_point(n, 3)]
-    assert C.exact_step(st, x0, eps, ar) == first and calls == [n]
+    assert C.exact_step(st, x0, eps, ar) == first and (n // 2, -1) in calls
 
 
 def test_certificate_divisions_need_no_bound(monkeypatch):

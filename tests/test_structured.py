@@ -66,6 +66,25 @@ def test_structured_equals_dense_at_larger_n(n):
             == KahanMap(fld, "1/7", "flint", method="dense").orbit(x, 3))
 
 
+@pytest.mark.parametrize("n", [4, 8, 12])
+def test_structured_step_at_points_with_vanishing_parts(n):
+    """The exact step splits x along tⁿ − 1 = (tᵏ − 1)(tᵏ + 1), k = n/2 (recursively): points
+    whose part mod tᵏ + 1 or mod tᵏ − 1 vanishes (u_{i+k} = ±u_i) — including the zero
+    point and a point with one nonzero coordinate — step as the dense solve says."""
+    rng = random.Random(n)
+    fld = LiePoissonSystem.random(n, seed=n).field("f")
+    k = n // 2
+    half = [Fraction(rng.randint(-4, 4), rng.randint(1, 6)) for _ in range(2 * k)]
+    u, v = half[:k], half[k:]
+    points = [u + u + v + v, u + [-t for t in u] + v + [-t for t in v],
+              [Fraction(0)] * (2 * n), [Fraction(3, 7)] + [Fraction(0)] * (2 * n - 1)]
+    for x in points:
+        ref = KahanMap(fld, "2/9", "fraction", method="dense").orbit(x, 2)
+        got = KahanMap(fld, "2/9", "flint", method="structured").orbit(x, 2)
+        assert [[Fraction(int(t.p), int(t.q)) for t in p] for p in got] == [list(p) for p in ref]
+    assert len(set(ref)) == 3  # control: the last point moves
+
+
 def test_structure_from_vectors_matches_field():
     for n in range(2, 7):
         s = LiePoissonSystem.random(n, seed=n)
@@ -215,13 +234,15 @@ def test_auto_choice_and_fallbacks():
 
 @pytest.mark.parametrize("n, low, switch, steps", [(11, "dense", STRUCTURED_MIN_BITS, 8),
                                                    (15, "split", AUTO_SPLIT_BELOW[15], 8),
+                                                   (14, "split", AUTO_SPLIT_BELOW[14], 10),
+                                                   (10, "split", AUTO_SPLIT_BELOW[10], 42),
                                                    (9, "split", AUTO_SPLIT_BELOW[9], 40)])
 def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch, steps):
-    """Where ``auto`` does not split at every height (flint, n = 7, 9, 11, 13, 14, 15), it
-    steps dense (n = 11, 13) or split (n = 7, 9, 14, 15) from low points and structured from
-    points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
-    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 9: about 100
-    bits a step, 3560 after 34 steps."""
+    """Where ``auto`` does not split at every height (flint, n = 7, 9, 10, 11, 13, 14, 15), it
+    steps dense (n = 11, 13) or split (n = 7, 9, 10, 14, 15) from low points and structured
+    from points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
+    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 14: 1390 after
+    8 steps; n = 9: about 100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39."""
     calls, solves = [], []
     real_init = split_mod.SplitSystem.__init__
 

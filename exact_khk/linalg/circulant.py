@@ -18,9 +18,14 @@ Dictionary (0-based, as in docs/conventions.md):
 
   with m_kl(t) the polynomial of the first row of the Hankel block M_kl.
 
-Exact step: with denominators cleared the 2×2 system lives in Z[t]/(tⁿ − 1)
-and is solved by Cramer's rule in closed form (:func:`kahan_cramer`: four
-products of point-sized polynomials); the one division, by the determinant D,
+Exact step: every product in R is one at each n-th root of unity, so the step is
+one 2×2 step over each factor of tⁿ − 1; :func:`exact_step` splits it along
+tⁿ − 1 = (t^(n/2) − 1)(t^(n/2) + 1) while n is even, with the point's part over
+each factor in lowest terms (along Kahan orbits that part's denominator is about a
+share deg/n of the point's).  Over each factor, with denominators cleared, the 2×2
+system lives in Z[t]/(tᵏ ∓ 1) and is solved by Cramer's rule in closed form
+(:func:`kahan_cramer`: four products of point-sized polynomials); the one
+division, by the determinant D,
 approximates the quotients in fixed point by Newton's iteration, recovers the
 common denominator by rational reconstruction and checks the candidate
 exactly (:meth:`CirculantRing.solve`).  D is a
@@ -177,13 +182,14 @@ def kahan_system(m, uh, vh, eps, mul, one=1):
     return (one - eps * f11, -eps * f12, -eps * f21, one - eps * f22), (uh, vh)
 
 
-def kahan_cramer(m, uh, vh, p, S, mul):
+def kahan_cramer(m, mu, uh, vh, p, S, mul):
     """Cramer's rule for :func:`kahan_system` with ``eps`` = p, ``one`` = S and
     right-hand side (uh, vh), in closed form: ``(det, (adj·x̂)_u, (adj·x̂)_v)``
     from four products of point-sized polynomials (the generic rule takes six,
     plus eight by the m_kl).  With f11 = 2m21û + m22v̂, f12 = m22û,
     f21 = −(2m11û + m12v̂), f22 = −m12û (:func:`kahan_system`),
-    f11f22 − f12f21 = 2μû² with μ = m11m22 − m12m21, so
+    f11f22 − f12f21 = 2μû² with μ = m11m22 − m12m21 (given: it depends on the
+    field only), so
 
         det = S² − pS(f11 + f22) + 2p²û·μû,
         (adj·x̂)_u = Sû + pû(m12û + m22v̂),
@@ -193,7 +199,7 @@ def kahan_cramer(m, uh, vh, p, S, mul):
     a, b, c = mul(m11, uh), mul(m12, uh), mul(m22, vh)
     f11 = 2 * mul(m21, uh) + c
     g = a * 2 + mul(m12, vh)
-    mu_u = mul(mul(m11, m22) - mul(m12, m21), uh)
+    mu_u = mul(mu, uh)
     det = mul(uh, mu_u) * (2 * p * p) - (f11 - b) * (p * S) + S * S
     ru = uh * S + mul(uh, b + c) * p
     rv = vh * S - (mul(vh, f11) + mul(uh, g)) * p
@@ -270,7 +276,8 @@ def _arb_int(x, s):
 
 
 class CirculantRing:
-    """Q[t]/(tⁿ − 1): ``fmpq_poly`` elements for the public helpers, ``fmpz_poly``
+    """Q[t]/(tⁿ − s), s = 1 (circulants; ``sign``) or −1 (the factor tⁿ + 1 of t²ⁿ − 1 in
+    :func:`exact_step`): ``fmpq_poly`` elements for the public helpers, ``fmpz_poly``
     (denominators cleared) inside the exact step.
 
     :meth:`solve` divides by a unit d without forming d⁻¹ over Q (whose
@@ -294,23 +301,36 @@ class CirculantRing:
     nothing).
     """
 
-    def __init__(self, n):
+    def __init__(self, n, sign=1):
         if flint is None:  # pragma: no cover
             raise ImportError("the structured exact step needs python-flint")
-        self.n, self._hankel = n, {}
-        self.modulus = flint.fmpq_poly([-1] + [0] * (n - 1) + [1])
-        self._zmodulus = flint.fmpz_poly([-1] + [0] * (n - 1) + [1])
+        self.n, self.sign, self._hankel = n, sign, {}
+        self.modulus = flint.fmpq_poly([-sign] + [0] * (n - 1) + [1])
+        self._zmodulus = flint.fmpz_poly([-sign] + [0] * (n - 1) + [1])
+        #: sign −1: ζ^−i at the precisions of the DFT start (the roots of tⁿ + 1 are ζ·ωʲ,
+        #: ζ = e^{iπ/n}, so d's values there are the DFT of the twisted d_i ζ^i)
+        self._twists = {}
         #: answer height / height of d at the last division: where the next division
         #: starts its precision search (a hint only; results are checked); None: no hint
         self.height_ratio = None
 
     def mul(self, a, b):
-        """a·b mod tⁿ − 1 (fmpq_poly or fmpz_poly)."""
+        """a·b mod tⁿ − s (fmpq_poly or fmpz_poly)."""
         return self.fold(a * b)
 
     def fold(self, c):
-        """c mod tⁿ − 1 for c of degree < 2n."""
-        return c.truncate(self.n) + c.right_shift(self.n) if c.degree() >= self.n else c
+        """c mod tⁿ − s for c of degree < 2n."""
+        if c.degree() < self.n:
+            return c
+        low, high = c.truncate(self.n), c.right_shift(self.n)
+        return low + high if self.sign == 1 else low - high
+
+    def twist(self, prec):
+        """[e^{−iπi/n} for i < n] as acb at ``prec`` bits (sign −1), cached."""
+        if prec not in self._twists:
+            with flint.ctx.workprec(prec):
+                self._twists[prec] = [flint.acb(flint.fmpq(-i, self.n)).exp_pi_i() for i in range(self.n)]
+        return self._twists[prec]
 
     def poly(self, coeffs):
         return flint.fmpq_poly(list(coeffs))
@@ -339,12 +359,40 @@ class CirculantRing:
             self._hankel[key] = tuple(tuple((w * den).numer() for w in row) for row in m), den
         return self._hankel[key]
 
+    def parts(self, st, reflected=False):
+        """The factors of tⁿ − 1 that :func:`split_solve` solves over, cached: t^(n/2) + 1,
+        t^(n/4) + 1, …, t^b + 1 and t^b − 1 (n = 2^a·b, b odd; just tⁿ − 1 for odd n), as
+        ``[(ring, m, μ)]``: a ring of this ring's own for each factor (so that each keeps
+        the hint of its own divisions), the integer Hankel polynomials m_kl of ``st`` (or
+        their reflections) and μ = m11m22 − m12m21, reduced mod the factor."""
+        key = (st, reflected, "parts")
+        if key not in self._hankel:
+            rings = self._hankel.setdefault("rings", {(self.n, self.sign): self})
+            m, out, k = self.integer_hankel(st, reflected)[0], [], self.n
+            while True:
+                if k % 2:
+                    sign, low = 1, m
+                else:
+                    k //= 2
+                    halves = [[_halves(w, k) for w in row] for row in m]
+                    sign, low = -1, tuple(tuple(h[1] for h in row) for row in halves)
+                    m = tuple(tuple(h[0] for h in row) for row in halves)
+                if (k, sign) not in rings:
+                    rings[k, sign] = CirculantRing(k, sign)
+                ring = rings[k, sign]
+                (m11, m12), (m21, m22) = low
+                out.append((ring, low, ring.mul(m11, m22) - ring.mul(m12, m21)))
+                if sign == 1:
+                    break
+            self._hankel[key] = out
+        return self._hankel[key]
+
     def solve(self, d, rhs):
         """``(W, δ)``: fmpz_polys W_i and an integer δ > 0 with d·W_i = δ·r_i in
-        Z[t]/(tⁿ − 1), i.e. W_i/δ = r_i/d, for fmpz_poly d and r_i.
+        Z[t]/(tⁿ − s), i.e. W_i/δ = r_i/d, for fmpz_poly d and r_i.
 
         Raises :class:`SingularMatrix` exactly when d is not a unit of
-        Q[t]/(tⁿ − 1) (gcd(d, tⁿ − 1) ≠ 1, i.e. d(ω) = 0 at an n-th root of unity).
+        Q[t]/(tⁿ − s) (gcd(d, tⁿ − s) ≠ 1, i.e. d vanishes at a root of tⁿ − s).
         """
         self._check_unit(d)
         n, hd = self.n, max(d.height_bits(), 1)
@@ -400,9 +448,9 @@ class CirculantRing:
         return W, delta
 
     def _check_unit(self, d):
-        """Raise :class:`SingularMatrix` unless d is a unit of Q[t]/(tⁿ − 1): a unit mod
-        :data:`UNIT_PRIME` is one over Q (its resultant with tⁿ − 1 is nonzero mod p);
-        otherwise gcd(d, tⁿ − 1) over Z decides."""
+        """Raise :class:`SingularMatrix` unless d is a unit of Q[t]/(tⁿ − s): a unit mod
+        :data:`UNIT_PRIME` is one over Q (its resultant with tⁿ − s is nonzero mod p);
+        otherwise gcd(d, tⁿ − s) over Z decides (a root of tⁿ − s is one of t²ⁿ − 1)."""
         p = UNIT_PRIME
         if flint.nmod_poly(d.coeffs(), p).gcd(flint.nmod_poly(self._zmodulus.coeffs(), p)).degree() == 0:
             return
@@ -415,7 +463,7 @@ class CirculantRing:
         return found
 
     def _solve_inverse(self, d, rhs):
-        """(W, δ) from d⁻¹ over Q (``fmpq_poly.xgcd`` with tⁿ − 1: FLINT's multimodular
+        """(W, δ) from d⁻¹ over Q (``fmpq_poly.xgcd`` with tⁿ − s: FLINT's multimodular
         gcd): for small answers, where it beats the fixed-point division's set-up, and
         as the fallback when the numerics are out of reach."""
         _, s, _ = flint.fmpq_poly(d).xgcd(self.modulus)  # s·d ≡ 1 (the gcd is 1: d is a unit)
@@ -450,10 +498,16 @@ class _Reciprocal:
         n, b0 = self.ring.n, self.start
         top = [int(c) for c in _shift(self.d, b0 - self.hd).coeffs()] + [0] * n
         with flint.ctx.workprec(b0 + 64):
-            vals = flint.acb.dft([flint.acb(c) for c in top[:n]])  # 2^(b0 − hd)·d(ω)
+            if self.ring.sign == 1:
+                vals = flint.acb.dft([flint.acb(c) for c in top[:n]])  # 2^(b0 − hd)·d(ω)
+            else:  # at the roots of tⁿ + 1
+                twist = self.ring.twist(b0 + 64)
+                vals = flint.acb.dft([c * w for c, w in zip(top[:n], twist)])
             if any(0 in v for v in vals):
                 return False
             inv = flint.acb.dft([1 / v for v in vals], inverse=True)
+            if self.ring.sign != 1:
+                inv = [c / w for c, w in zip(inv, twist)]
             self.V = flint.fmpz_poly([_arb_int(c.real, 2 * b0) for c in inv])
         self.b = b0
         if self.values is None:
@@ -559,9 +613,9 @@ def rational_reconstruction(a, m):
 
 
 @lru_cache(maxsize=64)
-def circulant_ring(n: int) -> CirculantRing:
-    """The (cached) ring Q[t]/(tⁿ − 1)."""
-    return CirculantRing(n)
+def circulant_ring(n: int, sign: int = 1) -> CirculantRing:
+    """The (cached) ring Q[t]/(tⁿ − sign)."""
+    return CirculantRing(n, sign)
 
 
 def _fmpq(ar, t):
@@ -581,6 +635,12 @@ def _from_fmpq(ar, vals):
     return tuple(ar.convert(Fraction(int(t.p), int(t.q))) for t in vals)
 
 
+def _halves(p, k):
+    """(p mod tᵏ − 1, p mod tᵏ + 1) for an fmpz_poly p of degree < 2k."""
+    low, high = p.truncate(k), p.right_shift(k)
+    return low + high, low - high
+
+
 def _cleared(vals):
     """(numerators, common denominator) of fmpq values."""
     den = flint.fmpz(1)
@@ -589,48 +649,93 @@ def _cleared(vals):
     return [t.p * (den // t.q) for t in vals], den
 
 
-def exact_step(st: CirculantStructure, x, eps, ar=None):
-    """Φ_f(x, ε) by the 2×2 solve over R (exact; ``x``, ``eps`` in a rational arithmetic).
+def split_solve(R, st, u, v, dx, solve_part, reflected=False):
+    """``(W, δ)``: a 2×2 solve over R for the point with integer polynomials (u, v) and
+    denominator dx, one solve over each factor of tⁿ − 1 (:meth:`CirculantRing.parts` of
+    ``st``), joined.
 
-    With x = X/dx, ε = e/q and Hankel polynomials m/dm, s·(I − εf'(x)) with
-    s = q·dm·dx has integer entries in Z[t]/(tⁿ − 1) and right-hand side
-    q·dm·X̂; Cramer's rule leaves one division by the determinant
-    (:meth:`CirculantRing.solve`).  Raises :class:`SingularMatrix` exactly when
-    det(I − εf'(x)) = 0.
+    Every product in R is one at each n-th root of unity, so a system whose entries are
+    products of the point's polynomials with fixed ones is one system over each factor,
+    on the point's part there.  Along Kahan orbits each part has a denominator of its own,
+    about a share deg/n of dx's bits (dx is about their product), so the factor
+    t^(n/2) + 1 works on half the coefficients at half the height.  ``solve_part(ring, i,
+    pu, pv, s)`` solves over the i-th factor for the part (pu, pv)/s in lowest terms and
+    returns ``(W_part, δ_part)``; the parts join by W = (a + b + tᵏ(a − b))/2 from
+    W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1.
+    """
+    parts, solved = R.parts(st, reflected), []
+    for i, (ring, _, _) in enumerate(parts):
+        if ring.sign == 1:
+            pu, pv = u, v
+        else:
+            (u, pu), (v, pv) = _halves(u, ring.n), _halves(v, ring.n)
+        g = pu.content().gcd(pv.content()).gcd(dx)  # the part's own denominator is dx/g
+        pu, pv, s = (pu // g, pv // g, dx // g) if g != 1 else (pu, pv, dx)
+        solved.append(solve_part(ring, i, pu, pv, s))
+    W, delta = solved.pop()
+    for (ring, _, _), (B, beta) in zip(parts[-2::-1], solved[::-1]):
+        join = delta.lcm(beta)
+        fa, fb = join // delta, join // beta
+        W = [(a * fa + b * fb) + (a * fa - b * fb).left_shift(ring.n) for a, b in zip(W, B)]
+        delta = 2 * join
+    return W, delta
+
+
+def exact_step(st: CirculantStructure, x, eps, ar=None):
+    """Φ_f(x, ε) by 2×2 solves over the factors of R (:func:`split_solve`; exact: ``x``,
+    ``eps`` in a rational arithmetic).
+
+    Over each factor, with the point's part X/dx in lowest terms, ε = e/q and Hankel
+    polynomials m/dm, s·(I − εf'(x)) with s = q·dm·dx has integer entries and
+    right-hand side q·dm·X̂; Cramer's rule in closed form (:func:`kahan_cramer`) leaves
+    one division by the determinant (:meth:`CirculantRing.solve`).  Raises
+    :class:`SingularMatrix` exactly when det(I − εf'(x)) = 0 (a factor's determinant
+    is not a unit).
     """
     from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
     R, n = circulant_ring(st.n), st.n
-    m, dm = R.integer_hankel(st)
+    dm = R.integer_hankel(st)[1]
     X, dx = _cleared([_fmpq(ar, t) for t in x])
     e = _fmpq(ar, eps)
-    det, rhs = kahan_cramer(m, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])),
-                            e.p, e.q * dm * dx, R.mul)
-    (wu, wv), delta = R.solve(det, [r * (e.q * dm) for r in rhs])
+    parts = R.parts(st)
+
+    def solve_part(ring, i, pu, pv, s):
+        det, rhs = kahan_cramer(parts[i][1], parts[i][2], pu, pv, e.p, e.q * dm * s, ring.mul)
+        return ring.solve(det, [r * (e.q * dm) for r in rhs])
+
+    (wu, wv), delta = split_solve(R, st, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])),
+                                  dx, solve_part)
     return _from_fmpq(ar, [flint.fmpq(c, delta) for c in reflect(R.coeffs(wu)) + reflect(R.coeffs(wv))])
 
 
 def exact_htilde(st: CirculantStructure, x, eps, ar=None):
-    """H̃(x, ε) = xᵀ (I − ε²(M J(x))²)^{-1} M x by a 2×2 solve over R (exact).
+    """H̃(x, ε) = xᵀ (I − ε²(M J(x))²)^{-1} M x by 2×2 solves over the factors of R
+    (:func:`split_solve`; exact).
 
     Equal (``==``) to :func:`exact_khk.systems.lie_poisson.invariants.Htilde`; raises
     :class:`SingularMatrix` where H̃ has a pole.  xᵀz is the constant
     coefficient of u(t) ẑ_u(t) + v(t) ẑ_v(t).  Denominators are cleared as in
-    :func:`exact_step`: S = (q·dm·dx)² times the matrix, q²·dm·dx times the
-    right-hand side.
+    :func:`exact_step`: over each factor, with the point's part in lowest terms
+    (denominator s), (q·dm·s)² times the matrix, q²·dm·s times the right-hand side.
     """
     from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
     R, n = circulant_ring(st.n), st.n
-    mh, dm = R.integer_hankel(st, reflected=True)
+    dm = R.integer_hankel(st, reflected=True)[1]
     X, dx = _cleared([_fmpq(ar, t) for t in x])
     e = _fmpq(ar, eps)
     u, v = flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:])
-    a, (ru, rv) = htilde_system(mh, u, v, e.p, R.mul, one=(e.q * dm * dx) ** 2)
-    scale = e.q ** 2 * dm * dx
-    (wu, wv), delta = cramer(a, (ru * scale, rv * scale), R.mul, R.solve)
+    parts = R.parts(st, reflected=True)
+
+    def solve_part(ring, i, pu, pv, s):
+        a, (ru, rv) = htilde_system(parts[i][1], pu, pv, e.p, ring.mul, one=(e.q * dm * s) ** 2)
+        scale = e.q ** 2 * dm * s
+        return cramer(a, (ru * scale, rv * scale), ring.mul, ring.solve)
+
+    (wu, wv), delta = split_solve(R, st, u, v, dx, solve_part, reflected=True)
     return _from_fmpq(ar, [flint.fmpq((R.mul(u, wu) + R.mul(v, wv))[0], dx * delta)])[0]
 
 
