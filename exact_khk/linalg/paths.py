@@ -64,7 +64,8 @@ AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 12)
 #: 1.26–1.41 at 10 000–30 000 bits, and near 1300 bits for n = 14, 1.34 at 1740 bits)
 AUTO_SPLIT_BELOW = {7: 2048, 9: 3584, 10: 5120, 14: 1280, 15: 768}
 #: flint: structured from the first step for n ≥ 16 (faster than a dense step even once
-#: that is built: 1.2× at the first orbit point at n = 16, 1.5× at n = 32; a dense step's
+#: that is built: 1.2× at the first orbit point at n = 16, 1.1× since the split over
+#: tᵏ ± 1 (stop 35: the parts' fixed costs), 1.5× at n = 32; a dense step's
 #: first call also builds the field's integer system, 10 ms at n = 32, 1.4 s before 8d7521b) ...
 STRUCTURED_MIN_N = 16
 #: ... and for the remaining n = 11, 13 from this height (4 orbit steps: dense / structured
