@@ -421,32 +421,13 @@ class FlintForms:
         return self._solutions(x, self._structure, [circulant.circulant_structure(f) for f in fields])
 
     def _solutions(self, x, st, rhs_structures):
-        """z_i = R_st^{-1} M_i x (M_i the Hessian of ``rhs_structures[i]``) by Cramer's rule over
-        each factor of tⁿ − 1 (:func:`~exact_khk.linalg.circulant.split_solve`).  With the
-        point's part X/s there in lowest terms, M = m̂/dm (reflected Hankel polynomials m̂):
-        the matrix a = (q·dm·s)² R, so a z_i = q²·dm²·s·(m̂_i X)/dm_i."""
+        """z_i = R_st^{-1} M_i x (M_i the Hessian of ``rhs_structures[i]``) by
+        :func:`~exact_khk.linalg.circulant.htilde_solve` in a ring of this purpose's own."""
         n = self.n
         R = self._ring("htilde")
-        dm = R.integer_hankel(st, reflected=True)[1]
         X, dx = circulant._cleared(list(x))
-        e = self.eps
-        parts = [R.parts(sti, reflected=True) for sti in [st] + list(rhs_structures)]
+        W, delta = circulant.htilde_solve(R, st, rhs_structures, X, dx, self.eps)
         dens = [R.integer_hankel(sti, reflected=True)[1] for sti in rhs_structures]
-
-        def solve_part(ring, i, u, v, s):
-            (a11, a12, a21, a22), _ = circulant.htilde_system(parts[0][i][1], u, v, e.p, ring.mul,
-                                                              one=(e.q * dm * s) ** 2)
-            scale = e.q ** 2 * dm ** 2 * s
-            adj = []
-            for structure in parts[1:]:
-                (m11, m12), (m21, m22) = structure[i][1]
-                r0 = (ring.mul(m11, u) + ring.mul(m12, v)) * scale
-                r1 = (ring.mul(m21, u) + ring.mul(m22, v)) * scale
-                adj += [ring.mul(a22, r0) - ring.mul(a12, r1), ring.mul(a11, r1) - ring.mul(a21, r0)]
-            return ring.solve(ring.mul(a11, a22) - ring.mul(a12, a21), adj)
-
-        W, delta = circulant.split_solve(R, st, flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:]), dx, solve_part,
-                                         reflected=True)
         coeffs = lambda p: (list(R.coeffs(p)) + [0] * n)[:n]  # noqa: E731
         return [[flint.fmpq(c, delta * dmi) for c in circulant.reflect(coeffs(W[2 * i]))
                  + circulant.reflect(coeffs(W[2 * i + 1]))] for i, dmi in enumerate(dens)]

@@ -710,33 +710,48 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
     return _from_fmpq(ar, [flint.fmpq(c, delta) for c in reflect(R.coeffs(wu)) + reflect(R.coeffs(wv))])
 
 
+def htilde_solve(R, st, rhs_structures, X, dx, e):
+    """``(W, δ)``: R_st z_i = M_i x (R_st = I − ε²(M J(x))², M the Hessian of ``st``, M_i that
+    of ``rhs_structures[i]``) for x = X/dx (X integers, dx > 0) and ε = e (fmpq), by
+    Cramer's rule over each factor of tⁿ − 1 (:func:`split_solve`): z_i has the reflected
+    halves W[2i]/(δ·dm_i), W[2i + 1]/(δ·dm_i) (dm_i the denominator of M_i's Hankel
+    polynomials).  Over each factor, with the point's part X'/s in lowest terms and
+    M = m̂/dm (reflected Hankel polynomials m̂), the matrix is a = (q·dm·s)² R_st, so
+    a z_i = q²·dm²·s·(m̂_i X')/dm_i.  Raises :class:`SingularMatrix` at a pole of H̃."""
+    n, dm = R.n, R.integer_hankel(st, reflected=True)[1]
+    parts = [R.parts(sti, reflected=True) for sti in [st] + list(rhs_structures)]
+
+    def solve_part(ring, i, u, v, s):
+        (a11, a12, a21, a22), _ = htilde_system(parts[0][i][1], u, v, e.p, ring.mul, one=(e.q * dm * s) ** 2)
+        scale = e.q ** 2 * dm ** 2 * s
+        adj = []
+        for structure in parts[1:]:
+            (m11, m12), (m21, m22) = structure[i][1]
+            r0 = (ring.mul(m11, u) + ring.mul(m12, v)) * scale
+            r1 = (ring.mul(m21, u) + ring.mul(m22, v)) * scale
+            adj += [ring.mul(a22, r0) - ring.mul(a12, r1), ring.mul(a11, r1) - ring.mul(a21, r0)]
+        return ring.solve(ring.mul(a11, a22) - ring.mul(a12, a21), adj)
+
+    return split_solve(R, st, flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:]), dx, solve_part, reflected=True)
+
+
 def exact_htilde(st: CirculantStructure, x, eps, ar=None):
     """H̃(x, ε) = xᵀ (I − ε²(M J(x))²)^{-1} M x by 2×2 solves over the factors of R
-    (:func:`split_solve`; exact).
+    (:func:`htilde_solve`; exact).
 
     Equal (``==``) to :func:`exact_khk.systems.lie_poisson.invariants.Htilde`; raises
-    :class:`SingularMatrix` where H̃ has a pole.  xᵀz is the constant
-    coefficient of u(t) ẑ_u(t) + v(t) ẑ_v(t).  Denominators are cleared as in
-    :func:`exact_step`: over each factor, with the point's part in lowest terms
-    (denominator s), (q·dm·s)² times the matrix, q²·dm·s times the right-hand side.
+    :class:`SingularMatrix` where H̃ has a pole.  xᵀz is the constant coefficient of
+    u(t) ẑ_u(t) + v(t) ẑ_v(t) (z's reflected halves ẑ).
     """
     from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
     R, n = circulant_ring(st.n), st.n
-    dm = R.integer_hankel(st, reflected=True)[1]
     X, dx = _cleared([_fmpq(ar, t) for t in x])
-    e = _fmpq(ar, eps)
+    (wu, wv), delta = htilde_solve(R, st, [st], X, dx, _fmpq(ar, eps))
+    dm = R.integer_hankel(st, reflected=True)[1]
     u, v = flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:])
-    parts = R.parts(st, reflected=True)
-
-    def solve_part(ring, i, pu, pv, s):
-        a, (ru, rv) = htilde_system(parts[i][1], pu, pv, e.p, ring.mul, one=(e.q * dm * s) ** 2)
-        scale = e.q ** 2 * dm * s
-        return cramer(a, (ru * scale, rv * scale), ring.mul, ring.solve)
-
-    (wu, wv), delta = split_solve(R, st, u, v, dx, solve_part, reflected=True)
-    return _from_fmpq(ar, [flint.fmpq((R.mul(u, wu) + R.mul(v, wv))[0], dx * delta)])[0]
+    return _from_fmpq(ar, [flint.fmpq((R.mul(u, wu) + R.mul(v, wv))[0], dx * delta * dm)])[0]
 
 
 # --- floating: the DFT splits R ⊗ C into n copies of C -----------------------
