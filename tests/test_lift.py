@@ -257,3 +257,30 @@ def test_certificate_divisions_need_no_bound(monkeypatch):
     system = LiePoissonSystem.random(8, 1)
     cert = certify(system, random_point(8, 1, system=system), steps=14)
     assert cert.status == "VALID" and asked == []
+
+
+@pytest.mark.parametrize("n", [2, 6, 8, 12, 16])
+def test_split_divide_equals_dense_circulant_solve(n):
+    """``split_divide`` (the division over each factor of tⁿ − 1, each part divided by its
+    content first) gives the quotients of python-flint's dense circulant solve, for d
+    and right-hand sides with common factors and a zero right-hand side; a d that
+    vanishes at a root of unity is refused like ``CirculantRing.solve`` refuses it."""
+    from exact_khk.linalg.circulant import split_divide
+
+    rng = random.Random(50 + n)
+    R = CirculantRing(n)
+    checked = 0
+    for bits in (1, 30, 200):
+        for _ in range(3):
+            d = _poly(rng, n, bits) * rng.randint(1, 50)
+            if d.gcd(R._zmodulus).degree() != 0:
+                continue
+            rhs = [_poly(rng, n, bits) * 6, _poly(rng, n, 2 * bits), flint.fmpz_poly([])]
+            W, delta = split_divide(R, d, rhs)
+            ref_W, ref_delta = _dense_reference(R, d, rhs)
+            assert _as_rational(W, delta) == _as_rational(ref_W, ref_delta)
+            checked += 1
+    assert checked >= 6
+    # control: a non-unit (d(1) = 0 for d = t − 1) is refused, by the part over t − 1
+    with pytest.raises(SingularMatrix):
+        split_divide(R, flint.fmpz_poly([-1, 1]), [flint.fmpz_poly([1])])

@@ -510,7 +510,8 @@ class FlintForms:
         Y, dy = fmpq_mat(self.N, 1, list(y)).numer_denom()
         Ye = Y.entries()
         # X(m_u) = X(mu)/dm, so X(mu) s = Y_part gives z_part = ± s · dm / dy
-        W, delta = Rg.solve(flint.fmpz_poly(mu.entries()), [flint.fmpz_poly(Ye[:n]), flint.fmpz_poly(Ye[n:])])
+        W, delta = circulant.split_divide(Rg, flint.fmpz_poly(mu.entries()),
+                                          [flint.fmpz_poly(Ye[:n]), flint.fmpz_poly(Ye[n:])])
         coeffs = lambda p: circulant.reflect((list(Rg.coeffs(p)) + [0] * n)[:n])  # noqa: E731
         s_v, s_u = coeffs(W[0]), coeffs(W[1])  # z_v = s_v·dm/(dy δ), z_u = −s_u·dm/(dy δ)
         X, dx = fmpq_mat(self.N, 1, list(x)).numer_denom()

@@ -367,25 +367,30 @@ class CirculantRing:
         their reflections) and μ = m11m22 − m12m21, reduced mod the factor."""
         key = (st, reflected, "parts")
         if key not in self._hankel:
-            rings = self._hankel.setdefault("rings", {(self.n, self.sign): self})
-            m, out, k = self.integer_hankel(st, reflected)[0], [], self.n
-            while True:
-                if k % 2:
-                    sign, low = 1, m
+            m, out = self.integer_hankel(st, reflected)[0], []
+            for ring in self.factors():
+                if ring.sign == 1:
+                    low = m
                 else:
-                    k //= 2
-                    halves = [[_halves(w, k) for w in row] for row in m]
-                    sign, low = -1, tuple(tuple(h[1] for h in row) for row in halves)
+                    halves = [[_halves(w, ring.n) for w in row] for row in m]
+                    low = tuple(tuple(h[1] for h in row) for row in halves)
                     m = tuple(tuple(h[0] for h in row) for row in halves)
-                if (k, sign) not in rings:
-                    rings[k, sign] = CirculantRing(k, sign)
-                ring = rings[k, sign]
                 (m11, m12), (m21, m22) = low
                 out.append((ring, low, ring.mul(m11, m22) - ring.mul(m12, m21)))
-                if sign == 1:
-                    break
             self._hankel[key] = out
         return self._hankel[key]
+
+    def factors(self):
+        """Rings of this ring's own (each keeps the hint of its own divisions) for the
+        factors t^(n/2) + 1, t^(n/4) + 1, …, t^b + 1 and t^b − 1 of tⁿ − 1 (n = 2^a·b, b odd;
+        just this ring for odd n), cached."""
+        if "factors" not in self._hankel:
+            out, k = [], self.n
+            while k % 2 == 0:
+                k //= 2
+                out.append(CirculantRing(k, -1))
+            self._hankel["factors"] = out + [self if k == self.n else CirculantRing(k)]
+        return self._hankel["factors"]
 
     def solve(self, d, rhs):
         """``(W, δ)``: fmpz_polys W_i and an integer δ > 0 with d·W_i = δ·r_i in
@@ -649,10 +654,10 @@ def _cleared(vals):
     return [t.p * (den // t.q) for t in vals], den
 
 
-def split_solve(R, st, u, v, dx, solve_part, reflected=False):
+def split_solve(R, u, v, dx, solve_part):
     """``(W, δ)``: a 2×2 solve over R for the point with integer polynomials (u, v) and
-    denominator dx, one solve over each factor of tⁿ − 1 (:meth:`CirculantRing.parts` of
-    ``st``), joined.
+    denominator dx, one solve over each factor of tⁿ − 1 (:meth:`CirculantRing.factors`;
+    the caller's per-factor data: :meth:`CirculantRing.parts`), joined.
 
     Every product in R is one at each n-th root of unity, so a system whose entries are
     products of the point's polynomials with fixed ones is one system over each factor,
@@ -663,22 +668,53 @@ def split_solve(R, st, u, v, dx, solve_part, reflected=False):
     returns ``(W_part, δ_part)``; the parts join by W = (a + b + tᵏ(a − b))/2 from
     W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1.
     """
-    parts, solved = R.parts(st, reflected), []
-    for i, (ring, _, _) in enumerate(parts):
-        if ring.sign == 1:
-            pu, pv = u, v
-        else:
-            (u, pu), (v, pv) = _halves(u, ring.n), _halves(v, ring.n)
+    def reduced(ring, i, parts):
+        pu, pv = parts
         g = pu.content().gcd(pv.content()).gcd(dx)  # the part's own denominator is dx/g
         pu, pv, s = (pu // g, pv // g, dx // g) if g != 1 else (pu, pv, dx)
-        solved.append(solve_part(ring, i, pu, pv, s))
+        return solve_part(ring, i, pu, pv, s)
+
+    return _over_factors(R, [u, v], reduced)
+
+
+def _over_factors(R, polys, solve_part):
+    """``(W, δ)`` joined from ``solve_part(ring, i, parts)`` → (W_part, δ_part) over each
+    factor of tⁿ − 1 (:meth:`CirculantRing.factors`), ``parts`` the polynomials ``polys``
+    mod the factor (p mod tᵏ ∓ 1 is low ± high); the parts join by
+    W = (a + b + tᵏ(a − b))/2 from W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1."""
+    factors, solved = R.factors(), []
+    for i, ring in enumerate(factors):
+        if ring.sign == 1:
+            parts = polys
+        else:
+            halves = [_halves(p, ring.n) for p in polys]
+            polys, parts = [h[0] for h in halves], [h[1] for h in halves]
+        solved.append(solve_part(ring, i, parts))
     W, delta = solved.pop()
-    for (ring, _, _), (B, beta) in zip(parts[-2::-1], solved[::-1]):
+    for ring, (B, beta) in zip(factors[-2::-1], solved[::-1]):
         join = delta.lcm(beta)
         fa, fb = join // delta, join // beta
         W = [(a * fa + b * fb) + (a * fa - b * fb).left_shift(ring.n) for a, b in zip(W, B)]
         delta = 2 * join
     return W, delta
+
+
+def split_divide(R, d, rhs):
+    """``(W, δ)`` as :meth:`CirculantRing.solve` (d·W_i = δ·r_i in Z[t]/(tⁿ − 1)), one
+    division over each factor of tⁿ − 1 with d's part and the r_i's parts each divided by
+    its content first (along orbits, as in :func:`split_solve`, a part of a point has far
+    fewer bits than the point).  Raises :class:`SingularMatrix` when d is not a unit."""
+    def divide(ring, i, parts):
+        dp, rp = parts[0], parts[1:]
+        gd = dp.content() or flint.fmpz(1)  # d's part 0: not a unit, ring.solve says so
+        gr = flint.fmpz(0)
+        for r in rp:
+            gr = gr.gcd(r.content())
+        gr = gr or flint.fmpz(1)
+        W, delta = ring.solve(dp // gd, [r // gr for r in rp])
+        return [w * gr for w in W], delta * gd
+
+    return _over_factors(R, [d] + list(rhs), divide)
 
 
 def exact_step(st: CirculantStructure, x, eps, ar=None):
@@ -705,8 +741,8 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
         det, rhs = kahan_cramer(parts[i][1], parts[i][2], pu, pv, e.p, e.q * dm * s, ring.mul)
         return ring.solve(det, [r * (e.q * dm) for r in rhs])
 
-    (wu, wv), delta = split_solve(R, st, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])),
-                                  dx, solve_part)
+    (wu, wv), delta = split_solve(R, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])), dx,
+                                  solve_part)
     return _from_fmpq(ar, [flint.fmpq(c, delta) for c in reflect(R.coeffs(wu)) + reflect(R.coeffs(wv))])
 
 
@@ -732,7 +768,7 @@ def htilde_solve(R, st, rhs_structures, X, dx, e):
             adj += [ring.mul(a22, r0) - ring.mul(a12, r1), ring.mul(a11, r1) - ring.mul(a21, r0)]
         return ring.solve(ring.mul(a11, a22) - ring.mul(a12, a21), adj)
 
-    return split_solve(R, st, flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:]), dx, solve_part, reflected=True)
+    return split_solve(R, flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:]), dx, solve_part)
 
 
 def exact_htilde(st: CirculantStructure, x, eps, ar=None):
