@@ -360,11 +360,9 @@ class CirculantRing:
         return self._hankel[key]
 
     def parts(self, st, reflected=False):
-        """The factors of tⁿ − 1 that :func:`split_solve` solves over, cached: t^(n/2) + 1,
-        t^(n/4) + 1, …, t^b + 1 and t^b − 1 (n = 2^a·b, b odd; just tⁿ − 1 for odd n), as
-        ``[(ring, m, μ)]``: a ring of this ring's own for each factor (so that each keeps
-        the hint of its own divisions), the integer Hankel polynomials m_kl of ``st`` (or
-        their reflections) and μ = m11m22 − m12m21, reduced mod the factor."""
+        """``[(m, μ)]`` for each factor of tⁿ − 1 (:meth:`factors`, in that order), cached:
+        the integer Hankel polynomials m_kl of ``st`` (or their reflections) and
+        μ = m11m22 − m12m21, reduced mod the factor."""
         key = (st, reflected, "parts")
         if key not in self._hankel:
             m, out = self.integer_hankel(st, reflected)[0], []
@@ -376,7 +374,7 @@ class CirculantRing:
                     low = tuple(tuple(h[1] for h in row) for row in halves)
                     m = tuple(tuple(h[0] for h in row) for row in halves)
                 (m11, m12), (m21, m22) = low
-                out.append((ring, low, ring.mul(m11, m22) - ring.mul(m12, m21)))
+                out.append((low, ring.mul(m11, m22) - ring.mul(m12, m21)))
             self._hankel[key] = out
         return self._hankel[key]
 
@@ -618,9 +616,9 @@ def rational_reconstruction(a, m):
 
 
 @lru_cache(maxsize=64)
-def circulant_ring(n: int, sign: int = 1) -> CirculantRing:
-    """The (cached) ring Q[t]/(tⁿ − sign)."""
-    return CirculantRing(n, sign)
+def circulant_ring(n: int) -> CirculantRing:
+    """The (cached) ring Q[t]/(tⁿ − 1)."""
+    return CirculantRing(n)
 
 
 def _fmpq(ar, t):
@@ -738,7 +736,7 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
     parts = R.parts(st)
 
     def solve_part(ring, i, pu, pv, s):
-        det, rhs = kahan_cramer(parts[i][1], parts[i][2], pu, pv, e.p, e.q * dm * s, ring.mul)
+        det, rhs = kahan_cramer(*parts[i], pu, pv, e.p, e.q * dm * s, ring.mul)
         return ring.solve(det, [r * (e.q * dm) for r in rhs])
 
     (wu, wv), delta = split_solve(R, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])), dx,
@@ -758,11 +756,11 @@ def htilde_solve(R, st, rhs_structures, X, dx, e):
     parts = [R.parts(sti, reflected=True) for sti in [st] + list(rhs_structures)]
 
     def solve_part(ring, i, u, v, s):
-        (a11, a12, a21, a22), _ = htilde_system(parts[0][i][1], u, v, e.p, ring.mul, one=(e.q * dm * s) ** 2)
+        (a11, a12, a21, a22), _ = htilde_system(parts[0][i][0], u, v, e.p, ring.mul, one=(e.q * dm * s) ** 2)
         scale = e.q ** 2 * dm ** 2 * s
         adj = []
         for structure in parts[1:]:
-            (m11, m12), (m21, m22) = structure[i][1]
+            (m11, m12), (m21, m22) = structure[i][0]
             r0 = (ring.mul(m11, u) + ring.mul(m12, v)) * scale
             r1 = (ring.mul(m21, u) + ring.mul(m22, v)) * scale
             adj += [ring.mul(a22, r0) - ring.mul(a12, r1), ring.mul(a11, r1) - ring.mul(a21, r0)]
