@@ -33,6 +33,20 @@ def _dense_reference(R, d, rhs):
     return [flint.fmpz_poly(cols[k * n:(k + 1) * n]) for k in range(len(rhs))], delta
 
 
+@pytest.fixture(params=["norm", "fixed point"])
+def route(request, monkeypatch):
+    """Every division of the test by Cramer's rule down the tower, or (but at n = 1) by the
+    fixed-point division."""
+    from exact_khk.linalg import circulant as C
+
+    if request.param == "fixed point":
+        monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_BITS", 0)
+        monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_WORK", 0)
+    else:
+        monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_BITS", 10 ** 9)
+    return request.param
+
+
 def _check(R, d, rhs):
     W, delta = R.solve(d, rhs)
     assert delta > 0
@@ -45,7 +59,7 @@ def _check(R, d, rhs):
 
 @pytest.mark.parametrize("sign", [1, -1])
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 8, 12, 17])
-def test_solve_equals_dense_circulant_solve(n, sign):
+def test_solve_equals_dense_circulant_solve(n, sign, route):
     rng = random.Random(n)
     R = CirculantRing(n, sign)
     checked = 0
@@ -59,6 +73,26 @@ def test_solve_equals_dense_circulant_solve(n, sign):
     assert checked >= 8
 
 
+@pytest.mark.parametrize("sign", [1, -1])
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 8, 12, 16, 17, 32])
+def test_norm_is_the_resultant(n, sign):
+    """d·A = N in Z[t]/(tⁿ − s), N divides Res(d, tⁿ − s) (FLINT's resultant, another
+    algorithm) and is ± it for n a power of 2; N = 0 exactly for the non-units."""
+    rng = random.Random(100 + n)
+    R = CirculantRing(n, sign)
+    factor = R._zmodulus.factor()[1][0][0]  # an irreducible factor of tⁿ − s
+    units = [_poly(rng, n, bits) for bits in (1, 5, 60, 200)]
+    non_units = [flint.fmpz_poly([0]), R.mul(factor, _poly(rng, n, 30))]
+    for d in units + non_units:
+        N, A = R.norm(d)
+        res = d.resultant(R._zmodulus)
+        assert (N == 0) == (res == 0)
+        if N:
+            assert res % N == 0 and (abs(N) == abs(res) or n & (n - 1))
+            assert R.mul(d, A if A is not None else flint.fmpz_poly([1])) == N
+    assert [R.norm(d)[0] for d in non_units] == [0, 0] and sum(R.norm(d)[0] != 0 for d in units) >= 3
+
+
 def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
     """Over Z[t]/(tⁿ + 1) (the factor the exact step splits off) the fixed-point division
     starts from d's values at the roots of tⁿ + 1 (a twisted DFT): it answers without the
@@ -68,10 +102,10 @@ def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
 
     rng = random.Random(12)
     n = 16
-    d = _poly(rng, n, 300) + flint.fmpz_poly([2 ** 310])  # a unit: |d(ζ)| ≈ 2^310 everywhere
+    d = _poly(rng, n, 600) + flint.fmpz_poly([2 ** 610])  # a unit: |d(ζ)| ≈ 2^610 everywhere
     rhs = [_poly(rng, n, 300), _poly(rng, n, 200)]
-    assert C._hadamard_bits(n, d.height_bits(), 300) > C.DIVISION_BY_INVERSE_MAX_BITS
-    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", None)  # the fallback is not taken
+    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 300))
+    monkeypatch.setattr(C.CirculantRing, "_solve_norm", None)  # the fallback is not taken
     answers = []
     for ratio in (0.0, 1.0, 1e9, None):
         R = CirculantRing(n, -1)
@@ -86,14 +120,14 @@ def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
     def fallback(self, d, rhs):
         raise FellBack
 
-    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", fallback)
+    monkeypatch.setattr(C.CirculantRing, "_solve_norm", fallback)
     R = CirculantRing(n, -1)
     R.twist = lambda prec: [flint.acb(1)] * n
     with pytest.raises(FellBack):
         R.solve(d, rhs)
 
 
-def test_precision_search_does_not_depend_on_the_hint():
+def test_precision_search_does_not_depend_on_the_hint(route):
     """The starting precision is a hint (the last answer's height); a hint far too
     small or too large changes the work, not the answer."""
     rng = random.Random(7)
@@ -108,7 +142,7 @@ def test_precision_search_does_not_depend_on_the_hint():
 
 
 def test_fixed_point_division_with_hints_far_off(monkeypatch):
-    """The same on the fixed-point path (Cramer's bound above DIVISION_BY_INVERSE_MAX_BITS).
+    """The same on the fixed-point path (Cramer's bound above the rule of ``by_norm``).
     A hint that is too small fails its first attempt, which then asks d's values at the
     roots of unity for a bound (``answer_bits``) and tries again.  Along an orbit the hint
     holds and the bound is never asked for."""
@@ -120,14 +154,14 @@ def test_fixed_point_division_with_hints_far_off(monkeypatch):
 
     rng = random.Random(11)
     n = 16
-    d = _poly(rng, n, 300) + flint.fmpz_poly([2 ** 310])  # a unit: d(ω) ≈ 2^310 everywhere
+    d = _poly(rng, n, 600) + flint.fmpz_poly([2 ** 610])  # a unit: d(ω) ≈ 2^610 everywhere
     rhs = [_poly(rng, n, 300), _poly(rng, n, 200)]
-    assert C._hadamard_bits(n, d.height_bits(), 300) > C.DIVISION_BY_INVERSE_MAX_BITS
+    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 300))
     bounds = []
     answer_bits = C._Reciprocal.answer_bits
     monkeypatch.setattr(C._Reciprocal, "answer_bits", lambda self, hr: bounds.append(hr) or answer_bits(self, hr))
-    inverse = C.CirculantRing._solve_inverse
-    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", None)  # the fallback is not taken
+    inverse = C.CirculantRing._solve_norm
+    monkeypatch.setattr(C.CirculantRing, "_solve_norm", None)  # the fallback is not taken
     answers = []
     for ratio in (0.0, 1.0, 1e9, None):
         bounds.clear()
@@ -137,7 +171,7 @@ def test_fixed_point_division_with_hints_far_off(monkeypatch):
         assert bounds or ratio != 0.0
     assert answers[0] == answers[1] == answers[2] == answers[3]
 
-    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", inverse)  # for the first step's small answer
+    monkeypatch.setattr(C.CirculantRing, "_solve_norm", inverse)  # for the first step's small answer
     phi = KahanMap(LiePoissonSystem.random(n, seed=1).field("f"), Fraction(1, 10), "flint", method="structured")
     dense = KahanMap(phi.field, phi.eps, "flint", method="dense")
     x = phi.step(random_point(n, 1))
@@ -150,7 +184,7 @@ def test_fixed_point_division_with_hints_far_off(monkeypatch):
 
 
 @pytest.mark.parametrize("n", [2, 3, 4, 6])
-def test_non_units_raise(n):
+def test_non_units_raise(n, route):
     R = CirculantRing(n)
     t = flint.fmpz_poly([0, 1])
     rhs = [flint.fmpz_poly([1, 2]), flint.fmpz_poly([3])]
@@ -176,7 +210,7 @@ def test_units_that_are_not_units_mod_the_test_prime():
 
 
 @pytest.mark.parametrize("n", [2, 4, 7, 16])
-def test_ill_conditioned_units(n):
+def test_ill_conditioned_units(n, route):
     """d with |d(ω)| tiny at a root of unity against its size (the floating start of
     the Newton iteration then fails until it is widened): still the exact answer."""
     rng = random.Random(n)
@@ -202,9 +236,9 @@ def test_rational_reconstruction():
 
 @pytest.mark.parametrize("n", [256, 320])
 def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
-    """Along an orbit the fixed-point division answers on its own: the division by d⁻¹
-    over Q is a fallback for numerics out of reach (and the route of small Cramer bounds,
-    below :data:`DIVISION_BY_INVERSE_MAX_BITS`: here only the small factors of tⁿ − 1 the
+    """Along an orbit the fixed-point division answers on its own: Cramer's rule down the
+    tower is a fallback for numerics out of reach (and the route of small Cramer bounds,
+    :func:`~exact_khk.linalg.circulant.by_norm`: here the small factors of tⁿ − 1 the
     step splits off), and a precision search that gives up early (as a first step with
     answers of ~n·hd bits once did for n ≥ 32) would send every first step there.  The
     first answer is checked against the fallback's."""
@@ -217,16 +251,16 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     st = C.circulant_structure(LiePoissonSystem.random(n, seed=3).field("f"))
     ar = get_arith("flint")
     x, eps = [ar(t) for t in random_point(n, 3)], ar(Fraction(1, 10))
-    fallback = C.CirculantRing._solve_inverse
+    fallback = C.CirculantRing._solve_norm
     calls = []
 
     def refuse(self, d, rhs):
         hr = max(r.height_bits() for r in rhs)
-        if C._hadamard_bits(self.n, d.height_bits(), hr) > C.DIVISION_BY_INVERSE_MAX_BITS:
+        if not C.by_norm(self.n, C._hadamard_bits(self.n, d.height_bits(), hr)):
             calls.append((self.n, self.sign))  # a fallback, not the route of small bounds
         return fallback(self, d, rhs)
 
-    monkeypatch.setattr(C.CirculantRing, "_solve_inverse", refuse)
+    monkeypatch.setattr(C.CirculantRing, "_solve_norm", refuse)
     C.circulant_ring.cache_clear()
     first = x = C.exact_step(st, x, eps, ar)
     for _ in range(2):
@@ -234,11 +268,12 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     assert calls == []
     # control: the first step again with every division sent to the fixed-point one
     # (no route of small bounds) and made to miss, so that it falls back
-    monkeypatch.setattr(C, "DIVISION_BY_INVERSE_MAX_BITS", 0)
+    monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_BITS", 0)
+    monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_WORK", 0)
     monkeypatch.setattr(C.CirculantRing, "_attempt", lambda *args: None)
     C.circulant_ring.cache_clear()
     x0 = [ar(t) for t in random_point(n, 3)]
-    assert C.exact_step(st, x0, eps, ar) == first and (n // 2, -1) in calls
+    assert C.exact_step(st, x0, eps, ar) == first and calls
 
 
 def test_certificate_divisions_need_no_bound(monkeypatch):

@@ -36,6 +36,36 @@ def _fields(n):
     return out
 
 
+@pytest.fixture(params=["split", "unsplit"])
+def split_route(request, monkeypatch):
+    """Every exact structured solve of the test over the factors of tⁿ − 1, or over
+    Z[t]/(tⁿ − 1) unsplit, whatever the point's height (``paths.SPLIT_MIN_BITS``)."""
+    monkeypatch.setattr(circulant, "SPLIT_MIN_BITS", -1 if request.param == "split" else 10 ** 9)
+    return request.param
+
+
+def test_small_points_solve_unsplit(monkeypatch):
+    """The rule of ``paths.SPLIT_MIN_BITS``: at n = 16 a point of at most that many bits is
+    solved over Z[t]/(t¹⁶ − 1) in one division, a higher one over the five factors
+    t⁸ + 1, t⁴ + 1, t² + 1, t + 1, t − 1 (the same point either way)."""
+    from exact_khk.linalg.paths import SPLIT_MIN_BITS
+
+    n, ar = 16, get_arith("flint")
+    fld = LiePoissonSystem.random(n, seed=1).field("f")
+    st = circulant_structure(fld)
+    rings, solve = [], circulant.CirculantRing.solve
+    monkeypatch.setattr(circulant.CirculantRing, "solve",
+                        lambda self, d, rhs: rings.append((self.n, self.sign)) or solve(self, d, rhs))
+    eps = ar(Fraction(1, 10))
+    dense = KahanMap(fld, eps, "flint", method="dense")
+    factors = [(8, -1), (4, -1), (2, -1), (1, -1), (1, 1)]
+    for bits, expected in ((SPLIT_MIN_BITS, [(16, 1)]), (SPLIT_MIN_BITS + 1, factors)):
+        x = [ar(Fraction(2 ** bits - 1 - i, 2 ** bits - 3)) for i in range(2 * n)]
+        rings.clear()
+        y = exact_step(st, x, eps, ar)
+        assert rings == expected and y == dense.step(x)
+
+
 def _point(rng, n, den=5):
     return [Fraction(rng.randint(-4, 4), rng.randint(1, den)) for _ in range(2 * n)]
 
@@ -55,7 +85,7 @@ def test_structured_equals_dense_exact(n):
 
 
 @pytest.mark.parametrize("n", [16, 20, 32])
-def test_structured_equals_dense_at_larger_n(n):
+def test_structured_equals_dense_at_larger_n(n, split_route):
     """The structured step (closed-form Cramer, fixed-point division checked exactly) gives
     the dense flint point along an orbit, beyond the heights where auto switches."""
     from exact_khk.systems.lie_poisson.system import random_point
@@ -67,7 +97,7 @@ def test_structured_equals_dense_at_larger_n(n):
 
 
 @pytest.mark.parametrize("n", [4, 8, 12])
-def test_structured_step_at_points_with_vanishing_parts(n):
+def test_structured_step_at_points_with_vanishing_parts(n, split_route):
     """The exact step splits x along tⁿ − 1 = (tᵏ − 1)(tᵏ + 1), k = n/2 (recursively): points
     whose part mod tᵏ + 1 or mod tᵏ − 1 vanishes (u_{i+k} = ±u_i) — including the zero
     point and a point with one nonzero coordinate — step as the dense solve says."""
@@ -94,7 +124,7 @@ def test_structure_from_vectors_matches_field():
                 circulant_structure(s.field(kind, signs, power)), (n, kind, signs, power)
 
 
-def test_htilde_structured_equals_dense():
+def test_htilde_structured_equals_dense(split_route):
     rng = random.Random(2)
     ar = get_arith("flint")
     for n in range(2, 8):

@@ -56,11 +56,14 @@ from math import lcm
 
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
+from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK, SPLIT_MIN_BITS
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
 except ImportError:  # pragma: no cover
     flint = None
+
+_MINUS_T = flint.fmpz_poly([0, -1]) if flint is not None else None
 
 #: guard bits added to the arithmetic's precision in the DFT (ball) step
 GUARD_BITS = 20
@@ -245,11 +248,6 @@ START_BITS = 128
 #: Newton's steps are planned for log ‖d̂⁻¹‖ up to this many bits (a larger one costs one
 #: more, short, step)
 NEWTON_SLACK_BITS = 4
-#: the division multiplies by d⁻¹ over Q (:meth:`CirculantRing._solve_inverse`) when
-#: Cramer's bound on the answer is at most this many bits: first steps from small points
-#: (1.2–2.2× faster than the fixed-point division for n = 48..128; 0.84× at n = 256,
-#: bound 6547 bits); along orbits the bound is far above the answer, and d⁻¹ far larger
-DIVISION_BY_INVERSE_MAX_BITS = 4096
 #: the last answer's height relative to its d sets the next division's first precision when
 #: it is at most this (Kahan steps along orbits ~1.1, the certificates' J((x + x̃)/2) solves
 #: ~1.33); a larger one comes from a first step off a small point (~n) and is no guide ...
@@ -293,9 +291,8 @@ class CirculantRing:
     relative to d), doubles after a first miss and then grows fourfold until
     the check passes, up to twice a bound on the answer's height read off d's
     values at the roots of unity (δ divides Π_ω d(ω)); if the attempt at that
-    bound fails, d⁻¹ over Q answers
-    (as it does when Cramer's bound is small,
-    :data:`DIVISION_BY_INVERSE_MAX_BITS`).  A division costs a few polynomial
+    bound fails, Cramer's rule down the tower answers (:meth:`norm`), as it does
+    when Cramer's bound is small (:func:`by_norm`).  A division costs a few polynomial
     products at the size of the answer, all in FLINT (no p-adic reductions:
     a reduction modulo a big p^k costs about two products, a shift nearly
     nothing).
@@ -360,22 +357,22 @@ class CirculantRing:
         return self._hankel[key]
 
     def parts(self, st, reflected=False):
-        """``[(m, μ)]`` for each factor of tⁿ − 1 (:meth:`factors`, in that order), cached:
-        the integer Hankel polynomials m_kl of ``st`` (or their reflections) and
-        μ = m11m22 − m12m21, reduced mod the factor."""
+        """``{ring: (m, μ)}`` for this ring and each factor of tⁿ − 1 (:meth:`factors`),
+        cached: the integer Hankel polynomials m_kl of ``st`` (or their reflections) and
+        μ = m11m22 − m12m21, reduced mod the ring's modulus."""
         key = (st, reflected, "parts")
         if key not in self._hankel:
-            m, out = self.integer_hankel(st, reflected)[0], []
+            m = self.integer_hankel(st, reflected)[0]
+            hankel = {self: m}
             for ring in self.factors():
                 if ring.sign == 1:
-                    low = m
+                    hankel[ring] = m
                 else:
                     halves = [[_halves(w, ring.n) for w in row] for row in m]
-                    low = tuple(tuple(h[1] for h in row) for row in halves)
+                    hankel[ring] = tuple(tuple(h[1] for h in row) for row in halves)
                     m = tuple(tuple(h[0] for h in row) for row in halves)
-                (m11, m12), (m21, m22) = low
-                out.append((low, ring.mul(m11, m22) - ring.mul(m12, m21)))
-            self._hankel[key] = out
+            self._hankel[key] = {ring: (m, ring.mul(m[0][0], m[1][1]) - ring.mul(m[0][1], m[1][0]))
+                                 for ring, m in hankel.items()}
         return self._hankel[key]
 
     def factors(self):
@@ -397,11 +394,11 @@ class CirculantRing:
         Raises :class:`SingularMatrix` exactly when d is not a unit of
         Q[t]/(tⁿ − s) (gcd(d, tⁿ − s) ≠ 1, i.e. d vanishes at a root of tⁿ − s).
         """
-        self._check_unit(d)
         n, hd = self.n, max(d.height_bits(), 1)
         hr = max(max(r.height_bits() for r in rhs), 1)
-        if _hadamard_bits(n, hd, hr) <= DIVISION_BY_INVERSE_MAX_BITS:
-            return self._remember(self._solve_inverse(d, rhs), hd)
+        if by_norm(n, _hadamard_bits(n, hd, hr)):
+            return self._remember(self._solve_norm(d, rhs), hd)
+        self._check_unit(d)
         inverse = _Reciprocal(self, d, hd)
         last = self.height_ratio
         ratio = HINT_MAX_RATIO if last is None or last > HINT_TRUSTED_RATIO else max(last, 0.25)
@@ -414,7 +411,7 @@ class CirculantRing:
             # roots of unity (det C(d) = Π_ω d(ω)), needed only now
             cap = 2 * inverse.answer_bits(hr) + 64 + 2 * TOLERANCE_BITS
             if Q >= cap:  # numerics out of reach (d far too ill-conditioned for the floating start)
-                return self._solve_inverse(d, rhs)  # pragma: no cover
+                return self._solve_norm(d, rhs)  # pragma: no cover
             # a first miss is mostly narrow (the answer a little above the hint): twice the
             # precision; after that a few fourfold steps, then the bound
             Q = min(cap, 2 * Q) if not missed else cap if 8 * Q >= cap else 4 * Q
@@ -465,16 +462,43 @@ class CirculantRing:
         self.height_ratio = max(delta.bit_length(), *(w.height_bits() for w in W)) / hd
         return found
 
-    def _solve_inverse(self, d, rhs):
-        """(W, δ) from d⁻¹ over Q (``fmpq_poly.xgcd`` with tⁿ − s: FLINT's multimodular
-        gcd): for small answers, where it beats the fixed-point division's set-up, and
-        as the fallback when the numerics are out of reach."""
-        _, s, _ = flint.fmpq_poly(d).xgcd(self.modulus)  # s·d ≡ 1 (the gcd is 1: d is a unit)
-        q = [self.fold(flint.fmpq_poly(r) * s) for r in rhs]
-        delta = flint.fmpz(1)
-        for p in q:
-            delta = delta.lcm(p.denom())
-        return [(p * delta).numer() for p in q], delta
+    def _solve_norm(self, d, rhs):
+        """(W, δ) by Cramer's rule, W_i = A·r_i and δ = N from :meth:`norm`, in lowest terms:
+        for small answers, where it beats the fixed-point division's set-up, and as the
+        fallback when the numerics are out of reach."""
+        N, A = self.norm(d)
+        if N == 0:
+            raise SingularMatrix("the 2x2 determinant vanishes at a root of t^n - 1")
+        W = [self.fold(A * r) for r in rhs] if A is not None else list(rhs)
+        g = N
+        for w in W:
+            g = g.gcd(w.content())
+        if N < 0:
+            g = -g
+        return [w // g for w in W], N // g
+
+    def norm(self, d):
+        """``(N, A)``: an integer N and an fmpz_poly A (None for 1) with d·A = N in
+        Z[t]/(tⁿ − s); N divides Π d(ω) over the roots of tⁿ − s (is ± it when n is a power
+        of 2) and is 0 exactly when d is not a unit.
+
+        Down the tower: for even n, d(t)·d(−t) is even, e(t²), so (N, A) = (N', d(−t)·A'(t²))
+        with (N', A') those of e in Z[s]/(s^(n/2) − s); at n = 1, N = d; at odd n > 1 from
+        d⁻¹ over Q (``fmpq_poly.xgcd``, FLINT's multimodular gcd).  Every step is a few
+        ``fmpz_poly`` products; d⁻¹ over Q at even n is far slower (5–11× at 200–2000 bits,
+        n = 4..32: its gcd does not know the tower)."""
+        n = self.n
+        if n == 1:
+            return d[0], None
+        if n % 2:
+            g, s, _ = flint.fmpq_poly(d).xgcd(self.modulus)  # s·d ≡ g
+            if g != 1:
+                return flint.fmpz(0), None
+            N = s.denom()
+            return N, (s * N).numer()
+        conjugate = d(_MINUS_T)
+        N, A = _ring(n // 2, self.sign).norm(self.fold(d * conjugate).deflate(2))
+        return N, conjugate if A is None else self.fold(conjugate * A.inflate(2))
 
 
 class _Reciprocal:
@@ -574,6 +598,14 @@ def _newton_start(target, guard) -> int:
     return max(b, START_BITS)
 
 
+def by_norm(n, bound) -> bool:
+    """Whether a division over Z[t]/(tⁿ ∓ 1) whose answer has at most ``bound`` bits
+    (Cramer's) is Cramer's rule down the tower (the rule of ``linalg.paths``; the tower
+    reaches n = 1 when n is a power of 2)."""
+    return (n == 1 or bound <= DIVISION_BY_NORM_MAX_BITS
+            or (n & (n - 1) == 0 and n * bound <= DIVISION_BY_NORM_MAX_WORK))
+
+
 def _hadamard_bits(n, hd, hr) -> int:
     """Bits of Cramer's rule's answer to d·W = δ·r (heights hd, hr) by Hadamard: δ ≤ |det C(d)|
     ≤ ‖d‖₂ⁿ and |adj(C(d))·r| ≤ ‖d‖₂ⁿ⁻¹‖r‖₂ (C(d) the n×n circulant of d, ‖d‖₂ ≤ √n·2^hd)."""
@@ -621,6 +653,12 @@ def circulant_ring(n: int) -> CirculantRing:
     return CirculantRing(n)
 
 
+@lru_cache(maxsize=128)
+def _ring(n: int, sign: int) -> CirculantRing:
+    """The rings of :meth:`CirculantRing.norm`'s tower (their products only: no hints)."""
+    return CirculantRing(n, sign)
+
+
 def _fmpq(ar, t):
     if isinstance(t, flint.fmpq):
         return t
@@ -655,39 +693,43 @@ def _cleared(vals):
 def split_solve(R, u, v, dx, solve_part):
     """``(W, δ)``: a 2×2 solve over R for the point with integer polynomials (u, v) and
     denominator dx, one solve over each factor of tⁿ − 1 (:meth:`CirculantRing.factors`;
-    the caller's per-factor data: :meth:`CirculantRing.parts`), joined.
+    the caller's per-factor data: :meth:`CirculantRing.parts`), joined; one solve over R
+    itself for points of at most :data:`~exact_khk.linalg.paths.SPLIT_MIN_BITS` bits.
 
     Every product in R is one at each n-th root of unity, so a system whose entries are
     products of the point's polynomials with fixed ones is one system over each factor,
     on the point's part there.  Along Kahan orbits each part has a denominator of its own,
     about a share deg/n of dx's bits (dx is about their product), so the factor
     t^(n/2) + 1 works on half the coefficients at half the height.  ``solve_part(ring, i,
-    pu, pv, s)`` solves over the i-th factor for the part (pu, pv)/s in lowest terms and
+    pu, pv, s)`` solves over ``ring`` for the part (pu, pv)/s in lowest terms and
     returns ``(W_part, δ_part)``; the parts join by W = (a + b + tᵏ(a − b))/2 from
     W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1.
     """
-    def reduced(ring, i, parts):
+    if max(u.height_bits(), v.height_bits(), dx.bit_length()) <= SPLIT_MIN_BITS:
+        return solve_part(R, u, v, dx)
+
+    def reduced(ring, parts):
         pu, pv = parts
         g = pu.content().gcd(pv.content()).gcd(dx)  # the part's own denominator is dx/g
         pu, pv, s = (pu // g, pv // g, dx // g) if g != 1 else (pu, pv, dx)
-        return solve_part(ring, i, pu, pv, s)
+        return solve_part(ring, pu, pv, s)
 
     return _over_factors(R, [u, v], reduced)
 
 
 def _over_factors(R, polys, solve_part):
-    """``(W, δ)`` joined from ``solve_part(ring, i, parts)`` → (W_part, δ_part) over each
+    """``(W, δ)`` joined from ``solve_part(ring, parts)`` → (W_part, δ_part) over each
     factor of tⁿ − 1 (:meth:`CirculantRing.factors`), ``parts`` the polynomials ``polys``
     mod the factor (p mod tᵏ ∓ 1 is low ± high); the parts join by
     W = (a + b + tᵏ(a − b))/2 from W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1."""
     factors, solved = R.factors(), []
-    for i, ring in enumerate(factors):
+    for ring in factors:
         if ring.sign == 1:
             parts = polys
         else:
             halves = [_halves(p, ring.n) for p in polys]
             polys, parts = [h[0] for h in halves], [h[1] for h in halves]
-        solved.append(solve_part(ring, i, parts))
+        solved.append(solve_part(ring, parts))
     W, delta = solved.pop()
     for ring, (B, beta) in zip(factors[-2::-1], solved[::-1]):
         join = delta.lcm(beta)
@@ -702,7 +744,7 @@ def split_divide(R, d, rhs):
     division over each factor of tⁿ − 1 with d's part and the r_i's parts each divided by
     its content first (along orbits, as in :func:`split_solve`, a part of a point has far
     fewer bits than the point).  Raises :class:`SingularMatrix` when d is not a unit."""
-    def divide(ring, i, parts):
+    def divide(ring, parts):
         dp, rp = parts[0], parts[1:]
         gd = dp.content() or flint.fmpz(1)  # d's part 0: not a unit, ring.solve says so
         gr = flint.fmpz(0)
@@ -735,8 +777,8 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
     e = _fmpq(ar, eps)
     parts = R.parts(st)
 
-    def solve_part(ring, i, pu, pv, s):
-        det, rhs = kahan_cramer(*parts[i], pu, pv, e.p, e.q * dm * s, ring.mul)
+    def solve_part(ring, pu, pv, s):
+        det, rhs = kahan_cramer(*parts[ring], pu, pv, e.p, e.q * dm * s, ring.mul)
         return ring.solve(det, [r * (e.q * dm) for r in rhs])
 
     (wu, wv), delta = split_solve(R, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])), dx,
@@ -755,12 +797,12 @@ def htilde_solve(R, st, rhs_structures, X, dx, e):
     n, dm = R.n, R.integer_hankel(st, reflected=True)[1]
     parts = [R.parts(sti, reflected=True) for sti in [st] + list(rhs_structures)]
 
-    def solve_part(ring, i, u, v, s):
-        (a11, a12, a21, a22), _ = htilde_system(parts[0][i][0], u, v, e.p, ring.mul, one=(e.q * dm * s) ** 2)
+    def solve_part(ring, u, v, s):
+        (a11, a12, a21, a22), _ = htilde_system(parts[0][ring][0], u, v, e.p, ring.mul, one=(e.q * dm * s) ** 2)
         scale = e.q ** 2 * dm ** 2 * s
         adj = []
         for structure in parts[1:]:
-            (m11, m12), (m21, m22) = structure[i][0]
+            (m11, m12), (m21, m22) = structure[ring][0]
             r0 = (ring.mul(m11, u) + ring.mul(m12, v)) * scale
             r1 = (ring.mul(m21, u) + ring.mul(m22, v)) * scale
             adj += [ring.mul(a22, r0) - ring.mul(a12, r1), ring.mul(a11, r1) - ring.mul(a21, r0)]

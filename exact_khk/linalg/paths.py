@@ -24,6 +24,15 @@ dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 :data:`SMALL_ANSWER_MIN_BITS` ≤ h <
                                 :data:`DIXON_BITS` · (N − 6)
 exact H̃ (flint, rational)       structured for n ≥ :data:`HTILDE_STRUCTURED_MIN_N`
+a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``circulant.
+                                split_solve``) for points of more than
+                                :data:`SPLIT_MIN_BITS` bits, else one over Z[t]/(tⁿ − 1)
+a structured step's division    Cramer's rule down the tower (``CirculantRing.norm``)
+by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is at most
+                                :data:`DIVISION_BY_NORM_MAX_BITS`, or m is a power of 2
+                                and m·H at most :data:`DIVISION_BY_NORM_MAX_WORK`, or
+                                m = 1; else the fixed-point division
+                                (``CirculantRing.solve``)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
                                 binary64 where N·κ ≤ :data:`BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
@@ -98,6 +107,23 @@ CYCLO_REGULAR_MAX_DEGREE = 128
 CYCLO_REGULAR_MAX_SIZE = 1024
 #: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
 HTILDE_STRUCTURED_MIN_N = 3
+#: a structured step (and H̃) solves over Z[t]/(tⁿ − 1) unsplit for points of at most this
+#: height (bits of the largest numerator or the common denominator), where the fixed
+#: costs of the factors' solves dominate (one step at random points of 1–16 bits, unsplit /
+#: split: 0.49–0.68 at n = 16, 0.62–0.84 at n = 24 and 32, 0.89–1.03 at n = 64; at 64
+#: bits 0.85, 1.07, 1.05, 1.24)
+SPLIT_MIN_BITS = 16
+#: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
+#: down the tower while Cramer's bound H (bits) is at most this: first steps off small
+#: points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at m = 2..256,
+#: H ≤ 7061, n = 16..512; where m has an odd factor b > 1 the tower ends in d⁻¹ over Q at
+#: tᵇ ∓ 1: 0.6–1.0 up to H = 8 693, 5.4 at n = m = 15, H = 11 696) ...
+DIVISION_BY_NORM_MAX_BITS = 8192
+#: ... or, for m a power of 2, while m·H is at most this (along orbits the answer is ~1.1×
+#: d's height, far below H: norm / fixed-point crosses 1 near H = 9 000 at m = 16 and
+#: 26 000 at m = 8; 0.56 at m = 4, H = 26 698; 0.03–0.13 at m ≤ 2 everywhere measured;
+#: 4–33× at m = 32..128 from H = 33 788; scalar divisions, m = 1, always)
+DIVISION_BY_NORM_MAX_WORK = 2 ** 17
 
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
 #: from values at points of the line (one N×N solve per point and step) instead of
