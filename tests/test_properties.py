@@ -85,7 +85,7 @@ tall = st.fractions(min_value=-10 ** 30, max_value=10 ** 30, max_denominator=10 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
 @given(setups(), st.lists(tall, min_size=8, max_size=8), nonzero)
 def test_structured_step_equals_dense_step_at_tall_points(setup, coords, eps):
-    """The structured step (precision hint, reconstruction, d⁻¹ over Q for small answers) gives the
+    """The structured step (precision hint, reconstruction, Cramer's rule down the tower for small answers) gives the
     dense step's rational point, also at points with 100-bit entries."""
     system, kind, _ = setup
     x = coords[:2 * system.n]

@@ -132,6 +132,7 @@ def test_split_refuses_what_it_cannot_do():
     (2, "split", "split"), (12, "split", "split"),
     (9, "split below 3584 bits, then structured", "split"),
     (7, "split below 2048 bits, then structured", "split"),
+    (8, "split below 2048 bits, then structured", "split"),
     (15, "split below 768 bits, then structured", "split"),
     (11, "dense below 512 bits, then structured", "split"),
     (16, "structured", "dense"),

@@ -266,13 +266,15 @@ def test_auto_choice_and_fallbacks():
                                                    (15, "split", AUTO_SPLIT_BELOW[15], 8),
                                                    (14, "split", AUTO_SPLIT_BELOW[14], 10),
                                                    (10, "split", AUTO_SPLIT_BELOW[10], 42),
-                                                   (9, "split", AUTO_SPLIT_BELOW[9], 40)])
+                                                   (9, "split", AUTO_SPLIT_BELOW[9], 40),
+                                                   (8, "split", AUTO_SPLIT_BELOW[8], 30)])
 def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch, steps):
-    """Where ``auto`` does not split at every height (flint, n = 7, 9, 10, 11, 13, 14, 15), it
-    steps dense (n = 11, 13) or split (n = 7, 9, 10, 14, 15) from low points and structured
+    """Where ``auto`` does not split at every height (flint, n = 7..11, 13, 14, 15), it
+    steps dense (n = 11, 13) or split (n = 7, 8, 9, 10, 14, 15) from low points and structured
     from points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
     Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 14: 1390 after
-    8 steps; n = 9: about 100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39."""
+    8 steps; n = 9: about 100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39;
+    n = 8: 2034 after 27."""
     calls, solves = [], []
     real_init = split_mod.SplitSystem.__init__
 

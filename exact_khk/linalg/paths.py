@@ -61,17 +61,19 @@ degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly`
 #: of the largest degree φ(d); for n ≥ 16 the structured step is as fast)
 SPLIT_N = tuple(range(1, 16))
 #: flint: split at every height (split / structured along orbits at 5 000–30 000 bits:
-#: 0.29–0.36, 0.60–0.69, 0.36–0.45 for n = 4, 5, 6; 0.84–1.17 for n = 8 and 0.73–1.07 for
-#: n = 12, where the structured step, split over the factors tᵏ ± 1 since stop 35, is
-#: at most 15 % faster: no rule; scripts/bench_split_height.py)
-AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 8, 12)
+#: 0.29–0.36, 0.60–0.69, 0.36–0.45 for n = 4, 5, 6; 0.49–1.04 for n = 12 at 560–20 000 bits
+#: since the structured step's division goes down the tower (stop 36), at most 4 % faster:
+#: no rule; scripts/bench_split_height.py)
+AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 12)
 #: flint: split below these heights, where the structured step overtakes it (4 orbit
 #: steps: split / structured = 1 near 1700 and 750 bits for n = 7, 15 and near 3500 bits
 #: for n = 9, whose factor of degree 6 makes the split step 1.17× the structured one at
 #: 6099 bits, and one step 1.23× and 1.52× at 10 000 and 20 000 bits; since the structured
 #: step splits over tᵏ ± 1 (stop 35, 7 orbit-step rounds): near 5000 bits for n = 10, then
-#: 1.26–1.41 at 10 000–30 000 bits, and near 1300 bits for n = 14, 1.34 at 1740 bits)
-AUTO_SPLIT_BELOW = {7: 2048, 9: 3584, 10: 5120, 14: 1280, 15: 768}
+#: 1.26–1.41 at 10 000–30 000 bits, and near 1300 bits for n = 14, 1.34 at 1740 bits;
+#: since its division goes down the tower (stop 36): n = 8 near 2000 bits, then 1.17–1.33 at
+#: 2 575–30 000 bits (it had kept the split step at every height); the others unchanged)
+AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 14: 1280, 15: 768}
 #: flint: structured from the first step for n ≥ 16 (faster than a dense step even once
 #: that is built: 1.2× at the first orbit point at n = 16, 1.1× since the split over
 #: tᵏ ± 1 (stop 35: the parts' fixed costs), 1.5× at n = 32; a dense step's
