@@ -425,8 +425,7 @@ class FlintForms:
         :func:`~exact_khk.linalg.circulant.htilde_solve` in a ring of this purpose's own."""
         n = self.n
         R = self._ring("htilde")
-        X, dx = circulant._cleared(list(x))
-        W, delta = circulant.htilde_solve(R, st, rhs_structures, X, dx, self.eps)
+        W, delta = circulant.htilde_solve(R, st, rhs_structures, *circulant.point_polys(list(x)), self.eps)
         dens = [R.integer_hankel(sti, reflected=True)[1] for sti in rhs_structures]
         coeffs = lambda p: (list(R.coeffs(p)) + [0] * n)[:n]  # noqa: E731
         return [[flint.fmpq(c, delta * dmi) for c in circulant.reflect(coeffs(W[2 * i]))

@@ -682,12 +682,14 @@ def _halves(p, k):
     return low + high, low - high
 
 
-def _cleared(vals):
-    """(numerators, common denominator) of fmpq values."""
-    den = flint.fmpz(1)
-    for t in vals:
-        den = den.lcm(t.q)
-    return [t.p * (den // t.q) for t in vals], den
+def point_polys(vals, reflected=False):
+    """``(u, v, dx)``: the halves of a point of 2n fmpq values as fmpz_polys over their
+    common denominator dx (with ``reflected``, û and v̂: :func:`reflect`)."""
+    n = len(vals) // 2
+    fix = reflect if reflected else list
+    q = flint.fmpq_poly(fix(vals[:n]) + fix(vals[n:]))
+    z = q.numer()
+    return z.truncate(n), z.right_shift(n), q.denom()
 
 
 def split_solve(R, u, v, dx, solve_part):
@@ -771,9 +773,9 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
     from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
-    R, n = circulant_ring(st.n), st.n
+    R = circulant_ring(st.n)
     dm = R.integer_hankel(st)[1]
-    X, dx = _cleared([_fmpq(ar, t) for t in x])
+    u, v, dx = point_polys([_fmpq(ar, t) for t in x], reflected=True)
     e = _fmpq(ar, eps)
     parts = R.parts(st)
 
@@ -781,20 +783,19 @@ def exact_step(st: CirculantStructure, x, eps, ar=None):
         det, rhs = kahan_cramer(*parts[ring], pu, pv, e.p, e.q * dm * s, ring.mul)
         return ring.solve(det, [r * (e.q * dm) for r in rhs])
 
-    (wu, wv), delta = split_solve(R, flint.fmpz_poly(reflect(X[:n])), flint.fmpz_poly(reflect(X[n:])), dx,
-                                  solve_part)
+    (wu, wv), delta = split_solve(R, u, v, dx, solve_part)
     return _from_fmpq(ar, [flint.fmpq(c, delta) for c in reflect(R.coeffs(wu)) + reflect(R.coeffs(wv))])
 
 
-def htilde_solve(R, st, rhs_structures, X, dx, e):
+def htilde_solve(R, st, rhs_structures, u, v, dx, e):
     """``(W, δ)``: R_st z_i = M_i x (R_st = I − ε²(M J(x))², M the Hessian of ``st``, M_i that
-    of ``rhs_structures[i]``) for x = X/dx (X integers, dx > 0) and ε = e (fmpq), by
+    of ``rhs_structures[i]``) for x = (u, v)/dx (:func:`point_polys`) and ε = e (fmpq), by
     Cramer's rule over each factor of tⁿ − 1 (:func:`split_solve`): z_i has the reflected
     halves W[2i]/(δ·dm_i), W[2i + 1]/(δ·dm_i) (dm_i the denominator of M_i's Hankel
     polynomials).  Over each factor, with the point's part X'/s in lowest terms and
     M = m̂/dm (reflected Hankel polynomials m̂), the matrix is a = (q·dm·s)² R_st, so
     a z_i = q²·dm²·s·(m̂_i X')/dm_i.  Raises :class:`SingularMatrix` at a pole of H̃."""
-    n, dm = R.n, R.integer_hankel(st, reflected=True)[1]
+    dm = R.integer_hankel(st, reflected=True)[1]
     parts = [R.parts(sti, reflected=True) for sti in [st] + list(rhs_structures)]
 
     def solve_part(ring, u, v, s):
@@ -808,7 +809,7 @@ def htilde_solve(R, st, rhs_structures, X, dx, e):
             adj += [ring.mul(a22, r0) - ring.mul(a12, r1), ring.mul(a11, r1) - ring.mul(a21, r0)]
         return ring.solve(ring.mul(a11, a22) - ring.mul(a12, a21), adj)
 
-    return split_solve(R, flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:]), dx, solve_part)
+    return split_solve(R, u, v, dx, solve_part)
 
 
 def exact_htilde(st: CirculantStructure, x, eps, ar=None):
@@ -822,11 +823,10 @@ def exact_htilde(st: CirculantStructure, x, eps, ar=None):
     from exact_khk.arith import get_arith
 
     ar = get_arith(ar or "flint")
-    R, n = circulant_ring(st.n), st.n
-    X, dx = _cleared([_fmpq(ar, t) for t in x])
-    (wu, wv), delta = htilde_solve(R, st, [st], X, dx, _fmpq(ar, eps))
+    R = circulant_ring(st.n)
+    u, v, dx = point_polys([_fmpq(ar, t) for t in x])
+    (wu, wv), delta = htilde_solve(R, st, [st], u, v, dx, _fmpq(ar, eps))
     dm = R.integer_hankel(st, reflected=True)[1]
-    u, v = flint.fmpz_poly(X[:n]), flint.fmpz_poly(X[n:])
     return _from_fmpq(ar, [flint.fmpq((R.mul(u, wu) + R.mul(v, wv))[0], dx * delta * dm)])[0]
 
 
