@@ -39,11 +39,9 @@ def route(request, monkeypatch):
     fixed-point division."""
     from exact_khk.linalg import circulant as C
 
-    if request.param == "fixed point":
-        monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_BITS", 0)
-        monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_WORK", 0)
-    else:
-        monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_BITS", 10 ** 9)
+    bits = 0 if request.param == "fixed point" else 10 ** 9
+    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK", "DIVISION_BY_INVERSE_MAX_BITS"):
+        monkeypatch.setattr(C, name, bits)
     return request.param
 
 
@@ -268,8 +266,8 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     assert calls == []
     # control: the first step again with every division sent to the fixed-point one
     # (no route of small bounds) and made to miss, so that it falls back
-    monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_BITS", 0)
-    monkeypatch.setattr(C, "DIVISION_BY_NORM_MAX_WORK", 0)
+    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK", "DIVISION_BY_INVERSE_MAX_BITS"):
+        monkeypatch.setattr(C, name, 0)
     monkeypatch.setattr(C.CirculantRing, "_attempt", lambda *args: None)
     C.circulant_ring.cache_clear()
     x0 = [ar(t) for t in random_point(n, 3)]

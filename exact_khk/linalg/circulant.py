@@ -22,13 +22,14 @@ Exact step: every product in R is one at each n-th root of unity, so the step is
 one 2×2 step over each factor of tⁿ − 1; :func:`exact_step` splits it along
 tⁿ − 1 = (t^(n/2) − 1)(t^(n/2) + 1) while n is even, with the point's part over
 each factor in lowest terms (along Kahan orbits that part's denominator is about a
-share deg/n of the point's).  Over each factor, with denominators cleared, the 2×2
-system lives in Z[t]/(tᵏ ∓ 1) and is solved by Cramer's rule in closed form
-(:func:`kahan_cramer`: four products of point-sized polynomials); the one
-division, by the determinant D,
-approximates the quotients in fixed point by Newton's iteration, recovers the
-common denominator by rational reconstruction and checks the candidate
-exactly (:meth:`CirculantRing.solve`).  D is a
+share deg/n of the point's; a point of a few bits is solved over R unsplit).  Over each
+factor, with denominators cleared, the 2×2 system lives in Z[t]/(tᵏ ∓ 1) and is solved by
+Cramer's rule in closed form (:func:`kahan_cramer`: four products of point-sized
+polynomials); the one division, by the determinant D, is Cramer's rule again where its
+answer is small (down the tower tᵏ ∓ 1 → t^(k/2) ∓ 1 by D(t)·D(−t),
+:meth:`CirculantRing.norm`) and otherwise approximates the quotients in fixed point by
+Newton's iteration, recovers the common denominator by rational reconstruction and checks
+the candidate exactly (:meth:`CirculantRing.solve`).  D is a
 unit of R ⟺ D(ω) ≠ 0 at every n-th root of unity ω ⟺ s^2n·det(I − εf'(x))
 = Π_ω D(ω) ≠ 0 (s the cleared denominator) ⟺ the step is defined.
 Floating step: the DFT splits R ⊗ C into n copies of C, so the step is n
@@ -56,7 +57,8 @@ from math import lcm
 
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
-from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK, SPLIT_MIN_BITS
+from exact_khk.linalg.paths import (DIVISION_BY_INVERSE_MAX_BITS, DIVISION_BY_NORM_MAX_BITS,
+                                    DIVISION_BY_NORM_MAX_WORK, SPLIT_MIN_BITS)
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
@@ -602,8 +604,9 @@ def by_norm(n, bound) -> bool:
     """Whether a division over Z[t]/(tⁿ ∓ 1) whose answer has at most ``bound`` bits
     (Cramer's) is Cramer's rule down the tower (the rule of ``linalg.paths``; the tower
     reaches n = 1 when n is a power of 2)."""
-    return (n == 1 or bound <= DIVISION_BY_NORM_MAX_BITS
-            or (n & (n - 1) == 0 and n * bound <= DIVISION_BY_NORM_MAX_WORK))
+    if n & (n - 1):  # the tower ends in d⁻¹ over Q at n's odd factor
+        return bound <= DIVISION_BY_INVERSE_MAX_BITS
+    return n == 1 or bound <= DIVISION_BY_NORM_MAX_BITS or n * bound <= DIVISION_BY_NORM_MAX_WORK
 
 
 def _hadamard_bits(n, hd, hr) -> int:
@@ -702,8 +705,8 @@ def split_solve(R, u, v, dx, solve_part):
     products of the point's polynomials with fixed ones is one system over each factor,
     on the point's part there.  Along Kahan orbits each part has a denominator of its own,
     about a share deg/n of dx's bits (dx is about their product), so the factor
-    t^(n/2) + 1 works on half the coefficients at half the height.  ``solve_part(ring, i,
-    pu, pv, s)`` solves over ``ring`` for the part (pu, pv)/s in lowest terms and
+    t^(n/2) + 1 works on half the coefficients at half the height.  ``solve_part(ring, pu,
+    pv, s)`` solves over ``ring`` for the part (pu, pv)/s in lowest terms and
     returns ``(W_part, δ_part)``; the parts join by W = (a + b + tᵏ(a − b))/2 from
     W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1.
     """

@@ -28,11 +28,11 @@ a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``
                                 split_solve``) for points of more than
                                 :data:`SPLIT_MIN_BITS` bits, else one over Z[t]/(tⁿ − 1)
 a structured step's division    Cramer's rule down the tower (``CirculantRing.norm``)
-by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is at most
-                                :data:`DIVISION_BY_NORM_MAX_BITS`, or m is a power of 2
-                                and m·H at most :data:`DIVISION_BY_NORM_MAX_WORK`, or
-                                m = 1; else the fixed-point division
-                                (``CirculantRing.solve``)
+by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is small: for m a
+                                power of 2, H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` or
+                                m·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` or m = 1; else
+                                H ≤ :data:`DIVISION_BY_INVERSE_MAX_BITS`; otherwise the
+                                fixed-point division (``CirculantRing.solve``)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
                                 binary64 where N·κ ≤ :data:`BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
@@ -115,17 +115,22 @@ HTILDE_STRUCTURED_MIN_N = 3
 #: split: 0.49–0.68 at n = 16, 0.62–0.84 at n = 24 and 32, 0.89–1.03 at n = 64; at 64
 #: bits 0.85, 1.07, 1.05, 1.24)
 SPLIT_MIN_BITS = 16
-#: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
-#: down the tower while Cramer's bound H (bits) is at most this: first steps off small
-#: points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at m = 2..256,
-#: H ≤ 7061, n = 16..512; where m has an odd factor b > 1 the tower ends in d⁻¹ over Q at
-#: tᵇ ∓ 1: 0.6–1.0 up to H = 8 693, 5.4 at n = m = 15, H = 11 696) ...
+#: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1, m a power of 2,
+#: is Cramer's rule down the tower while Cramer's bound H (bits) is at most this: first
+#: steps off small points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at
+#: m = 2..256, H ≤ 7061, n = 16..512) ...
 DIVISION_BY_NORM_MAX_BITS = 8192
-#: ... or, for m a power of 2, while m·H is at most this (along orbits the answer is ~1.1×
-#: d's height, far below H: norm / fixed-point crosses 1 near H = 9 000 at m = 16 and
-#: 26 000 at m = 8; 0.56 at m = 4, H = 26 698; 0.03–0.13 at m ≤ 2 everywhere measured;
-#: 4–33× at m = 32..128 from H = 33 788; scalar divisions, m = 1, always)
+#: ... or while m·H is at most this (along orbits the answer is ~1.1× d's height, far below
+#: H: norm / fixed-point crosses 1 near H = 9 000 at m = 16 and 26 000 at m = 8; 0.56 at
+#: m = 4, H = 26 698; 0.03–0.13 at m ≤ 2 everywhere measured; 4–33× at m = 32..128 from
+#: H = 33 788; scalar divisions, m = 1, always)
 DIVISION_BY_NORM_MAX_WORK = 2 ** 17
+#: where m has an odd factor b > 1 the tower ends in d⁻¹ over Q at tᵇ ∓ 1 (FLINT's
+#: multimodular xgcd), Cramer's rule up to this H (the rule before the tower: 1.2–2.2×
+#: faster than the fixed-point division at n = 48..128; since, norm / fixed-point 0.6–1.0
+#: at n = 20..48, H ≤ 4 106, but 1.9× at n = m = 11, H ≈ 6 000, and 5.4× at n = m = 15,
+#: H = 11 696)
+DIVISION_BY_INVERSE_MAX_BITS = 4096
 
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
 #: from values at points of the line (one N×N solve per point and step) instead of
