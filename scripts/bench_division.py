@@ -1,0 +1,132 @@
+#!/usr/bin/env python3
+"""The structured exact step's two rules of ``linalg.paths``, measured: its division routes and its split.
+
+Divisions (``--ns``, ``--bits``): along the orbit of ``random_point(n, 1)`` (field f of
+``LiePoissonSystem.random(n, seed=1)``, ε = 1/10), at the first point whose height reaches each
+target, every division the step makes over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is recorded and
+timed both ways: Cramer's rule down the tower (``CirculantRing._solve_norm``) and the fixed-point
+division (``CirculantRing.solve`` with the tower ruled out, from the hint the ring had).  H is
+Cramer's bound on the answer (bits); "rule" is what ``circulant.by_norm`` picks.
+
+Split (``--split-ns``, ``--point-bits``): one step at random points whose coordinates have
+``--point-bits`` bits (numerators and a common denominator), over Z[t]/(tⁿ − 1) unsplit and
+over the factors of tⁿ − 1 (``paths.SPLIT_MIN_BITS`` forced either way).
+
+Times are medians of ``--rounds`` interleaved rounds; both routes give the same answer (asserted).
+Nothing about speed is asserted.  Prints Markdown tables.
+
+    python3 scripts/bench_division.py [--ns 16,32,64] [--bits 0,1000,3000] [--split-ns 16,24,32,64] [--point-bits 1,4,16,64]
+"""
+
+from __future__ import annotations
+
+import argparse
+import random
+import sys
+from fractions import Fraction
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench import EPS, height  # noqa: E402
+from bench_exact import fmt, medians  # noqa: E402
+
+from exact_khk import LiePoissonSystem, get_arith  # noqa: E402
+from exact_khk.linalg import circulant as C  # noqa: E402
+from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
+
+
+def ints(text):
+    return [int(t) for t in text.split(",") if t.strip()]
+
+
+def fixed_point(ring, hint, d, rhs):
+    """The fixed-point division of d by a fresh ring with the hint ``ring`` had."""
+    fresh = C.CirculantRing(ring.n, ring.sign)
+    fresh.height_ratio = hint
+    saved = C.DIVISION_BY_NORM_MAX_BITS, C.DIVISION_BY_NORM_MAX_WORK, C.DIVISION_BY_INVERSE_MAX_BITS
+    C.DIVISION_BY_NORM_MAX_BITS = C.DIVISION_BY_NORM_MAX_WORK = C.DIVISION_BY_INVERSE_MAX_BITS = -1
+    try:
+        return fresh.solve(d, rhs)
+    finally:
+        C.DIVISION_BY_NORM_MAX_BITS, C.DIVISION_BY_NORM_MAX_WORK, C.DIVISION_BY_INVERSE_MAX_BITS = saved
+
+
+def division_rows(n, targets, rounds):
+    ar = get_arith("flint")
+    st = C.circulant_structure(LiePoissonSystem.random(n, seed=1).field("f"))
+    x, eps, k, done = [ar(t) for t in random_point(n, 1)], ar(EPS), 0, set()
+    real = C.CirculantRing.solve
+    for target in targets:
+        while height(x) < target:
+            x, k = C.exact_step(st, x, eps, ar), k + 1
+        if k in done:
+            continue
+        done.add(k)
+        seen = []
+        C.CirculantRing.solve = lambda self, d, rhs: seen.append((self, self.height_ratio, d, rhs)) or real(self, d, rhs)
+        try:
+            C.exact_step(st, x, eps, ar)
+        finally:
+            C.CirculantRing.solve = real
+        for ring, hint, d, rhs in seen:
+            if ring.n == 1:
+                continue  # scalar: no fixed-point division to compare
+            H = C._hadamard_bits(ring.n, max(d.height_bits(), 1), max(r.height_bits() for r in rhs))
+            a, b = ring._solve_norm(d, rhs), fixed_point(ring, hint, d, rhs)
+            assert [w * b[1] for w in a[0]] == [w * a[1] for w in b[0]], "the two divisions differ"
+            t = medians({"norm": lambda: ring._solve_norm(d, rhs), "fixed": lambda: fixed_point(ring, hint, d, rhs)},
+                        rounds=rounds)
+            factor = f"t^{ring.n} {'+' if ring.sign < 0 else '-'} 1"
+            yield (f"| {n} | {k} | {height(x)} | {factor} | {H} | {fmt(t['norm'])} | {fmt(t['fixed'])} | "
+                   f"{t['norm'] / t['fixed']:.2f} | {'norm' if C.by_norm(ring.n, H) else 'fixed point'} |")
+
+
+def split_rows(n, bits_list, rounds):
+    ar, rng = get_arith("flint"), random.Random(n)
+    st = C.circulant_structure(LiePoissonSystem.random(n, seed=1).field("f"))
+    eps = ar(EPS)
+    saved = C.SPLIT_MIN_BITS
+
+    def step(limit, x):
+        C.SPLIT_MIN_BITS = limit
+        try:
+            return C.exact_step(st, x, eps, ar)
+        finally:
+            C.SPLIT_MIN_BITS = saved
+
+    for bits in bits_list:
+        den = rng.getrandbits(bits) | 1
+        x = [ar(Fraction(rng.getrandbits(bits), den)) for _ in range(2 * n)]
+        assert step(10 ** 9, x) == step(-1, x), "split and unsplit steps differ"
+        t = medians({"unsplit": lambda: step(10 ** 9, x), "split": lambda: step(-1, x)}, rounds=rounds)
+        yield (f"| {n} | {height(x)} | {fmt(t['unsplit'])} | {fmt(t['split'])} | {t['unsplit'] / t['split']:.2f} | "
+               f"{'unsplit' if height(x) <= saved else 'split'} |")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ns", type=ints, default=ints("16,32,64"))
+    ap.add_argument("--bits", type=ints, default=ints("0,1000,3000"), help="orbit heights of the division table")
+    ap.add_argument("--split-ns", type=ints, default=ints("16,24,32,64"))
+    ap.add_argument("--point-bits", type=ints, default=ints("1,4,16,64"), help="heights of the split table's points")
+    ap.add_argument("--rounds", type=int, default=5)
+    args = ap.parse_args(argv)
+    if args.ns:
+        print("| n | step | height (bits) | factor | Cramer's bound H (bits) | norm | fixed point | norm / fixed point "
+              "| rule |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        for n in args.ns:
+            for line in division_rows(n, args.bits, args.rounds):
+                print(line, flush=True)
+    if args.split_ns:
+        print()
+        print("| n | point height (bits) | unsplit | split | unsplit / split | rule |")
+        print("|---|---|---|---|---|---|")
+        for n in args.split_ns:
+            for line in split_rows(n, args.point_bits, args.rounds):
+                print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()
