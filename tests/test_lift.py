@@ -236,8 +236,8 @@ def test_rational_reconstruction():
 def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     """Along an orbit the fixed-point division answers on its own: Cramer's rule down the
     tower is a fallback for numerics out of reach (and the route of small Cramer bounds,
-    :func:`~exact_khk.linalg.circulant.by_norm`: here the small factors of tⁿ − 1 the
-    step splits off), and a precision search that gives up early (as a first step with
+    :func:`~exact_khk.linalg.circulant.by_norm`: here the first step, whose small point
+    is solved unsplit, and the small factors of tⁿ − 1 the later steps split off), and a precision search that gives up early (as a first step with
     answers of ~n·hd bits once did for n ≥ 32) would send every first step there.  The
     first answer is checked against the fallback's."""
     from fractions import Fraction

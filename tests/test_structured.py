@@ -39,16 +39,16 @@ def _fields(n):
 @pytest.fixture(params=["split", "unsplit"])
 def split_route(request, monkeypatch):
     """Every exact structured solve of the test over the factors of tⁿ − 1, or over
-    Z[t]/(tⁿ − 1) unsplit, whatever the point's height (``paths.SPLIT_MIN_BITS``)."""
-    monkeypatch.setattr(circulant, "SPLIT_MIN_BITS", -1 if request.param == "split" else 10 ** 9)
+    Z[t]/(tⁿ − 1) unsplit, whatever the point's height (``paths.UNSPLIT_MAX_WORK``)."""
+    monkeypatch.setattr(circulant, "UNSPLIT_MAX_WORK", -1 if request.param == "split" else 10 ** 12)
     return request.param
 
 
 def test_small_points_solve_unsplit(monkeypatch):
-    """The rule of ``paths.SPLIT_MIN_BITS``: at n = 16 a point of at most that many bits is
-    solved over Z[t]/(t¹⁶ − 1) in one division, a higher one over the five factors
-    t⁸ + 1, t⁴ + 1, t² + 1, t + 1, t − 1 (the same point either way)."""
-    from exact_khk.linalg.paths import SPLIT_MIN_BITS
+    """The rule of ``paths.UNSPLIT_MAX_WORK``: at n = 16 a point of height h with 16²·h at
+    most that is solved over Z[t]/(t¹⁶ − 1) in one division, a higher one over the five
+    factors t⁸ + 1, t⁴ + 1, t² + 1, t + 1, t − 1 (the same point either way)."""
+    from exact_khk.linalg.paths import UNSPLIT_MAX_WORK
 
     n, ar = 16, get_arith("flint")
     fld = LiePoissonSystem.random(n, seed=1).field("f")
@@ -59,7 +59,8 @@ def test_small_points_solve_unsplit(monkeypatch):
     eps = ar(Fraction(1, 10))
     dense = KahanMap(fld, eps, "flint", method="dense")
     factors = [(8, -1), (4, -1), (2, -1), (1, -1), (1, 1)]
-    for bits, expected in ((SPLIT_MIN_BITS, [(16, 1)]), (SPLIT_MIN_BITS + 1, factors)):
+    top = UNSPLIT_MAX_WORK // n ** 2
+    for bits, expected in ((top, [(16, 1)]), (top + 1, factors)):
         x = [ar(Fraction(2 ** bits - 1 - i, 2 ** bits - 3)) for i in range(2 * n)]
         rings.clear()
         y = exact_step(st, x, eps, ar)

@@ -25,8 +25,8 @@ dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 :data:`DIXON_BITS` · (N − 6)
 exact H̃ (flint, rational)       structured for n ≥ :data:`HTILDE_STRUCTURED_MIN_N`
 a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``circulant.
-                                split_solve``) for points of more than
-                                :data:`SPLIT_MIN_BITS` bits, else one over Z[t]/(tⁿ − 1)
+                                split_solve``), but one over Z[t]/(tⁿ − 1) for points of
+                                height h with n²·h ≤ :data:`UNSPLIT_MAX_WORK`
 a structured step's division    Cramer's rule down the tower (``CirculantRing.norm``)
 by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is small: for m a
                                 power of 2, H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` or
@@ -109,12 +109,14 @@ CYCLO_REGULAR_MAX_DEGREE = 128
 CYCLO_REGULAR_MAX_SIZE = 1024
 #: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
 HTILDE_STRUCTURED_MIN_N = 3
-#: a structured step (and H̃) solves over Z[t]/(tⁿ − 1) unsplit for points of at most this
-#: height (bits of the largest numerator or the common denominator), where the fixed
-#: costs of the factors' solves dominate (one step at random points of 1–16 bits, unsplit /
-#: split: 0.49–0.68 at n = 16, 0.62–0.84 at n = 24 and 32, 0.89–1.03 at n = 64; at 64
-#: bits 0.85, 1.07, 1.05, 1.24)
-SPLIT_MIN_BITS = 16
+#: a structured step (and H̃) solves over Z[t]/(tⁿ − 1) unsplit for points of height h (bits
+#: of the largest numerator or the common denominator) with n²·h at most this: there the
+#: fixed costs of the ~log₂ n factors' solves outweigh the unsplit solve's Cramer-sized
+#: arithmetic (~n²·h).  One step at random points of 1–64 bits (scripts/bench_division.py),
+#: unsplit / split: n = 16: 0.63–0.74 to 16 bits, 0.82 at 32, 1.09 at 64; n = 24: 0.63–0.75
+#: to 16 bits, 0.90 at 32; n = 32: 0.72–0.78 to 8 bits, 0.84 at 16, 0.96 at 32; n = 64:
+#: 0.90–0.99 to 8 bits, 1.04 at 16; n = 128: 1.08–1.18 from 1 bit
+UNSPLIT_MAX_WORK = 8192
 #: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1, m a power of 2,
 #: is Cramer's rule down the tower while Cramer's bound H (bits) is at most this: first
 #: steps off small points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at
