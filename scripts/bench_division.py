@@ -113,19 +113,20 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args(argv)
     if args.ns:
-        print("| n | step | height (bits) | factor | Cramer's bound H (bits) | norm | fixed point | norm / fixed point "
-              "| rule |")
-        print("|---|---|---|---|---|---|---|---|---|")
-        for n in args.ns:
-            for line in division_rows(n, args.bits, args.rounds):
-                print(line, flush=True)
+        table(["n", "step", "height (bits)", "factor", "Cramer's bound H (bits)", "norm", "fixed point",
+               "norm / fixed point", "rule"], (line for n in args.ns for line in division_rows(n, args.bits, args.rounds)))
     if args.split_ns:
         print()
-        print("| n | point height (bits) | unsplit | split | unsplit / split | rule |")
-        print("|---|---|---|---|---|---|")
-        for n in args.split_ns:
-            for line in split_rows(n, args.point_bits, args.rounds):
-                print(line, flush=True)
+        table(["n", "point height (bits)", "unsplit", "split", "unsplit / split", "rule"],
+              (line for n in args.split_ns for line in split_rows(n, args.point_bits, args.rounds)))
+
+
+def table(columns, lines):
+    """A Markdown table, each row printed as soon as it is measured."""
+    print("| " + " | ".join(columns) + " |")
+    print("|" + "---|" * len(columns))
+    for line in lines:
+        print(line, flush=True)
 
 
 if __name__ == "__main__":

@@ -317,3 +317,16 @@ def test_split_divide_equals_dense_circulant_solve(n):
     # control: a non-unit (d(1) = 0 for d = t − 1) is refused, by the part over t − 1
     with pytest.raises(SingularMatrix):
         split_divide(R, flint.fmpz_poly([-1, 1]), [flint.fmpz_poly([1])])
+
+
+def test_division_rule_as_documented():
+    """``by_norm`` is the rule of the table in ``linalg.paths``: the tower for m a power of 2
+    while H ≤ DIVISION_BY_NORM_MAX_BITS or m·H ≤ DIVISION_BY_NORM_MAX_WORK (always at m = 1),
+    d⁻¹ over Q at the end of the tower for other m while H ≤ DIVISION_BY_INVERSE_MAX_BITS."""
+    from exact_khk.linalg.circulant import by_norm
+    from exact_khk.linalg.paths import (DIVISION_BY_INVERSE_MAX_BITS as INV, DIVISION_BY_NORM_MAX_BITS as BITS,
+                                        DIVISION_BY_NORM_MAX_WORK as WORK)
+
+    assert by_norm(1, 10 ** 9) and by_norm(256, BITS) and not by_norm(256, BITS + 1)
+    assert by_norm(8, WORK // 8) and not by_norm(8, WORK // 8 + 1) and WORK // 8 > BITS
+    assert by_norm(12, INV) and not by_norm(12, INV + 1) and not by_norm(3, BITS)
