@@ -499,7 +499,7 @@ class CirculantRing:
             N = s.denom()
             return N, (s * N).numer()
         conjugate = d(_MINUS_T)
-        N, A = _ring(n // 2, self.sign).norm(self.fold(d * conjugate).deflate(2))
+        N, A = circulant_ring(n // 2, self.sign).norm(self.fold(d * conjugate).deflate(2))
         return N, conjugate if A is None else self.fold(conjugate * A.inflate(2))
 
 
@@ -650,15 +650,10 @@ def rational_reconstruction(a, m):
     return (-num, -den) if den < 0 else (num, den)
 
 
-@lru_cache(maxsize=64)
-def circulant_ring(n: int) -> CirculantRing:
-    """The (cached) ring Q[t]/(tⁿ − 1)."""
-    return CirculantRing(n)
-
-
 @lru_cache(maxsize=128)
-def _ring(n: int, sign: int) -> CirculantRing:
-    """The rings of :meth:`CirculantRing.norm`'s tower (their products only: no hints)."""
+def circulant_ring(n: int, sign: int = 1) -> CirculantRing:
+    """The (cached) ring Q[t]/(tⁿ − s): the exact step's, and those of
+    :meth:`CirculantRing.norm`'s tower (which uses their products only, not their hints)."""
     return CirculantRing(n, sign)
 
 
