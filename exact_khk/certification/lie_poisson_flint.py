@@ -423,13 +423,11 @@ class FlintForms:
     def _solutions(self, x, st, rhs_structures):
         """z_i = R_st^{-1} M_i x (M_i the Hessian of ``rhs_structures[i]``) by
         :func:`~exact_khk.linalg.circulant.htilde_solve` in a ring of this purpose's own."""
-        n = self.n
         R = self._ring("htilde")
         W, delta = circulant.htilde_solve(R, st, rhs_structures, *circulant.point_polys(list(x)), self.eps)
         dens = [R.integer_hankel(sti, reflected=True)[1] for sti in rhs_structures]
-        coeffs = lambda p: (list(R.coeffs(p)) + [0] * n)[:n]  # noqa: E731
-        return [[flint.fmpq(c, delta * dmi) for c in circulant.reflect(coeffs(W[2 * i]))
-                 + circulant.reflect(coeffs(W[2 * i + 1]))] for i, dmi in enumerate(dens)]
+        return [[flint.fmpq(c, delta * dmi) for c in circulant.reflect(R.coeffs(W[2 * i]))
+                 + circulant.reflect(R.coeffs(W[2 * i + 1]))] for i, dmi in enumerate(dens)]
 
     def htilde_adjoint(self, x):
         """w = R^{-T} x for H̃'s matrix R = I − ε²(Hs J(x))² (dense, in integers:
@@ -506,13 +504,11 @@ class FlintForms:
         Rg = self._ring("definition")
         half = flint.fmpq(1, 2)
         mu, dm = fmpq_mat(n, 1, [(a + b) * half for a, b in zip(x[:n], y[:n])]).numer_denom()
-        Y, dy = fmpq_mat(self.N, 1, list(y)).numer_denom()
-        Ye = Y.entries()
+        yu, yv, dy = circulant.point_polys(list(y))
         # X(m_u) = X(mu)/dm, so X(mu) s = Y_part gives z_part = ± s · dm / dy
-        W, delta = circulant.split_divide(Rg, flint.fmpz_poly(mu.entries()),
-                                          [flint.fmpz_poly(Ye[:n]), flint.fmpz_poly(Ye[n:])])
-        coeffs = lambda p: circulant.reflect((list(Rg.coeffs(p)) + [0] * n)[:n])  # noqa: E731
-        s_v, s_u = coeffs(W[0]), coeffs(W[1])  # z_v = s_v·dm/(dy δ), z_u = −s_u·dm/(dy δ)
+        W, delta = circulant.split_divide(Rg, flint.fmpz_poly(mu.entries()), [yu, yv])
+        # z_v = s_v·dm/(dy δ), z_u = −s_u·dm/(dy δ)
+        s_v, s_u = (circulant.reflect(Rg.coeffs(w)) for w in W)
         X, dx = fmpq_mat(self.N, 1, list(x)).numer_denom()
         Xe = X.entries()
         dot = sum((Xe[n + i] * s_v[i] - Xe[i] * s_u[i] for i in range(n)), flint.fmpz(0))
