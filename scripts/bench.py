@@ -47,7 +47,7 @@ import sympy  # noqa: E402
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
 from exact_khk.linalg.circulant import exact_step  # noqa: E402
 from exact_khk.systems.lie_poisson.system import structure_from_system  # noqa: E402
-from exact_khk.linalg.paths import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N  # noqa: E402
+from exact_khk.linalg.paths import DENSE_BELOW  # noqa: E402
 from exact_khk.studies.output import write_atomic  # noqa: E402
 from exact_khk.linalg.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
@@ -390,8 +390,9 @@ def write(path, info, args, res, elapsed):
     L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = "
           + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + ", and for n = "
           + ", ".join(f"{n} below {b} bits" for n, b in AUTO_SPLIT_BELOW.items()) + "; "
-          f"structured for n ≥ {STRUCTURED_MIN_N}, above those heights, and for n = 11, 13 "
-          f"from points of {STRUCTURED_MIN_BITS} bits on). \"split\": one 2×2 system per cyclotomic factor "
+          "structured above those heights, for n = "
+          + ", ".join(f"{n} from points of {b} bits on" for n, b in DENSE_BELOW.items())
+          + " (dense below) and for every other n from the start). \"split\": one 2×2 system per cyclotomic factor "
           "of tⁿ − 1. Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
           "\"—\": not run (a smaller case already took more than "
@@ -414,7 +415,8 @@ def write(path, info, args, res, elapsed):
           "once its answers are known to be small; the timed calls repeat one orbit, so after the warm-up "
           "call it does so from the first step. `auto` (flint) switches to the structured step at "
           + ", ".join(f"{b} bits for n = {n}" for n, b in AUTO_SPLIT_BELOW.items())
-          + f" (split below), and at {STRUCTURED_MIN_BITS} bits for n = 11, 13 (dense below).", "",
+          + " (split below), and at " + ", ".join(f"{b} bits for n = {n}" for n, b in DENSE_BELOW.items())
+          + " (dense below).", "",
           "| n | " + " | ".join(f"from ≥ {t} bits" for t, *_ in res["crossover"][0][1]) + " |",
           "|---|" + "---|" * len(res["crossover"][0][1])]
     L += [f"| {n} | " + " | ".join(f"{a:.2f} / {b:.2f} ({h} bits)" for _, h, a, b in cells) + " |"

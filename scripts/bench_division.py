@@ -12,10 +12,15 @@ Split (``--split-ns``, ``--point-bits``): one step at random points whose coordi
 ``--point-bits`` bits (numerators and a common denominator), over Z[t]/(tⁿ − 1) unsplit and
 over the factors of tⁿ − 1 (``paths.UNSPLIT_MAX_WORK`` forced either way).
 
+Norm (``--norm-ns``, odd n only; ``--norm-bits``): where the tower ends at an odd b, the norm by
+the Galois conjugates (``CirculantRing.norm``) against d⁻¹ over Q by ``fmpq_poly.xgcd`` (FLINT's
+multimodular gcd, the route before it), for random d with coefficients of each height.
+
 Times are medians of ``--rounds`` interleaved rounds; both routes give the same answer (asserted).
 Nothing about speed is asserted.  Prints Markdown tables.
 
     python3 scripts/bench_division.py [--ns 16,32,64] [--bits 0,1000,3000] [--split-ns 16,24,32,64] [--point-bits 1,4,16,64]
+    python3 scripts/bench_division.py --ns "" --split-ns "" --norm-ns 5,9,11,15 --norm-bits 10,100,1000
 """
 
 from __future__ import annotations
@@ -44,12 +49,12 @@ def fixed_point(ring, hint, d, rhs):
     """The fixed-point division of d by a fresh ring with the hint ``ring`` had."""
     fresh = C.CirculantRing(ring.n, ring.sign)
     fresh.height_ratio = hint
-    saved = C.DIVISION_BY_NORM_MAX_BITS, C.DIVISION_BY_NORM_MAX_WORK, C.DIVISION_BY_INVERSE_MAX_BITS
-    C.DIVISION_BY_NORM_MAX_BITS = C.DIVISION_BY_NORM_MAX_WORK = C.DIVISION_BY_INVERSE_MAX_BITS = -1
+    saved = C.by_norm
+    C.by_norm = lambda n, bound: False
     try:
         return fresh.solve(d, rhs)
     finally:
-        C.DIVISION_BY_NORM_MAX_BITS, C.DIVISION_BY_NORM_MAX_WORK, C.DIVISION_BY_INVERSE_MAX_BITS = saved
+        C.by_norm = saved
 
 
 def division_rows(n, targets, rounds):
@@ -104,12 +109,33 @@ def split_rows(n, bits_list, rounds):
                f"{'unsplit' if n * n * height(x) <= saved else 'split'} |")
 
 
+def norm_rows(ns, bits_list, rounds):
+    """The norm at odd n (the Galois conjugates) against d⁻¹ over Q by ``fmpq_poly.xgcd``, for
+    random d with coefficients of each height; both give d·A = N (asserted)."""
+    import flint
+
+    rng = random.Random(7)
+    for n in ns:
+        ring = C.CirculantRing(n)
+        for bits in bits_list:
+            d = flint.fmpz_poly([rng.randint(-2 ** bits, 2 ** bits) for _ in range(n)])
+            N, A = ring.norm(d)
+            assert N != 0 and ring.mul(d, A) == N, "not d·A = N"
+            g, s, _ = flint.fmpq_poly(d).xgcd(ring.modulus)
+            t = medians({"galois": lambda: ring.norm(d), "xgcd": lambda: flint.fmpq_poly(d).xgcd(ring.modulus)},
+                        rounds=rounds)
+            yield (f"| {n} | {bits} | {fmt(t['galois'])} | {fmt(t['xgcd'])} | {t['galois'] / t['xgcd']:.2f} | "
+                   f"{N.bit_length()} | {s.denom().bit_length()} |")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ns", type=ints, default=ints("16,32,64"))
     ap.add_argument("--bits", type=ints, default=ints("0,1000,3000"), help="orbit heights of the division table")
     ap.add_argument("--split-ns", type=ints, default=ints("16,24,32,64"))
     ap.add_argument("--point-bits", type=ints, default=ints("1,4,16,64"), help="heights of the split table's points")
+    ap.add_argument("--norm-ns", type=ints, default=[], help="odd n of the norm table (none by default)")
+    ap.add_argument("--norm-bits", type=ints, default=ints("10,100,1000"), help="heights of the norm table's d")
     ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args(argv)
     if args.ns:
@@ -119,6 +145,12 @@ def main(argv=None):
         print()
         table(["n", "point height (bits)", "unsplit", "split", "unsplit / split", "rule"],
               (line for n in args.split_ns for line in split_rows(n, args.point_bits, args.rounds)))
+    if args.norm_ns:
+        if any(n % 2 == 0 or n < 3 for n in args.norm_ns):
+            ap.error("--norm-ns: odd n >= 3 only (the tower's end)")
+        print()
+        table(["n", "height of d (bits)", "norm (Galois)", "xgcd over Q", "norm / xgcd", "bits of N",
+               "bits of xgcd's denominator"], norm_rows(args.norm_ns, args.norm_bits, args.rounds))
 
 
 def table(columns, lines):

@@ -40,7 +40,7 @@ def route(request, monkeypatch):
     from exact_khk.linalg import circulant as C
 
     bits = 0 if request.param == "fixed point" else 10 ** 9
-    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK", "DIVISION_BY_INVERSE_MAX_BITS"):
+    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK"):
         monkeypatch.setattr(C, name, bits)
     return request.param
 
@@ -72,23 +72,26 @@ def test_solve_equals_dense_circulant_solve(n, sign, route):
 
 
 @pytest.mark.parametrize("sign", [1, -1])
-@pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 8, 12, 16, 17, 32])
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 8, 9, 11, 12, 15, 16, 17, 21, 30, 32, 45])
 def test_norm_is_the_resultant(n, sign):
-    """d·A = N in Z[t]/(tⁿ − s), N divides Res(d, tⁿ − s) (FLINT's resultant, another
-    algorithm) and is ± it for n a power of 2; N = 0 exactly for the non-units."""
+    """d·A = N in Z[t]/(tⁿ − s); N is 0 exactly when Res(d, tⁿ − s) is (FLINT's resultant,
+    another algorithm), i.e. for the non-units, and ± it for n a power of 2.  Where the
+    tower ends at an odd b > 1 (the Galois conjugates), N is b times an lcm of powers of
+    the norms there, so neither divides the other in general."""
     rng = random.Random(100 + n)
     R = CirculantRing(n, sign)
-    factor = R._zmodulus.factor()[1][0][0]  # an irreducible factor of tⁿ − s
+    # a multiple of each irreducible factor of tⁿ − s (a cyclotomic one: d vanishes at its roots)
+    factors = [f for f, _ in R._zmodulus.factor()[1]]
     units = [_poly(rng, n, bits) for bits in (1, 5, 60, 200)]
-    non_units = [flint.fmpz_poly([0]), R.mul(factor, _poly(rng, n, 30))]
+    non_units = [flint.fmpz_poly([0])] + [R.mul(f, _poly(rng, n, 30)) for f in factors]
     for d in units + non_units:
         N, A = R.norm(d)
         res = d.resultant(R._zmodulus)
         assert (N == 0) == (res == 0)
         if N:
-            assert res % N == 0 and (abs(N) == abs(res) or n & (n - 1))
+            assert abs(N) == abs(res) or n & (n - 1)
             assert R.mul(d, A if A is not None else flint.fmpz_poly([1])) == N
-    assert [R.norm(d)[0] for d in non_units] == [0, 0] and sum(R.norm(d)[0] != 0 for d in units) >= 3
+    assert all(R.norm(d)[0] == 0 for d in non_units) and sum(R.norm(d)[0] != 0 for d in units) >= 3
 
 
 def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
@@ -266,7 +269,7 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     assert calls == []
     # control: the first step again with every division sent to the fixed-point one
     # (no route of small bounds) and made to miss, so that it falls back
-    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK", "DIVISION_BY_INVERSE_MAX_BITS"):
+    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK"):
         monkeypatch.setattr(C, name, 0)
     monkeypatch.setattr(C.CirculantRing, "_attempt", lambda *args: None)
     C.circulant_ring.cache_clear()
@@ -320,13 +323,13 @@ def test_split_divide_equals_dense_circulant_solve(n):
 
 
 def test_division_rule_as_documented():
-    """``by_norm`` is the rule of the table in ``linalg.paths``: the tower for m a power of 2
-    while H ≤ DIVISION_BY_NORM_MAX_BITS or m·H ≤ DIVISION_BY_NORM_MAX_WORK (always at m = 1),
-    d⁻¹ over Q at the end of the tower for other m while H ≤ DIVISION_BY_INVERSE_MAX_BITS."""
+    """``by_norm`` is the rule of the table in ``linalg.paths``: the tower while
+    H ≤ DIVISION_BY_NORM_MAX_BITS or m·H ≤ DIVISION_BY_NORM_MAX_WORK, always at m = 1, for
+    every m (powers of 2 and the others alike)."""
     from exact_khk.linalg.circulant import by_norm
-    from exact_khk.linalg.paths import (DIVISION_BY_INVERSE_MAX_BITS as INV, DIVISION_BY_NORM_MAX_BITS as BITS,
-                                        DIVISION_BY_NORM_MAX_WORK as WORK)
+    from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS as BITS, DIVISION_BY_NORM_MAX_WORK as WORK
 
     assert by_norm(1, 10 ** 9) and by_norm(256, BITS) and not by_norm(256, BITS + 1)
     assert by_norm(8, WORK // 8) and not by_norm(8, WORK // 8 + 1) and WORK // 8 > BITS
-    assert by_norm(12, INV) and not by_norm(12, INV + 1) and not by_norm(3, BITS)
+    assert by_norm(12, WORK // 12) and not by_norm(12, WORK // 12 + 1) and by_norm(3, 4 * BITS)
+    assert by_norm(255, BITS) and not by_norm(255, BITS + 1)

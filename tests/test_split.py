@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
                        get_arith, rational_sign_patterns)
 from exact_khk.linalg import split as split_mod
-from exact_khk.linalg.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N
+from exact_khk.linalg.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, DENSE_BELOW, SPLIT_N
 from exact_khk.linalg.split import split_system
 from exact_khk.systems.lie_poisson.system import random_point
 
@@ -135,10 +135,11 @@ def test_split_refuses_what_it_cannot_do():
     (8, "split below 2048 bits, then structured", "split"),
     (15, "split below 768 bits, then structured", "split"),
     (11, "dense below 512 bits, then structured", "split"),
+    (14, "structured", "split"),
     (16, "structured", "dense"),
 ])
 def test_auto_paths(n, flint_path, gmpy2_path):
-    """The auto rule as documented (split.AUTO_SPLIT_N, AUTO_SPLIT_BELOW; kahan.STRUCTURED_MIN_*)."""
+    """The auto rule as documented (paths.AUTO_SPLIT_N, AUTO_SPLIT_BELOW, DENSE_BELOW)."""
     fld = LiePoissonSystem.random(n, 1).field("f")
     assert KahanMap(fld, "1/10", "flint").path == flint_path
     assert KahanMap(fld, "1/10", "gmpy2").path == gmpy2_path
@@ -146,10 +147,10 @@ def test_auto_paths(n, flint_path, gmpy2_path):
 
 
 def test_auto_split_tables_cover_split_n():
-    """Every n of SPLIT_N except 11 and 13 (factors of degree 10, 12) is split by auto with
-    python-flint, always or below a height."""
-    assert set(AUTO_SPLIT_N).isdisjoint(AUTO_SPLIT_BELOW)
-    assert set(AUTO_SPLIT_N) | set(AUTO_SPLIT_BELOW) == set(SPLIT_N) - {11, 13}
+    """Every n of SPLIT_N but 11, 13 (factors of degree 10, 12: dense below a height) and 14
+    (structured from the start) is split by auto with python-flint, always or below a height."""
+    assert set(AUTO_SPLIT_N).isdisjoint(AUTO_SPLIT_BELOW) and set(DENSE_BELOW) == {11, 13}
+    assert set(AUTO_SPLIT_N) | set(AUTO_SPLIT_BELOW) == set(SPLIT_N) - {11, 13, 14}
 
 
 def test_split_rejects_non_circulant_blocks():

@@ -21,7 +21,7 @@ from exact_khk.systems.lie_poisson.system import structure_from_system
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.linalg import circulant
 from exact_khk.arith import point_height as _height
-from exact_khk.linalg.paths import STRUCTURED_MIN_BITS, STRUCTURED_MIN_N
+from exact_khk.linalg.paths import DENSE_BELOW
 from exact_khk.linalg import split as split_mod
 from exact_khk.linalg.paths import AUTO_SPLIT_BELOW
 from exact_khk.systems.lie_poisson.system import random_point
@@ -236,7 +236,7 @@ def test_structured_float_condition_policy():
 
 
 def test_auto_choice_and_fallbacks():
-    big, small = LiePoissonSystem.random(STRUCTURED_MIN_N, 1), LiePoissonSystem.random(2, 1)
+    big, small = LiePoissonSystem.random(16, 1), LiePoissonSystem.random(2, 1)
     assert KahanMap(big.field("g"), "1/3", "flint").structure is not None
     assert KahanMap(big.field("g"), "1/3", "fraction").structure is None  # the reference stays dense
     assert KahanMap(small.field("f"), "1/3", "flint").structure is None  # n = 2: the split step
@@ -263,18 +263,16 @@ def test_auto_choice_and_fallbacks():
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
 
 
-@pytest.mark.parametrize("n, low, switch, steps", [(11, "dense", STRUCTURED_MIN_BITS, 8),
+@pytest.mark.parametrize("n, low, switch, steps", [(11, "dense", DENSE_BELOW[11], 8),
                                                    (15, "split", AUTO_SPLIT_BELOW[15], 8),
-                                                   (14, "split", AUTO_SPLIT_BELOW[14], 10),
                                                    (10, "split", AUTO_SPLIT_BELOW[10], 42),
                                                    (9, "split", AUTO_SPLIT_BELOW[9], 40),
                                                    (8, "split", AUTO_SPLIT_BELOW[8], 30)])
 def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch, steps):
-    """Where ``auto`` does not split at every height (flint, n = 7..11, 13, 14, 15), it
-    steps dense (n = 11, 13) or split (n = 7, 8, 9, 10, 14, 15) from low points and structured
+    """Where ``auto`` does not split at every height (flint, n = 7..11, 13, 15), it
+    steps dense (n = 11, 13) or split (n = 7, 8, 9, 10, 15) from low points and structured
     from points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
-    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 14: 1390 after
-    8 steps; n = 9: about 100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39;
+    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 9: about 100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39;
     n = 8: 2034 after 27."""
     calls, solves = [], []
     real_init = split_mod.SplitSystem.__init__
@@ -327,14 +325,14 @@ def test_structured_step_at_n_256():
 
 def test_large_n_structured_step_never_builds_the_dense_tensor():
     """The Lie–Poisson field builds its (2n)^3 quadratic terms only on demand; the
-    structured step (auto for flint at n >= STRUCTURED_MIN_N) never needs them."""
+    structured step (auto for flint at n ≥ 16) never needs them."""
     from exact_khk.systems.lie_poisson.system import random_point
 
-    s = LiePoissonSystem.random(STRUCTURED_MIN_N, 3)
+    s = LiePoissonSystem.random(16, 3)
     fld = s.field("f")
     phi = KahanMap(fld, "1/10", "flint")
     assert phi.structure is not None and phi.switch_bits == 0
-    x = random_point(STRUCTURED_MIN_N, 3)
+    x = random_point(16, 3)
     y = phi.step(x)
     assert list(phi.inverse(y)) == [phi.arith(t) for t in x]   # the step is undone exactly
     assert "terms" not in fld._cache      # neither the step nor its inverse built the (2n)^3 terms

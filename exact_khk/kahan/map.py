@@ -47,10 +47,9 @@ by the DFT for ``float``/``mp:P``, or by the exact DFT in ``cyclo:N`` with n | N
 whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
 n < 16, and for ``flint`` when n = 2, 3, 4, 5, 6, 12
 (:data:`~exact_khk.linalg.paths.AUTO_SPLIT_N`) and, below a height where the
-structured path overtakes it, n = 7, 8, 9, 10, 14, 15 (:data:`~exact_khk.linalg.paths.AUTO_SPLIT_BELOW`);
-otherwise the structured path for exact ``flint`` steps when n ≥ 16
-(:data:`~exact_khk.linalg.paths.STRUCTURED_MIN_N`), and at n = 11, 13 once the
-point's height reaches :data:`~exact_khk.linalg.paths.STRUCTURED_MIN_BITS`;
+structured path overtakes it, n = 7, 8, 9, 10, 15 (:data:`~exact_khk.linalg.paths.AUTO_SPLIT_BELOW`);
+otherwise the structured path for exact ``flint`` steps, at n = 11, 13 once the
+point's height reaches :data:`~exact_khk.linalg.paths.DENSE_BELOW` (dense below);
 the exact DFT in ``cyclo:N`` (n | N) and ``gf:P`` (n | P − 1) when n ≥ 3
 (:data:`~exact_khk.linalg.paths.EXACT_DFT_STEP_MIN_N`);
 otherwise dense.  The rules follow the crossovers

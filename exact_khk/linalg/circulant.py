@@ -53,12 +53,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
-from math import lcm
+from math import gcd, lcm
 
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
-from exact_khk.linalg.paths import (DIVISION_BY_INVERSE_MAX_BITS, DIVISION_BY_NORM_MAX_BITS,
-                                    DIVISION_BY_NORM_MAX_WORK, UNSPLIT_MAX_WORK)
+from exact_khk.linalg.numtheory import ramanujan_sum
+from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK, UNSPLIT_MAX_WORK
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
@@ -481,26 +481,63 @@ class CirculantRing:
 
     def norm(self, d):
         """``(N, A)``: an integer N and an fmpz_poly A (None for 1) with d·A = N in
-        Z[t]/(tⁿ − s); N divides Π d(ω) over the roots of tⁿ − s (is ± it when n is a power
-        of 2) and is 0 exactly when d is not a unit.
+        Z[t]/(tⁿ − s); N is 0 exactly when d is not a unit, and ± Π d(ω) over the roots of
+        tⁿ − s when n is a power of 2 (else it may carry other factors: lowest terms are the
+        caller's).
 
         Down the tower: for even n, d(t)·d(−t) is even, e(t²), so (N, A) = (N', d(−t)·A'(t²))
-        with (N', A') those of e in Z[s]/(s^(n/2) − s); at n = 1, N = d; at odd n > 1 from
-        d⁻¹ over Q (``fmpq_poly.xgcd``, FLINT's multimodular gcd).  Every step is a few
-        ``fmpz_poly`` products; d⁻¹ over Q at even n is far slower (5–11× at 200–2000 bits,
-        n = 4..32: its gcd does not know the tower)."""
+        with (N', A') those of e in Z[s]/(s^(n/2) − s); at n = 1, N = d; at odd n > 1 by the
+        Galois conjugates (:meth:`_galois_norm`; tⁿ + 1 is tⁿ − 1 at −t).  Every step is a few
+        ``fmpz_poly`` products; d⁻¹ over Q (``fmpq_poly.xgcd``, FLINT's multimodular gcd,
+        which does not know the tower) is 5–11× slower at 200–2000 bits, n = 4..32, and
+        1.3–10× at 100–4000 bits, odd n = 9..21 (faster only for d of a few dozen bits)."""
         n = self.n
         if n == 1:
             return d[0], None
         if n % 2:
-            g, s, _ = flint.fmpq_poly(d).xgcd(self.modulus)  # s·d ≡ g
-            if g != 1:
-                return flint.fmpz(0), None
-            N = s.denom()
-            return N, (s * N).numer()
+            if self.sign == -1:  # t → −t maps Z[t]/(tⁿ + 1) onto Z[t]/(tⁿ − 1)
+                N, A = circulant_ring(n).norm(d(_MINUS_T))
+                return N, None if A is None else A(_MINUS_T)
+            return self._galois_norm(d)
         conjugate = d(_MINUS_T)
         N, A = circulant_ring(n // 2, self.sign).norm(self.fold(d * conjugate).deflate(2))
         return N, conjugate if A is None else self.fold(conjugate * A.inflate(2))
+
+    def _galois_norm(self, d):
+        """:meth:`norm` for odd n > 1 (sign 1), by the conjugates σ_k: t → tᵏ (k a unit mod n),
+        ring automorphisms that permute coefficients.  Up a chain of subgroups of (Z/n)^×,
+        each of prime index p over the last, e ← e·C with C the product of e's p − 1
+        conjugates by the new cosets' representatives (the first: σ_−1, the reflection), so
+        that at the end P = d·A is fixed by every σ_k: at a primitive q-th root of unity (q | n)
+        its value v_q is an integer, (Σ_i P_i c_q(i))/φ(q) (Ramanujan sums).  With
+        E_q = Σ_i c_q(i) tⁱ (n times the idempotents: Σ_q E_q = n), d⁻¹ = Σ_q A·E_q/(n·v_q);
+        at q = 1 it is E_1/(n·d(1)) instead (v_1 = d(1)^φ(n) would carry the extra factor
+        A(1) = d(1)^(φ(n) − 1)), and the last A·E_n is n·A less the others, so for prime n no
+        product is left.  N = n·L, L the lcm of d(1) and the v_q; N = 0 if one of them is."""
+        n = self.n
+        tower, components = _galois_data(n)
+        e, A = d, None
+        for perms in tower:
+            c = _padded(e, n)
+            C = None
+            for perm in perms:
+                conjugate = flint.fmpz_poly([c[i] for i in perm])
+                C = conjugate if C is None else self.fold(C * conjugate)
+            A = C if A is None else self.fold(A * C)
+            e = self.fold(e * C)
+        c = _padded(e, n)
+        values = [flint.fmpz(sum(_padded(d, n)))]  # d(1), then v_q for q > 1
+        values += [sum(c[i] * w for i, w in weights) // phi for phi, weights, _ in components[1:]]
+        if any(v == 0 for v in values):
+            return flint.fmpz(0), None
+        parts = [components[0][2]] + [self.fold(A * E) for _, _, E in components[1:-1]]
+        parts.append(A * n - sum(parts[1:], flint.fmpz_poly()) - A(1) * components[0][2])
+        L = values[0]
+        for i in range(1, len(parts)):  # A·E_q/v_q in lower terms (v_q = N_q(d)^(φ(n)/φ(q)))
+            g = parts[i].content().gcd(values[i])
+            parts[i], values[i] = parts[i] // g, values[i] // g
+            L = L.lcm(values[i])
+        return n * L, sum(((L // v) * B for v, B in zip(values, parts)), flint.fmpz_poly())
 
 
 class _Reciprocal:
@@ -600,12 +637,41 @@ def _newton_start(target, guard) -> int:
     return max(b, START_BITS)
 
 
+def _padded(p, n):
+    """The n coefficients of an fmpz_poly p of degree < n."""
+    c = p.coeffs()
+    return c + [0] * (n - len(c))
+
+
+@lru_cache(maxsize=None)
+def _galois_data(n):
+    """``(tower, components)`` of :meth:`CirculantRing._galois_norm` for odd n > 1.  tower:
+    per subgroup step, one index list per conjugate σ_k (σ_k(e)_j = e_i for i = j·k⁻¹ mod n);
+    components: per divisor q of n, (φ(q), [(i, Σ c_q over the class of i)] over one index i
+    per class {i: gcd(i, n) = g}, the Ramanujan sums c_q(i) for i < n as an fmpz_poly)."""
+    units = [k for k in range(1, n) if gcd(k, n) == 1]
+    group, tower = {1}, []
+    while len(group) < len(units):
+        g = next(k for k in [n - 1] + units if k not in group)
+        order, x = 1, g
+        while x not in group:
+            x, order = x * g % n, order + 1
+        p = next(p for p in range(2, order + 1) if order % p == 0)  # a step of prime index
+        g = pow(g, order // p, n)
+        tower.append([[j * pow(k, -1, n) % n for j in range(n)] for k in (pow(g, i, n) for i in range(1, p))])
+        group = {h * pow(g, i, n) % n for h in group for i in range(p)}
+    divisors = [q for q in range(1, n + 1) if n % q == 0]
+    components = []
+    for q in divisors:
+        c = [ramanujan_sum(q, i) for i in range(n)]
+        weights = [(g % n, sum(c[i] for i in range(n) if gcd(i, n) == g)) for g in divisors]
+        components.append((len([k for k in range(1, q + 1) if gcd(k, q) == 1]), weights, flint.fmpz_poly(c)))
+    return tuple(tower), tuple(components)
+
+
 def by_norm(n, bound) -> bool:
     """Whether a division over Z[t]/(tⁿ ∓ 1) whose answer has at most ``bound`` bits
-    (Cramer's) is Cramer's rule down the tower (the rule of ``linalg.paths``; the tower
-    reaches n = 1 when n is a power of 2)."""
-    if n & (n - 1):  # the tower ends in d⁻¹ over Q at n's odd factor
-        return bound <= DIVISION_BY_INVERSE_MAX_BITS
+    (Cramer's) is Cramer's rule down the tower (the rule of ``linalg.paths``)."""
     return n == 1 or bound <= DIVISION_BY_NORM_MAX_BITS or n * bound <= DIVISION_BY_NORM_MAX_WORK
 
 

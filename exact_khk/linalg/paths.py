@@ -14,10 +14,11 @@ circulant blocks, kernel gmpy2  split for n in :data:`SPLIT_N` (Bareiss is
                                 1.7–100× slower)
 circulant blocks, kernel flint  split for n in :data:`AUTO_SPLIT_N`;
                                 split below :data:`AUTO_SPLIT_BELOW` [n] bits, then
-                                structured (n = 7, 9, 10, 14, 15);
-                                structured for n ≥ :data:`STRUCTURED_MIN_N`;
-                                dense below :data:`STRUCTURED_MIN_BITS`, then
-                                structured (n = 11, 13)
+                                structured (n = 7, 8, 9, 10, 15);
+                                dense below :data:`DENSE_BELOW` [n] bits, then
+                                structured (n = 11, 13);
+                                structured from the first step for every other n
+                                (n = 14 and n ≥ 16)
 no structure, or other kernels  dense
 dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 8 ≤ N < 16) once an answer grew by < 2× and
@@ -28,11 +29,11 @@ a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``
                                 split_solve``), but one over Z[t]/(tⁿ − 1) for points of
                                 height h with n²·h ≤ :data:`UNSPLIT_MAX_WORK`
 a structured step's division    Cramer's rule down the tower (``CirculantRing.norm``)
-by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is small: for m a
-                                power of 2, H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` or
-                                m·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` or m = 1; else
-                                H ≤ :data:`DIVISION_BY_INVERSE_MAX_BITS`; otherwise the
-                                fixed-point division (``CirculantRing.solve``)
+by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is small:
+                                H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` or
+                                m·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` or m = 1;
+                                otherwise the fixed-point division
+                                (``CirculantRing.solve``)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
                                 binary64 where N·κ ≤ :data:`BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
@@ -72,18 +73,22 @@ AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 12)
 #: step splits over tᵏ ± 1 (stop 35, 7 orbit-step rounds): near 5000 bits for n = 10, then
 #: 1.26–1.41 at 10 000–30 000 bits, and near 1300 bits for n = 14, 1.34 at 1740 bits;
 #: since its division goes down the tower (stop 36): n = 8 near 2000 bits, then 1.17–1.33 at
-#: 2 575–30 000 bits (it had kept the split step at every height); the others unchanged)
-AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 14: 1280, 15: 768}
-#: flint: structured from the first step for n ≥ 16 (faster than a dense step even once
-#: that is built: 1.2× at the first orbit point at n = 16, 1.1× since the split over
-#: tᵏ ± 1 (stop 35: the parts' fixed costs), 1.5× at n = 32; a dense step's
-#: first call also builds the field's integer system, 10 ms at n = 32, 1.4 s before 8d7521b) ...
-STRUCTURED_MIN_N = 16
-#: ... and for the remaining n = 11, 13 from this height (4 orbit steps: dense / structured
-#: = 1 near 550 bits for n = 11 and 450 bits for n = 13; dense is 2.2–2.5× faster at the
-#: second orbit points, 113–137 bits; at the first, height-2 point structured is 1.1–1.5×
-#: faster since c24c63d, one step not worth a rule)
-STRUCTURED_MIN_BITS = 512
+#: 2 575–30 000 bits (it had kept the split step at every height); the others unchanged.
+#: Since the tower ends in the Galois conjugates at odd factors (stop 37): split / structured
+#: 0.94 at n = 14's first point and 1.04–1.84 from 148 bits, so n = 14 left the table
+#: (structured from the first step, and no split code to generate); n = 10 now crosses
+#: between 1 100 and 2 000 bits but the structured step is at most 1.09× faster up to
+#: 4 100 bits, so its entry stays; n = 7, 9, 15 unchanged)
+AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 15: 768}
+#: flint: dense below these heights, then structured, for the n = 11, 13 that the split step
+#: serves poorly (factors of degree 10, 12) (4 orbit steps: dense / structured = 1 near 550
+#: bits for n = 11 and 450 bits for n = 13; dense 0.74–0.84× at 2–268 bits for n = 11 and
+#: 0.83–0.94× at 2–306 bits for n = 13, stop 37); every other n without a rule above is
+#: structured from the first step (n = 14 and n ≥ 16: faster than a dense step even once
+#: that is built: dense / structured 1.5 over 4 orbit steps from n = 14's first point, one
+#: step 447 against 177 µs at n = 16's; a dense step's first call also builds the field's
+#: integer system, 10 ms at n = 32)
+DENSE_BELOW = {11: 512, 13: 512}
 #: dense orbit steps: Dixon from this height (crossover measured for N = 8..14) ...
 SMALL_ANSWER_MIN_BITS = 128
 #: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
@@ -117,22 +122,21 @@ HTILDE_STRUCTURED_MIN_N = 3
 #: to 16 bits, 0.90 at 32; n = 32: 0.72–0.78 to 8 bits, 0.84 at 16, 0.96 at 32; n = 64:
 #: 0.90–0.99 to 8 bits, 1.04 at 16; n = 128: 1.08–1.18 from 1 bit
 UNSPLIT_MAX_WORK = 8192
-#: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1, m a power of 2,
-#: is Cramer's rule down the tower while Cramer's bound H (bits) is at most this: first
-#: steps off small points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at
-#: m = 2..256, H ≤ 7061, n = 16..512) ...
+#: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
+#: down the tower while Cramer's bound H (bits) is at most this: first steps off small
+#: points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at m = 2..256,
+#: H ≤ 7061, n = 16..512; 0.10–0.16 at the first points of n = 11..48) ...
 DIVISION_BY_NORM_MAX_BITS = 8192
 #: ... or while m·H is at most this (along orbits the answer is ~1.1× d's height, far below
 #: H: norm / fixed-point crosses 1 near H = 9 000 at m = 16 and 26 000 at m = 8; 0.56 at
 #: m = 4, H = 26 698; 0.03–0.13 at m ≤ 2 everywhere measured; 4–33× at m = 32..128 from
-#: H = 33 788; scalar divisions, m = 1, always)
+#: H = 33 788; scalar divisions, m = 1, always).  The same rule for m with an odd factor,
+#: whose tower ends in the Galois conjugates (stop 37; scripts/bench_division.py): 0.09–0.31
+#: at m = 3, 5, 6 to H = 6 043; 0.24–0.68 at m = 10, 12 to H = 10 108, 1.07–1.27 at m = 10,
+#: 12, 20 from H = 11 393 (fixed point there); n = m = 11, 13, 15: 0.46–0.70 at H = 2 785–
+#: 6 516, 0.99 and 1.24 at H = 8 693 (m = 13) and 10 129 (m = 11), the rule's one miss,
+#: 0.82–2.1 beyond it (fixed point)
 DIVISION_BY_NORM_MAX_WORK = 2 ** 17
-#: where m has an odd factor b > 1 the tower ends in d⁻¹ over Q at tᵇ ∓ 1 (FLINT's
-#: multimodular xgcd), Cramer's rule up to this H (the rule before the tower: 1.2–2.2×
-#: faster than the fixed-point division at n = 48..128; since, norm / fixed-point 0.6–1.0
-#: at n = 20..48, H ≤ 4 106, but 1.9× at n = m = 11, H ≈ 6 000, and 5.4× at n = m = 15,
-#: H = 11 696)
-DIVISION_BY_INVERSE_MAX_BITS = 4096
 
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
 #: from values at points of the line (one N×N solve per point and step) instead of
@@ -185,4 +189,4 @@ def auto_path(n: int, kernel: str, splits: bool, circulant: bool):
             return True, True, AUTO_SPLIT_BELOW[n]
     if not circulant or kernel != "flint":
         return False, False, 0
-    return False, True, (0 if n >= STRUCTURED_MIN_N else STRUCTURED_MIN_BITS)
+    return False, True, DENSE_BELOW.get(n, 0)
