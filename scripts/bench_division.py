@@ -16,7 +16,7 @@ Norm (``--norm-ns``, odd n only; ``--norm-bits``): where the tower ends at an od
 the Galois conjugates (``CirculantRing.norm``) against d⁻¹ over Q by ``fmpq_poly.xgcd`` (FLINT's
 multimodular gcd, the route before it), for random d with coefficients of each height.
 
-Times are medians of ``--rounds`` interleaved rounds; both routes give the same answer (asserted).
+Times are medians of ``--rounds`` interleaved rounds (each a loop of about 2 ms of calls); both routes give the same answer (asserted).
 Nothing about speed is asserted.  Prints Markdown tables.
 
     python3 scripts/bench_division.py [--ns 16,32,64] [--bits 0,1000,3000] [--split-ns 16,24,32,64] [--point-bits 1,4,16,64]
@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import random
 import sys
+import time
 from fractions import Fraction
 from pathlib import Path
 
@@ -43,6 +44,19 @@ from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 def ints(text):
     return [int(t) for t in text.split(",") if t.strip()]
+
+
+def per_call(fns, rounds):
+    """Median time per call of each callable over ``rounds`` interleaved rounds, each round
+    a loop of about 2 ms of calls (a single call of tens of µs is mostly timer and cache
+    noise)."""
+    number = {}
+    for k, f in fns.items():
+        t0 = time.perf_counter()
+        f()
+        number[k] = max(1, int(2e-3 / max(time.perf_counter() - t0, 1e-7)))
+    loops = {k: (lambda f=f, m=number[k]: [f() for _ in range(m)]) for k, f in fns.items()}
+    return {k: t / number[k] for k, t in medians(loops, rounds=rounds).items()}
 
 
 def fixed_point(ring, hint, d, rhs):
@@ -80,7 +94,7 @@ def division_rows(n, targets, rounds):
             H = C._hadamard_bits(ring.n, max(d.height_bits(), 1), max(r.height_bits() for r in rhs))
             a, b = ring._solve_norm(d, rhs), fixed_point(ring, hint, d, rhs)
             assert [w * b[1] for w in a[0]] == [w * a[1] for w in b[0]], "the two divisions differ"
-            t = medians({"norm": lambda: ring._solve_norm(d, rhs), "fixed": lambda: fixed_point(ring, hint, d, rhs)},
+            t = per_call({"norm": lambda: ring._solve_norm(d, rhs), "fixed": lambda: fixed_point(ring, hint, d, rhs)},
                         rounds=rounds)
             factor = f"t^{ring.n} {'+' if ring.sign < 0 else '-'} 1"
             yield (f"| {n} | {k} | {height(x)} | {factor} | {H} | {fmt(t['norm'])} | {fmt(t['fixed'])} | "
@@ -104,7 +118,7 @@ def split_rows(n, bits_list, rounds):
         den = rng.getrandbits(bits) | 1
         x = [ar(Fraction(rng.getrandbits(bits), den)) for _ in range(2 * n)]
         assert step(10 ** 12, x) == step(-1, x), "split and unsplit steps differ"
-        t = medians({"unsplit": lambda: step(10 ** 12, x), "split": lambda: step(-1, x)}, rounds=rounds)
+        t = per_call({"unsplit": lambda: step(10 ** 12, x), "split": lambda: step(-1, x)}, rounds=rounds)
         yield (f"| {n} | {height(x)} | {fmt(t['unsplit'])} | {fmt(t['split'])} | {t['unsplit'] / t['split']:.2f} | "
                f"{'unsplit' if n * n * height(x) <= saved else 'split'} |")
 
@@ -122,7 +136,7 @@ def norm_rows(ns, bits_list, rounds):
             N, A = ring.norm(d)
             assert N != 0 and ring.mul(d, A) == N, "not d·A = N"
             g, s, _ = flint.fmpq_poly(d).xgcd(ring.modulus)
-            t = medians({"galois": lambda: ring.norm(d), "xgcd": lambda: flint.fmpq_poly(d).xgcd(ring.modulus)},
+            t = per_call({"galois": lambda: ring.norm(d), "xgcd": lambda: flint.fmpq_poly(d).xgcd(ring.modulus)},
                         rounds=rounds)
             yield (f"| {n} | {bits} | {fmt(t['galois'])} | {fmt(t['xgcd'])} | {t['galois'] / t['xgcd']:.2f} | "
                    f"{N.bit_length()} | {s.denom().bit_length()} |")

@@ -72,7 +72,7 @@ def test_solve_equals_dense_circulant_solve(n, sign, route):
 
 
 @pytest.mark.parametrize("sign", [1, -1])
-@pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 8, 9, 11, 12, 15, 16, 17, 21, 30, 32, 45])
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 8, 9, 11, 12, 15, 16, 17, 21, 23, 30, 32, 45, 47])
 def test_norm_is_the_resultant(n, sign):
     """d·A = N in Z[t]/(tⁿ − s); N is 0 exactly when Res(d, tⁿ − s) is (FLINT's resultant,
     another algorithm), i.e. for the non-units, and ± it for n a power of 2.  Where the

@@ -519,14 +519,13 @@ class CirculantRing:
         e, A = d, None
         for perms in tower:
             c = _padded(e, n)
-            C = None
-            for perm in perms:
-                conjugate = flint.fmpz_poly([c[i] for i in perm])
-                C = conjugate if C is None else self.fold(C * conjugate)
-            A = C if A is None else self.fold(A * C)
-            e = self.fold(e * C)
+            C = [flint.fmpz_poly([c[i] for i in perm]) for perm in perms]
+            while len(C) > 1:  # their product as a balanced tree (p − 1 may be large: n = 1019)
+                C = [self.fold(a * b) for a, b in zip(C[::2], C[1::2])] + C[len(C) & ~1:]
+            A = C[0] if A is None else self.fold(A * C[0])
+            e = self.fold(e * C[0])
         c = _padded(e, n)
-        values = [flint.fmpz(sum(_padded(d, n)))]  # d(1), then v_q for q > 1
+        values = [d(1)]  # d(1), then v_q for q > 1
         values += [sum(c[i] * w for i, w in weights) // phi for phi, weights, _ in components[1:]]
         if any(v == 0 for v in values):
             return flint.fmpz(0), None
