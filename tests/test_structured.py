@@ -272,7 +272,8 @@ def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch, st
     """Where ``auto`` does not split at every height (flint, n = 7..11, 13, 15), it
     steps dense (n = 11, 13) or split (n = 7, 8, 9, 10, 15) from low points and structured
     from points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
-    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 9: about 100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39;
+    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 9: about
+    100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39;
     n = 8: 2034 after 27."""
     calls, solves = [], []
     real_init = split_mod.SplitSystem.__init__

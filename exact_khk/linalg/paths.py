@@ -74,16 +74,16 @@ AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 12)
 #: 1.26–1.41 at 10 000–30 000 bits, and near 1300 bits for n = 14, 1.34 at 1740 bits;
 #: since its division goes down the tower (stop 36): n = 8 near 2000 bits, then 1.17–1.33 at
 #: 2 575–30 000 bits (it had kept the split step at every height); the others unchanged.
-#: Since the tower ends in the Galois conjugates at odd factors (stop 37): split / structured
-#: 0.94 at n = 14's first point and 1.04–1.84 from 148 bits, so n = 14 left the table
-#: (structured from the first step, and no split code to generate); n = 10 now crosses
-#: between 1 100 and 2 000 bits but the structured step is at most 1.09× faster up to
-#: 4 100 bits, so its entry stays; n = 7, 9, 15 unchanged)
+#: Since the tower ends in the Galois conjugates at odd factors (stop 37, bench.py's
+#: crossover table): split / structured 0.90 at n = 14's first point and 1.18–2.57 from 326
+#: bits, so n = 14 left the table (structured from the first step, and no split code to
+#: generate); n = 10 now crosses near 1 500 bits but the structured step is at most 1.2×
+#: faster up to 6 000 bits, so its entry stays; n = 7, 9, 15 unchanged)
 AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 15: 768}
 #: flint: dense below these heights, then structured, for the n = 11, 13 that the split step
 #: serves poorly (factors of degree 10, 12) (4 orbit steps: dense / structured = 1 near 550
-#: bits for n = 11 and 450 bits for n = 13; dense 0.74–0.84× at 2–268 bits for n = 11 and
-#: 0.83–0.94× at 2–306 bits for n = 13, stop 37); every other n without a rule above is
+#: bits for n = 11 and 450 bits for n = 13; dense 0.77–0.82× at 2–268 bits for n = 11 and
+#: 0.80–0.95× at 2–306 bits for n = 13, stop 37); every other n without a rule above is
 #: structured from the first step (n = 14 and n ≥ 16: faster than a dense step even once
 #: that is built: dense / structured 1.5 over 4 orbit steps from n = 14's first point, one
 #: step 447 against 177 µs at n = 16's; a dense step's first call also builds the field's
@@ -131,11 +131,12 @@ DIVISION_BY_NORM_MAX_BITS = 8192
 #: H: norm / fixed-point crosses 1 near H = 9 000 at m = 16 and 26 000 at m = 8; 0.56 at
 #: m = 4, H = 26 698; 0.03–0.13 at m ≤ 2 everywhere measured; 4–33× at m = 32..128 from
 #: H = 33 788; scalar divisions, m = 1, always).  The same rule for m with an odd factor,
-#: whose tower ends in the Galois conjugates (stop 37; scripts/bench_division.py): 0.09–0.31
-#: at m = 3, 5, 6 to H = 6 043; 0.24–0.68 at m = 10, 12 to H = 10 108, 1.07–1.27 at m = 10,
-#: 12, 20 from H = 11 393 (fixed point there); n = m = 11, 13, 15: 0.46–0.70 at H = 2 785–
-#: 6 516, 0.99 and 1.24 at H = 8 693 (m = 13) and 10 129 (m = 11), the rule's one miss,
-#: 0.82–2.1 beyond it (fixed point)
+#: whose tower ends in the Galois conjugates (stop 37; scripts/bench_division.py, 299
+#: divisions at n = 12..96 to 12 000 bits): the two routes cross at m·H ≈ 150 000–210 000
+#: for m = 8, 11, 13, 16, but higher for m with small odd factors (≈ 270 000 at m = 9,
+#: 450 000 at m = 15, 18, 600 000–700 000 at m = 10, 12, 20, 24), where the rule leaves up
+#: to 2.5× on a division (m = 20, H = 11 393); in all, its choices cost 1.031× the faster
+#: route's (m·H ≤ 2¹⁸: 1.012×, but whole steps with it were mixed, 0.72–1.37×: not taken)
 DIVISION_BY_NORM_MAX_WORK = 2 ** 17
 
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
