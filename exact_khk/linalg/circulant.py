@@ -518,13 +518,13 @@ class CirculantRing:
         tower, components = _galois_data(n)
         e, A = d, None
         for perms in tower:
-            c = _padded(e, n)
+            c = self.coeffs(e)
             C = [flint.fmpz_poly([c[i] for i in perm]) for perm in perms]
             while len(C) > 1:  # their product as a balanced tree (p − 1 may be large: n = 1019)
                 C = [self.fold(a * b) for a, b in zip(C[::2], C[1::2])] + C[len(C) & ~1:]
             A = C[0] if A is None else self.fold(A * C[0])
             e = self.fold(e * C[0])
-        c = _padded(e, n)
+        c = self.coeffs(e)
         values = [d(1)]  # d(1), then v_q for q > 1
         values += [sum(c[i] * w for i, w in weights) // phi for phi, weights, _ in components[1:]]
         if any(v == 0 for v in values):
@@ -636,12 +636,6 @@ def _newton_start(target, guard) -> int:
     return max(b, START_BITS)
 
 
-def _padded(p, n):
-    """The n coefficients of an fmpz_poly p of degree < n."""
-    c = p.coeffs()
-    return c + [0] * (n - len(c))
-
-
 @lru_cache(maxsize=None)
 def _galois_data(n):
     """``(tower, components)`` of :meth:`CirculantRing._galois_norm` for odd n > 1.  tower:
@@ -664,7 +658,7 @@ def _galois_data(n):
     for q in divisors:
         c = [ramanujan_sum(q, i) for i in range(n)]
         weights = [(g % n, sum(c[i] for i in range(n) if gcd(i, n) == g)) for g in divisors]
-        components.append((len([k for k in range(1, q + 1) if gcd(k, q) == 1]), weights, flint.fmpz_poly(c)))
+        components.append((c[0], weights, flint.fmpz_poly(c)))  # c_q(0) = φ(q)
     return tuple(tower), tuple(components)
 
 
