@@ -75,9 +75,9 @@ def test_solve_equals_dense_circulant_solve(n, sign, route):
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 8, 9, 11, 12, 15, 16, 17, 21, 23, 30, 32, 45, 47])
 def test_norm_is_the_resultant(n, sign):
     """d·A = N in Z[t]/(tⁿ − s); N is 0 exactly when Res(d, tⁿ − s) is (FLINT's resultant,
-    another algorithm), i.e. for the non-units, and ± it for n a power of 2.  Where the
-    tower ends at an odd b > 1 (the Galois conjugates), N is b times an lcm of powers of
-    the norms there, so neither divides the other in general."""
+    another algorithm), i.e. for the non-units, and divides it for n a power of 2 (the tower
+    keeps N and A in lowest terms).  Where the tower ends at an odd b > 1 (the Galois
+    conjugates), N divides b times an lcm of powers of the norms there, not Res in general."""
     rng = random.Random(100 + n)
     R = CirculantRing(n, sign)
     # a multiple of each irreducible factor of tⁿ − s (a cyclotomic one: d vanishes at its roots)
@@ -89,7 +89,8 @@ def test_norm_is_the_resultant(n, sign):
         res = d.resultant(R._zmodulus)
         assert (N == 0) == (res == 0)
         if N:
-            assert abs(N) == abs(res) or n & (n - 1)
+            assert res % N == 0 or n & (n - 1)
+            assert (A if A is not None else flint.fmpz_poly([1])).content().gcd(N) == 1  # lowest terms
             assert R.mul(d, A if A is not None else flint.fmpz_poly([1])) == N
     assert all(R.norm(d)[0] == 0 for d in non_units) and sum(R.norm(d)[0] != 0 for d in units) >= 3
 
@@ -103,9 +104,9 @@ def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
 
     rng = random.Random(12)
     n = 16
-    d = _poly(rng, n, 600) + flint.fmpz_poly([2 ** 610])  # a unit: |d(ζ)| ≈ 2^610 everywhere
-    rhs = [_poly(rng, n, 300), _poly(rng, n, 200)]
-    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 300))
+    d = _poly(rng, n, 4600) + flint.fmpz_poly([2 ** 4610])  # a unit: |d(ζ)| ≈ 2^4610 everywhere
+    rhs = [_poly(rng, n, 2300), _poly(rng, n, 1500)]
+    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 2300))
     monkeypatch.setattr(C.CirculantRing, "_solve_norm", None)  # the fallback is not taken
     answers = []
     for ratio in (0.0, 1.0, 1e9, None):
@@ -155,9 +156,9 @@ def test_fixed_point_division_with_hints_far_off(monkeypatch):
 
     rng = random.Random(11)
     n = 16
-    d = _poly(rng, n, 600) + flint.fmpz_poly([2 ** 610])  # a unit: d(ω) ≈ 2^610 everywhere
-    rhs = [_poly(rng, n, 300), _poly(rng, n, 200)]
-    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 300))
+    d = _poly(rng, n, 4600) + flint.fmpz_poly([2 ** 4610])  # a unit: d(ω) ≈ 2^4610 everywhere
+    rhs = [_poly(rng, n, 2300), _poly(rng, n, 1500)]
+    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 2300))
     bounds = []
     answer_bits = C._Reciprocal.answer_bits
     monkeypatch.setattr(C._Reciprocal, "answer_bits", lambda self, hr: bounds.append(hr) or answer_bits(self, hr))
@@ -324,12 +325,12 @@ def test_split_divide_equals_dense_circulant_solve(n):
 
 def test_division_rule_as_documented():
     """``by_norm`` is the rule of the table in ``linalg.paths``: the tower while
-    H ≤ DIVISION_BY_NORM_MAX_BITS or m·H ≤ DIVISION_BY_NORM_MAX_WORK, always at m = 1, for
-    every m (powers of 2 and the others alike)."""
+    H ≤ DIVISION_BY_NORM_MAX_BITS and b·H ≤ DIVISION_BY_NORM_MAX_WORK, b the odd part of m,
+    always at m = 1."""
     from exact_khk.linalg.circulant import by_norm
     from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS as BITS, DIVISION_BY_NORM_MAX_WORK as WORK
 
     assert by_norm(1, 10 ** 9) and by_norm(256, BITS) and not by_norm(256, BITS + 1)
-    assert by_norm(8, WORK // 8) and not by_norm(8, WORK // 8 + 1) and WORK // 8 > BITS
-    assert by_norm(12, WORK // 12) and not by_norm(12, WORK // 12 + 1) and by_norm(3, 4 * BITS)
-    assert by_norm(255, BITS) and not by_norm(255, BITS + 1)
+    assert by_norm(2, BITS) and not by_norm(8, BITS + 1) and WORK >= BITS
+    assert by_norm(12, WORK // 3) and not by_norm(12, WORK // 3 + 1) and by_norm(3, WORK // 3)
+    assert by_norm(11, WORK // 11) and not by_norm(88, WORK // 11 + 1) and not by_norm(15, WORK // 15 + 1)

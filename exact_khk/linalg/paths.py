@@ -30,10 +30,10 @@ a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``
                                 height h with n²·h ≤ :data:`UNSPLIT_MAX_WORK`
 a structured step's division    Cramer's rule down the tower (``CirculantRing.norm``)
 by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is small:
-                                H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` or
-                                m·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` or m = 1;
-                                otherwise the fixed-point division
-                                (``CirculantRing.solve``)
+                                H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` and
+                                b·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` (b the odd
+                                part of m), or m = 1; otherwise the fixed-point
+                                division (``CirculantRing.solve``)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
                                 binary64 where N·κ ≤ :data:`BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
@@ -123,20 +123,19 @@ HTILDE_STRUCTURED_MIN_N = 3
 #: 0.90–0.99 to 8 bits, 1.04 at 16; n = 128: 1.08–1.18 from 1 bit
 UNSPLIT_MAX_WORK = 8192
 #: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
-#: down the tower while Cramer's bound H (bits) is at most this: first steps off small
-#: points, whose answers are Cramer-sized (norm / fixed-point 0.06–0.14 at m = 2..256,
-#: H ≤ 7061, n = 16..512; 0.10–0.16 at the first points of n = 11..48) ...
-DIVISION_BY_NORM_MAX_BITS = 8192
-#: ... or while m·H is at most this (along orbits the answer is ~1.1× d's height, far below
-#: H: norm / fixed-point crosses 1 near H = 9 000 at m = 16 and 26 000 at m = 8; 0.56 at
-#: m = 4, H = 26 698; 0.03–0.13 at m ≤ 2 everywhere measured; 4–33× at m = 32..128 from
-#: H = 33 788; scalar divisions, m = 1, always).  The same rule for m with an odd factor,
-#: whose tower ends in the Galois conjugates (stop 37; scripts/bench_division.py, 299
-#: divisions at n = 12..96 to 12 000 bits): the two routes cross at m·H ≈ 150 000–210 000
-#: for m = 8, 11, 13, 16, but higher for m with small odd factors (≈ 270 000 at m = 9,
-#: 450 000 at m = 15, 18, 600 000–700 000 at m = 10, 12, 20, 24), where the rule leaves up
-#: to 2.5× on a division (m = 20, H = 11 393); in all, its choices cost 1.031× the faster
-#: route's (m·H ≤ 2¹⁸: 1.012×, but whole steps with it were mixed, 0.72–1.37×: not taken)
+#: down the tower (``CirculantRing.norm``, which keeps N and the adjugate A in lowest terms
+#: at every level) while Cramer's bound H (bits) is at most this ...
+DIVISION_BY_NORM_MAX_BITS = 2 ** 16
+#: ... and b·H is at most this, b the odd part of m (where the tower ends in the Galois
+#: conjugates, whose cost grows with b); scalar divisions, m = 1, always.  Since the norm
+#: keeps lowest terms (stop 37; along orbits gcd(N, content A) is most of N: 6 234 of 7 149
+#: bits over t¹⁶ + 1 at n = 32, 434 bits), norm / fixed-point along orbits crosses 1 near
+#: H = 70 000 at m = 8, 16, 100 000 at m = 32, 200 000 at m = 64, but near 13 000 at
+#: m = 11, 13, 22 000 at m = 9, 15, 45 000 at m = 5·2ᵏ (scripts/bench_division.py at n =
+#: 12..256 to 12 000 bits); over 299 divisions this rule's choices cost 1.024× the faster
+#: route's, the earlier H ≤ 8192 or m·H ≤ 2¹⁷ 1.064× (3.3× on single divisions at m = 16,
+#: 24, H ≈ 16 500); first steps off small points (Cramer-sized answers) 0.05–0.16 at every
+#: m measured
 DIVISION_BY_NORM_MAX_WORK = 2 ** 17
 
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
