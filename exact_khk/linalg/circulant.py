@@ -533,8 +533,8 @@ class CirculantRing:
             return flint.fmpz(0), None
         parts = [components[0][2]] + [self.fold(A * E) for _, _, E in components[1:-1]]
         parts.append(A * n - sum(parts[1:], flint.fmpz_poly()) - A(1) * components[0][2])
-        L = values[0]
-        for i in range(1, len(parts)):  # A·E_q/v_q in lower terms (v_q = N_q(d)^(φ(n)/φ(q)))
+        L = values[0].lcm(values[-1])  # v_n = N_n(d): its lowest terms are _lower_terms's
+        for i in range(1, len(parts) - 1):  # A·E_q/v_q in lower terms (v_q = N_q(d)^(φ(n)/φ(q)))
             g = parts[i].content().gcd(values[i])
             parts[i], values[i] = parts[i] // g, values[i] // g
             L = L.lcm(values[i])
