@@ -21,6 +21,8 @@ measured by scripts/bench_float.py); the bare systems are built from ``KahanMap.
 with python-flint's own ``fmpq_mat.numer_denom``.
 
 Usage:  python3 scripts/bench.py [--budget SECONDS] [--quick] [--out PATH]
+        python3 scripts/bench.py --section orbit|crossover --ns 9,10 [--heights 0,500] [--steps 1]
+        (one table, printed; the file is left as it is)
 No timing is asserted anywhere; this only measures.
 """
 
@@ -350,6 +352,28 @@ def machine():
 MARKER = "<!-- The sections below are written by the other scripts/bench_*.py; bench.py keeps them. -->"
 
 
+def orbit_table(orbit):
+    """The rows of :func:`orbit_steps` as a markdown table (no header), and the note of steps
+    more than 1.3× the bare solve."""
+    L = [f"| {r['n']} | {r['bits']} | {r['steps']} | {r['path']} | {fmt(r['auto'])} | {fmt(r['dense'])} | "
+         f"{fmt(r['bare'])} | {ratio(r['auto'], r['bare'])} | {ratio(r['dense'], r['bare'])} |" for r in orbit]
+    over = [f"n = {r['n']} from {r['bits']} bits ({ratio(r['auto'], r['bare'])})" for r in orbit
+            if r["auto"] > 1.3 * r["bare"]]
+    return L + ["", "Orbit steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
+
+
+def crossover_table(rows):
+    """The rows of :func:`crossover` as a markdown table with its header."""
+    return (["| n | " + " | ".join(f"from ≥ {t} bits" for t, *_ in rows[0][1]) + " |",
+             "|---|" + "---|" * len(rows[0][1])]
+            + [f"| {n} | " + " | ".join(f"{a:.2f} / {b:.2f} ({h} bits)" for _, h, a, b in cells) + " |"
+               for n, cells in rows])
+
+
+ORBIT_HEADER = ["| n | start height (bits) | steps | auto path | auto | dense | bare | auto / bare | dense / bare |",
+                "|---|---|---|---|---|---|---|---|---|"]
+
+
 def write(path, info, args, res, elapsed):
     exact, orbit, along, htil = res["exact"], res["orbit"], res["along"], res["htilde"]
     scal, reach = res["scaling"], res["reach"]
@@ -367,13 +391,8 @@ def write(path, info, args, res, elapsed):
          "## Exact orbit steps (python-flint)", "",
          "`KahanMap.orbit` from a point of the orbit of `random_point(n, 1)` with the given height, "
          "per step, against a bare `fmpz_mat.solve` loop over the systems of the same orbit points.", "",
-         "| n | start height (bits) | steps | auto path | auto | dense | bare | auto / bare | dense / bare |",
-         "|---|---|---|---|---|---|---|---|---|"]
-    L += [f"| {r['n']} | {r['bits']} | {r['steps']} | {r['path']} | {fmt(r['auto'])} | {fmt(r['dense'])} | "
-          f"{fmt(r['bare'])} | {ratio(r['auto'], r['bare'])} | {ratio(r['dense'], r['bare'])} |" for r in orbit]
-    over = [f"n = {r['n']} from {r['bits']} bits ({ratio(r['auto'], r['bare'])})" for r in orbit
-            if r["auto"] > 1.3 * r["bare"]]
-    L += ["", "Orbit steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
+         *ORBIT_HEADER]
+    L += orbit_table(orbit)
     L += ["", "## Exact step at random points (python-flint unless stated)", "",
           "| n | h (bits) | library auto | dense (fmpz_mat) | structured | split | bare `fmpz_mat.solve` "
           "| auto / bare | gmpy2 Bareiss | Fraction elim. | SymPy LUsolve | Fraction / dense | SymPy / dense "
@@ -417,10 +436,7 @@ def write(path, info, args, res, elapsed):
           + ", ".join(f"{b} bits for n = {n}" for n, b in AUTO_SPLIT_BELOW.items())
           + " (split below), and at " + ", ".join(f"{b} bits for n = {n}" for n, b in DENSE_BELOW.items())
           + " (dense below).", "",
-          "| n | " + " | ".join(f"from ≥ {t} bits" for t, *_ in res["crossover"][0][1]) + " |",
-          "|---|" + "---|" * len(res["crossover"][0][1])]
-    L += [f"| {n} | " + " | ".join(f"{a:.2f} / {b:.2f} ({h} bits)" for _, h, a, b in cells) + " |"
-          for n, cells in res["crossover"]]
+          *crossover_table(res["crossover"])]
     L += ["", "## Structured against dense along one exact orbit", "",
           "| n | step | height (bits) | structured | dense | dense / structured |", "|---|---|---|---|---|---|"]
     L += [f"| {n} | {k} | {h} | {fmt(a)} | {fmt(b)} | {ratio(b, a)} |" for n, k, h, a, b in along]
@@ -450,12 +466,36 @@ def write(path, info, args, res, elapsed):
     write_atomic(path, "\n".join(L) + "\n" + tail)
 
 
+def print_section(ap, args):
+    """``--section``: one table for the given n and heights, printed."""
+    if not args.ns or min(args.ns) < 2:
+        ap.error("--section needs --ns, integers >= 2")
+    log = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
+    if args.section == "orbit":
+        heights = args.heights or (0, 64, 1000)
+        if args.steps < 1:
+            ap.error("--steps must be at least 1")
+        lines = ORBIT_HEADER + orbit_table(orbit_steps(args.ns, heights, log, args.steps))
+    else:
+        heights = args.heights or (0, 250, 500, 1000, 1500, 2000, 3000, 4500, 6000)
+        lines = crossover_table(crossover(args.ns, heights, log))
+    print("\n".join(lines))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--budget", type=float, default=10.0, help="seconds per orbit-length run (default 10)")
     ap.add_argument("--quick", action="store_true", help="fewer sizes and heights")
     ap.add_argument("--out", default=str(Path(__file__).resolve().parent.parent / "docs" / "benchmarks.md"))
+    ap.add_argument("--section", choices=("orbit", "crossover"),
+                    help="run only this table for --ns and print it; docs/benchmarks.md is left as it is")
+    ap.add_argument("--ns", type=lambda s: [int(t) for t in s.split(",")], help="n of --section (comma-separated)")
+    ap.add_argument("--heights", type=lambda s: [int(t) for t in s.split(",")],
+                    help="start heights in bits of --section (comma-separated)")
+    ap.add_argument("--steps", type=int, default=16, help="steps per timing of --section orbit (default 16)")
     args = ap.parse_args(argv)
+    if args.section:
+        return print_section(ap, args)
     args.scale_bits = 64
     log = lambda s: print(s, flush=True)  # noqa: E731
     t0 = time.perf_counter()
