@@ -248,6 +248,56 @@ def test_a_task_that_kills_its_worker_is_recorded(tmp_path):
     assert got[2]["verdict"] == "ERROR" and "worker process died" in got[2]["error"]
 
 
+class _BreaksBeforeSubmit(LocalEngine):
+    """A local engine whose pool breaks between a wait and the next submission: before
+    submission ``at`` one worker is killed and the pool is seen broken, so that submission
+    raises BrokenProcessPool (the race a worker that dies at that moment wins), or with
+    ``oserror`` the OSError Python 3.11's pool can raise then from its closed wake-up pipe."""
+
+    def __init__(self, workers, at=3, oserror=False):
+        super().__init__(workers)
+        self.at, self.oserror, self.calls = at, oserror, 0
+
+    def _start(self):
+        super()._start()
+        real, engine = self._pool, self
+
+        class Pool:
+            def __getattr__(self, name):
+                return getattr(real, name)
+
+            def submit(self, fn, *args):
+                engine.calls += 1
+                if engine.calls == engine.at:
+                    next(iter(real._processes.values())).kill()
+                    deadline = time.monotonic() + 30
+                    while not real._broken and time.monotonic() < deadline:
+                        time.sleep(0.01)
+                    assert real._broken
+                    if engine.oserror:
+                        raise OSError("handle is closed")
+                return real.submit(fn, *args)
+
+        self._pool = Pool()
+
+
+@pytest.mark.parametrize("oserror", [False, True])
+def test_a_pool_that_breaks_before_a_submission_reruns_its_tasks(tmp_path, oserror):
+    """No task dies here, but the pool breaks before a submission: every task still gets its
+    record (OK), none is lost or run twice into the results."""
+    engine = _BreaksBeforeSubmit(2, oserror=oserror)
+    res = run_sweep(probe_spec("0-5", sleep=0.5), tmp_path, engine=engine, plots=False)
+    assert engine.calls > 6  # the broken submission and the reruns happened
+    assert sorted(r["params"]["system"]["seed"] for r in lines(tmp_path)) == [0, 1, 2, 3, 4, 5]
+    assert res.summary.counts == {"OK": 6}
+
+
+def test_a_pool_that_refuses_its_first_task_stops_the_sweep(tmp_path):
+    """A pool broken before it took any task is not restarted for ever: one error naming it."""
+    with pytest.raises(RuntimeError, match="the local worker pool refuses tasks .*OSError"):
+        run_sweep(probe_spec("0-1"), tmp_path, engine=_BreaksBeforeSubmit(2, at=1, oserror=True), plots=False)
+
+
 def test_inline_errors_from_the_mathematics(tmp_path):
     spec = parse_spec('task = "certify"\n[system]\nfamily = "lie-poisson"\nn = 4\nseeds = 1\n[options]\n'
                       'prove = true\n', origin="p.toml")

@@ -306,6 +306,7 @@ class LocalEngine:
             ctx.set_forkserver_preload(PRELOAD)
         self._pool = ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=_worker_init,
                                          initargs=(os.getpid(),))
+        self._fresh = True  # no task submitted to this pool yet
         try:  # a pool whose processes cannot start must not pass for tasks that kill their worker
             self._pool.submit(os.getpid).result(timeout=120)
         except Exception as exc:  # noqa: BLE001 - BrokenProcessPool, TimeoutError, ...
@@ -340,15 +341,32 @@ class LocalEngine:
         inflight = {}          # future -> (payload, start, alone)
         if self._pool is None:
             self._start()
+
+        def submit(queue, alone):
+            """Start the next task of ``queue``; False (the task back in its queue) when the
+            pool broke since the last wait (a worker died in between: BrokenProcessPool, or
+            on Python 3.11 an OSError from the pool's closing wake-up pipe)."""
+            p = queue.popleft()
+            try:
+                inflight[self._pool.submit(run_task, p)] = (p, time.monotonic(), alone)
+                self._fresh = False
+                return True
+            except (BrokenProcessPool, OSError) as exc:
+                queue.appendleft(p)
+                if self._fresh:  # a pool just started that takes no task: restarting would loop
+                    self._stop(kill=True)
+                    raise RuntimeError(f"the local worker pool refuses tasks ({type(exc).__name__}: {exc}); "
+                                       "try --workers 0 (in this process) or --dask local") from None
+                return False
+
         while pending or suspects or inflight:
+            started = True
             if suspects and not inflight:
-                p = suspects.popleft()
-                inflight[self._pool.submit(run_task, p)] = (p, time.monotonic(), True)
-            while pending and not suspects and len(inflight) < self.workers:
-                p = pending.popleft()
-                inflight[self._pool.submit(run_task, p)] = (p, time.monotonic(), False)
-            wait_for = self.tick
-            if timeout:
+                started = submit(suspects, True)
+            while started and pending and not suspects and len(inflight) < self.workers:
+                started = submit(pending, False)
+            wait_for = 0 if not started else self.tick
+            if timeout and inflight:
                 first = min(t0 for _, t0, _ in inflight.values())
                 wait_for = max(0.01, min(wait_for, first + timeout + grace - time.monotonic()))
             done, _ = wait(list(inflight), timeout=wait_for, return_when=FIRST_COMPLETED)
@@ -370,7 +388,8 @@ class LocalEngine:
 
                     rec = _engine_record(p, "ERROR", error_text(exc), time.monotonic() - t0, self.name)
                 on_record(rec)
-            if dead or any(f.done() and isinstance(f.exception(), BrokenProcessPool) for f in inflight):
+            if dead or not started or any(f.done() and isinstance(f.exception(), BrokenProcessPool)
+                                          for f in inflight):
                 # the pool is unusable: rerun what was running, one at a time
                 for f, (p, _, _) in list(inflight.items()):
                     broken.append(p)
