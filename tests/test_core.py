@@ -212,7 +212,8 @@ def test_singular_step_float_raises_not_garbage():
 
 
 @pytest.mark.parametrize("bad, match", [
-    (dict(a="1,2", b="1", c="1,1"), "b: expected 2 entries"),
+    (dict(a="1,2", b="1", c="1,1"), "a, b, c need one length n: a has 2 entries, b 1, c 2"),
+    (dict(a="1,0", b="0,1,0", c="3,1,1"), "a has 2 entries, b 3, c 3"),  # a short a is a's fault too
     (dict(a="1", b="1", c="1"), "n >= 2"),
     (dict(a="1,x", b="1,1", c="1,1"), r"a\[1\]"),
 ])

@@ -20,8 +20,11 @@ def test_prime_and_parameter_checks():
             get_arith(bad)
     F = get_arith("gf:7")
     assert F.exact and F.format(F(Fraction(-1, 3))) == "2"        # 3 * 2 = 6 = -1
-    with pytest.raises(BadReductionError, match="divisible by 7"):
+    with pytest.raises(BadReductionError, match=r"1/14 has a denominator divisible by 7"):
         F(Fraction(1, 14))
+    with pytest.raises(BadReductionError, match=r"a denominator of 8423 bits is divisible by 7 \(bad") as info:
+        F(Fraction(1, 7 ** 3000))  # its size, not its 2 536 digits
+    assert len(str(info.value)) < 200
     with pytest.raises(ZeroDivisionError):
         F.one / F.zero
     with pytest.raises(TypeError):

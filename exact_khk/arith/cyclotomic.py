@@ -543,8 +543,10 @@ class GFArith(Arith):
             return out
         q = _as_fraction(value)
         if q.denominator % self.P == 0:
-            raise BadReductionError(f"arith {self.name}: {q} has a denominator divisible by {self.P} "
-                                    f"(bad reduction); choose another prime")
+            what = (f"{q} has a denominator" if q.denominator.bit_length() + abs(q.numerator).bit_length() <= 400
+                    else f"a denominator of {q.denominator.bit_length()} bits is")  # (a number, not pages of digits)
+            raise BadReductionError(f"arith {self.name}: {what} divisible by {self.P} (bad reduction); "
+                                    f"choose another prime")
         return flint.nmod(q.numerator, self.P) / q.denominator
 
     def format(self, e) -> str:

@@ -232,10 +232,12 @@ class LiePoissonSystem(System):
     @classmethod
     def from_vectors(cls, a, b, c):
         """From three vectors (strings like ``'1/2,-3,0'`` or sequences of rationals)."""
-        a = parse_vector(a, "a")
+        a, b, c = parse_vector(a, "a"), parse_vector(b, "b"), parse_vector(c, "c")
+        if not len(a) == len(b) == len(c):
+            raise InputError(f"a, b, c need one length n: a has {len(a)} entries, b {len(b)}, c {len(c)}")
         if len(a) < 2:
             raise InputError(f"n: the family needs n >= 2, got n = {len(a)}")
-        return cls(a, parse_vector(b, "b", len(a)), parse_vector(c, "c", len(a)))
+        return cls(a, b, c)
 
     @classmethod
     def random(cls, n: int, seed: int, bound: int = 3):
