@@ -225,3 +225,24 @@ def test_exact_zero_pivot_is_a_singular_step_without_warnings():
         assert err.value.condition == math.inf
         y = KahanMap(s.field("f"), F(-1, 3), "float").step(x)
     assert all(map(math.isfinite, y))
+
+
+
+@pytest.mark.parametrize("q, size", [(Fraction(10) ** 400, 1328), (Fraction(-(10 ** 5000), 3), 16608)])
+def test_a_number_beyond_float64_is_refused_by_its_size(q, size):
+    """float64 refuses |q| ≥ 2^1024 with InputError naming its size, also where Python refuses
+    to print an int of more than 4300 digits (the message used to print q, and failed with
+    ValueError there)."""
+    import sys
+
+    from exact_khk.errors import InputError
+
+    old = sys.get_int_max_str_digits() if hasattr(sys, "get_int_max_str_digits") else None
+    if old is not None:
+        sys.set_int_max_str_digits(4300)  # Python's default (the command line lifts it)
+    try:
+        with pytest.raises(InputError, match=rf"arith float: a number of about 2\^{size} is too large"):
+            get_arith("float").convert(q)
+    finally:
+        if old is not None:
+            sys.set_int_max_str_digits(old)

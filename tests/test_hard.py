@@ -8,7 +8,7 @@ import sympy
 
 from exact_khk import KahanMap, NearSingularWarning, SingularStepError
 from exact_khk.cli.main import main
-from exact_khk.studies.hard import (catalogue, classify, det_polynomial, markdown_table, run_case,
+from exact_khk.studies.hard import (HardCase, catalogue, cell, classify, det_polynomial, markdown_table, run_case,
                             run_catalogue, singular_step_sizes)
 from exact_khk.studies.scaling import ArithRun, StepRow
 from exact_khk.systems.lie_poisson.system import LiePoissonSystem
@@ -92,6 +92,19 @@ def test_run_case_near_root():
     assert not any(o.silent_failure for o in r.outcomes)
     # 10 digits need more than float's 53 bits here, and mp:256 sufficed
     assert 53 < r.bits_needed <= 256
+
+
+def test_a_point_beyond_an_arithmetic_is_its_cell_not_the_end_of_the_run():
+    """x0 beyond float64 (2^3321): the float column says OUT OF RANGE with the reason, flagged,
+    and the other arithmetics still run (the run used to stop with the float error)."""
+    s = LiePoissonSystem.from_vectors("1,2", "0,1", "-1,3")
+    case = HardCase("huge", "a coordinate of 10^1000", s, (Fraction(10) ** 1000, 1, 2, -1), Fraction(1, 10), 2)
+    r = run_case(case, ["float", "mp:113", "ball:128"], precision=False)
+    out = {o.arith: o for o in r.outcomes}
+    assert out["float"].status == "unrepresentable" and out["float"].flagged and not out["float"].silent_failure
+    assert "too large for float64" in out["float"].message and "2^3321" in out["float"].message
+    assert cell(out["float"]) == "OUT OF RANGE"
+    assert out["mp:113"].status != "unrepresentable" and out["ball:128"].status != "unrepresentable"
 
 
 def test_classify_detects_silent_failure():

@@ -495,8 +495,8 @@ class FloatArith(Arith):
         q = _as_fraction(value)
         try:
             return float(q)  # correctly rounded
-        except OverflowError:
-            raise InputError(f"arith float: {q if len(str(q)) < 40 else str(q)[:40] + '...'} "
+        except OverflowError:  # |q| ≥ 2^1024 (its size: str(q) may be thousands of digits, or refused)
+            raise InputError(f"arith float: a number of about 2^{q.numerator.bit_length() - q.denominator.bit_length()} "
                              f"is too large for float64 (use mp:P)") from None
 
     def format(self, e) -> str:

@@ -232,7 +232,8 @@ def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DI
 class CaseOutcome:
     """What one arithmetic returned on a case.
 
-    ``status``: ``ok`` / ``warned`` / ``singular`` / ``undecided``; ``step`` where it
+    ``status``: ``ok`` / ``warned`` / ``singular`` / ``undecided`` / ``unrepresentable``
+    (x0 or ε beyond the arithmetic; ``message`` says why); ``step`` where it
     was flagged; ``condition`` the largest condition estimate seen;
     ``error_log10`` the relative error of the last point compared with the exact
     orbit (balls: of the midpoint; ``radius_log10`` the certified bound);
@@ -345,6 +346,8 @@ def cell(o: CaseOutcome) -> str:
     elif o.status == "singular":
         kappa = "" if o.condition is None else f" κ={o.condition:.0e}"
         text = f"SINGULAR{kappa} @{o.step}"
+    elif o.status == "unrepresentable":
+        text = "OUT OF RANGE"  # x0 or ε: the run's message says which
     else:
         text = f"UNDECIDED @{o.step}"
     if o.radius_log10 is not None and o.status in ("ok", "warned"):

@@ -211,7 +211,9 @@ class ArithRun:
     """An orbit in one arithmetic: per-step rows and a summary.
 
     ``status``: ``'ok'``, ``'warned'`` (NearSingularWarning at some step),
-    ``'singular'`` (SingularStepError) or ``'undecided'`` (UndecidedError, balls);
+    ``'singular'`` (SingularStepError), ``'undecided'`` (UndecidedError, balls) or
+    ``'unrepresentable'`` (the arithmetic cannot hold x0 or ε: beyond float64's range, a
+    bad reduction mod P; ``message`` says which; no step);
     ``failed_step`` is the step that raised; ``steps_done`` counts the steps that
     returned a point (one more than the compared rows when the exact orbit
     stopped first: the step the exact map refuses was still attempted).  ``bits_left``: correct bits of the
@@ -330,15 +332,20 @@ def run_orbit(system, x0, eps, steps, arith, exact=None, diagnostics=True, progr
     if exact is None:
         exact, _ = exact_orbit(fld, x0, eps, steps)
     exact = exact[: steps + 1]
-    phi = KahanMap(fld, eps, ar)
     integrals, commuting = declared(system) if diagnostics else ({}, {})
-    maps = [KahanMap(g, eps, ar) for g in commuting.values()]
+    try:  # x0 and eps are valid rationals (read above): ar may still not hold them
+        phi = KahanMap(fld, eps, ar)
+        maps = [KahanMap(g, eps, ar) for g in commuting.values()]
+        with ar.local():
+            x = phi.point(x0, "x0")
+    except InputError as exc:
+        return ArithRun(ar.name, ar.prec, "unrepresentable", 0, None, str(exc), None, None, None, None,
+                        None, None, None, None)
     flint_ar = get_arith("flint")
     start = {name: I(flint_ar, exact[0], eps) for name, I in integrals.items()}
     ball = isinstance(ar, BallArith)
     rows, times, status, failed, message, conds = [], [], "ok", None, "", []
     with ar.local():
-        x = phi.point(x0, "x0")
         for k in range(steps + 1):
             if k >= len(exact):  # the exact orbit stopped (singular): nothing to compare
                 break
