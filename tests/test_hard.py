@@ -107,6 +107,16 @@ def test_a_point_beyond_an_arithmetic_is_its_cell_not_the_end_of_the_run():
     assert out["mp:113"].status != "unrepresentable" and out["ball:128"].status != "unrepresentable"
 
 
+def test_a_point_too_high_for_the_root_isolation_is_refused_at_once():
+    from exact_khk.errors import InputError
+    from exact_khk.studies.hard import HARD_MAX_X0_BITS, system_cases
+
+    s = LiePoissonSystem.from_vectors("1,2", "0,1", "-1,3")
+    with pytest.raises(InputError, match=rf"x0: a point of {HARD_MAX_X0_BITS + 1} bits is beyond"):
+        system_cases(s, x0=(2 ** HARD_MAX_X0_BITS, 1, 2, -1), long_steps=2)
+    assert system_cases(s, x0=(2 ** 100, 1, 2, -1), long_steps=2, distances=(3,))  # below it: built
+
+
 def test_classify_detects_silent_failure():
     row = StepRow("float", 1, -3.0)
     run = ArithRun("float", 53, "ok", 1, None, "", 1e-5, -3.0, 10.0, None, None, None, None, None, (row,))

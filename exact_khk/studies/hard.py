@@ -44,6 +44,10 @@ from exact_khk.systems.lie_poisson.system import DEFAULT_X0, LiePoissonSystem, d
 DEFAULT_ARITHS = ("float", "mp:113", "mp:256", "ball:128", "ball:512")
 DISTANCES = (3, 6, 10, 15, 20, 30)  # ε = ε* + 10^-d
 EPS_SYMBOL = sympy.Symbol("eps")
+#: the height (bits) of x0 up to which the hard cases are built: isolating the real roots of
+#: det(I − εf′(x0)) (SymPy) grows fast with its coefficients' size; `hard --system euler-top`
+#: with x0 = (2^b, 1, 1): 2.3 s at b = 2048, 4.9 s at 4096, 21 s at 8192, over 60 s at 16 600
+HARD_MAX_X0_BITS = 8192
 
 
 # --- certified singular step sizes ---------------------------------------------
@@ -204,6 +208,10 @@ def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DI
     eps = parse_rational(system.default_eps if eps is None else eps, "eps")
     if eps == 0:
         raise InputError("eps: the step size must be nonzero")
+    bits = point_height(get_arith("fraction"), x0)
+    if bits > HARD_MAX_X0_BITS:
+        raise InputError(f"x0: a point of {bits} bits is beyond the {HARD_MAX_X0_BITS} bits up to which the hard "
+                         f"cases are built (HARD_MAX_X0_BITS: the real roots of det(I - eps f'(x0)) take minutes)")
     roots = singular_step_sizes(system.field("f"), x0)
     cases = []
     if roots:
