@@ -370,6 +370,15 @@ def test_height_growth_classes():
     assert height_growth(s.field("f"), ["1", "2", "-1", "1/2", "0", "1"], "1/10", steps=30).growth == "linear"
 
 
+def test_height_growth_says_why_it_cannot_fit():
+    """A start point so high that max_bits is passed within 3 steps: the message gives the
+    start's height and the ways out (it blamed max_bits alone)."""
+    s = LiePoissonSystem.random(3, 1)
+    with pytest.raises(InputError, match=r"max_bits: the orbit passed 1000 bits after \d steps \(x0 has 300 "
+                                         r"bits\).*start from a lower point, or leave the heights out"):
+        height_growth(s.field("f"), [str(2 ** 299 + 1), "2", "-1", "1/2", "0", "1"], "1/10", max_bits=1000)
+
+
 # --- command line ---------------------------------------------------------------------
 
 

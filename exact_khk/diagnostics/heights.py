@@ -149,8 +149,9 @@ def height_growth(field, x0, eps, steps=30, max_bits=200_000, arith="flint") -> 
             truncated = True
             break
     if truncated and len(hs) < 5:
-        raise InputError(f"max_bits: the orbit passed {max_bits} bits after {len(hs) - 1} steps; at least 4 are "
-                         f"needed to fit a height growth (raise max_bits)")
+        raise InputError(f"max_bits: the orbit passed {max_bits} bits after {len(hs) - 1} steps (x0 has {hs[0]} "
+                         f"bits); at least 4 steps are needed to fit a height growth: raise max_bits, start "
+                         f"from a lower point, or leave the heights out")
     return classify_heights(hs, truncated)
 
 
