@@ -3,9 +3,9 @@ sizes and arithmetics, locally or on a Dask cluster (a thin view of
 :mod:`exact_khk.sweep`; docs/sweeps.md).
 
 Exit status 0 when every selected task has run (whatever the verdicts: they
-are in DIR/results.jsonl and the summary), 2 for a malformed spec or option, 5
-when DIR cannot be written, 130 when interrupted (what finished is kept; the
-same command resumes).
+are in DIR/results.jsonl and the summary), 2 for a malformed spec or option or a
+DIR/results.jsonl that is not a sweep's results file, 5 when DIR cannot be
+written, 130 when interrupted (what finished is kept; the same command resumes).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def register(sub):
                    help="rerun only the tasks whose recorded verdict is one of these, comma-separated "
                         "(failed = ERROR and TIMEOUT; e.g. 'failed,inconclusive')")
     p.add_argument("--timeout", type=float, metavar="SECONDS",
-                   help="time limit per task (default: the spec's 'timeout', else 600; 0: none)")
+                   help="time limit per task, at most a year (default: the spec's 'timeout', else 600; 0: none)")
     p.add_argument("--dry-run", action="store_true",
                    help="check the spec and print how many tasks there are, are done and would run")
     p.add_argument("--summary", action="store_true", help="run nothing; rewrite and print the summary of DIR")
@@ -51,9 +51,9 @@ def register(sub):
 def cmd_sweep(args):
     from exact_khk.sweep.run import ResultStore, parse_only, run_sweep, select
     from exact_khk.sweep.spec import load_spec
+    from exact_khk.sweep.tasks import checked_timeout
 
-    if args.timeout is not None and not args.timeout >= 0:
-        raise InputError(f"--timeout: expected a non-negative number of seconds, got {args.timeout}")
+    checked_timeout(args.timeout, "--timeout")  # refused with --dry-run too
     if args.dask is not None and args.dask != "local" and args.workers is not None:
         raise InputError("--workers: a Dask cluster has its own workers; use --workers only with --dask local")
     if args.dask == "local" and args.workers == 0:

@@ -33,6 +33,7 @@ TIMEOUT).  One sweep at a time may write to DIR (a lock file, POSIX).
 
 from __future__ import annotations
 
+import codecs
 import json
 import os
 import queue
@@ -45,8 +46,8 @@ from pathlib import Path
 from exact_khk.errors import InputError, OutputError
 from exact_khk.parsing import _short
 from exact_khk.studies.output import check_writable, prepare_folder, write_atomic
-from exact_khk.sweep.tasks import (ENGINE_VERDICTS, FAILED, TASKS, VERDICTS, make_record, now_iso, run_task,
-                                   worker_info)
+from exact_khk.sweep.tasks import (ENGINE_VERDICTS, FAILED, TASKS, VERDICTS, checked_timeout, make_record, now_iso,
+                                   run_task, worker_info)
 
 RESULTS = "results.jsonl"
 META = "sweep.json"
@@ -93,28 +94,40 @@ def default_grace(timeout) -> float:
 # --- the results file --------------------------------------------------------------
 
 
+def checked_out(out_dir):
+    """``out_dir`` unless it is empty (which would be the current folder)."""
+    if os.fspath(out_dir) == "":
+        raise InputError("--out: expected a folder, got an empty name")
+    return out_dir
+
+
 class ResultStore:
     """``DIR/results.jsonl``: read (tolerating a cut last line), appended line by line."""
 
     def __init__(self, out_dir):
-        self.dir = Path(out_dir)
+        self.dir = Path(checked_out(out_dir))
         self.path = self.dir / RESULTS
         self.bad_lines = 0
         self._fh = None
 
     def read(self) -> list:
         """Every record in file order (lines that are not JSON objects are counted in
-        ``bad_lines`` and skipped)."""
+        ``bad_lines`` and skipped); :class:`InputError` for a line no sweep writes (not
+        UTF-8, JSON nested too deeply): the file is not a sweep's results."""
         if not self.path.exists():
             return []
         out = []
         try:
-            with open(self.path, encoding="utf-8") as fh:
-                for line in fh:
+            with open(self.path, "rb") as fh:
+                for number, line in enumerate(fh, 1):
                     if not line.strip():
                         continue
                     try:
-                        rec = json.loads(line)
+                        rec = json.loads(_line_text(line))
+                    except UnicodeDecodeError:
+                        raise self._not_results(number, "is not UTF-8 text") from None
+                    except RecursionError:
+                        raise self._not_results(number, "nests JSON too deeply") from None
                     except ValueError:
                         self.bad_lines += 1
                         continue
@@ -125,6 +138,9 @@ class ResultStore:
         except OSError as exc:
             raise OutputError(f"--out: cannot read {str(self.path)!r}: {exc.strerror or exc}") from None
         return out
+
+    def _not_results(self, number, why) -> InputError:
+        return InputError(f"--out: {str(self.path)!r} is not the results file of a sweep: line {number} {why}")
 
     def latest(self) -> dict:
         """key -> its latest record."""
@@ -157,6 +173,14 @@ class ResultStore:
         if self._fh is not None:
             self._fh.close()
             self._fh = None
+
+
+def _line_text(line: bytes) -> str:
+    """The text of a line of the results file; a last line cut short by a crash (no newline)
+    may end inside a character, which is left out."""
+    if line.endswith(b"\n"):
+        return line.decode("utf-8")
+    return codecs.getincrementaldecoder("utf-8")().decode(line)  # not final: a cut character waits
 
 
 class _Lock:
@@ -595,10 +619,10 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
     from exact_khk.sweep.summary import summarise, write_summary
 
     say = echo or (lambda line: None)
-    timeout = spec.timeout if timeout == "spec" else (timeout or None)
+    timeout = spec.timeout if timeout == "spec" else checked_timeout(timeout, "timeout")
     only = parse_only(only, spec.task) if isinstance(only, str) else only
     workers = checked_workers(workers)  # refused before the output folder exists
-    out = prepare_folder(out_dir)
+    out = prepare_folder(checked_out(out_dir))
     check_writable(out / RESULTS, "--out")
     tasks = spec.tasks()
     with _Lock(out):
@@ -669,7 +693,7 @@ def _read_meta(out: Path) -> dict:
     try:
         meta = json.loads((out / META).read_text(encoding="utf-8"))
         return meta if isinstance(meta, dict) else {}
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):  # unreadable: written anew
         return {}
 
 

@@ -48,7 +48,7 @@ from pathlib import Path
 
 from exact_khk.errors import InputError
 from exact_khk.parsing import MAX_STEPS, _short, read_text_file
-from exact_khk.sweep.tasks import TASKS
+from exact_khk.sweep.tasks import TASKS, checked_timeout
 
 try:
     import tomllib
@@ -186,6 +186,8 @@ def parse_spec(text: str, origin: str = "<string>", base=None, default_name: str
         t = tomllib.loads(text, parse_float=Decimal)
     except (tomllib.TOMLDecodeError, ValueError) as exc:
         raise InputError(f"{origin}: not valid TOML: {exc}") from None
+    except RecursionError:  # tomllib reads nested arrays and tables recursively
+        raise InputError(f"{origin}: arrays or tables nested too deeply for a sweep spec") from None
     _known(t, "", err)
     fmt = t.get("format", SPEC_FORMAT)
     if fmt != SPEC_FORMAT:
@@ -201,7 +203,10 @@ def parse_spec(text: str, origin: str = "<string>", base=None, default_name: str
     if not isinstance(task, str) or task not in TASKS:
         raise err("task", f"unknown task {task!r}; available: {', '.join(sorted(TASKS))}")
     kind = TASKS[task]
-    timeout = _timeout(t.get("timeout", DEFAULT_TIMEOUT), err)
+    try:
+        timeout = checked_timeout(t.get("timeout", DEFAULT_TIMEOUT))
+    except InputError as exc:
+        raise err("", str(exc)) from None
 
     if "system" not in t:
         raise err("system", "missing table [system]: family = \"lie-poisson\" (with n and seeds), "
@@ -245,15 +250,6 @@ def _known(t, where, err):
     if unknown:
         at = f"{where}.{unknown[0]}" if where else unknown[0]
         raise err(at, f"unknown key; known keys{' in [' + where + ']' if where else ''}: {', '.join(KEYS[where])}")
-
-
-def _timeout(value, err):
-    if isinstance(value, bool) or not isinstance(value, (int, float, Decimal)):
-        raise err("timeout", f"expected a number of seconds (0: no limit), got {value!r}")
-    value = float(value)
-    if value < 0 or value != value or value == float("inf"):
-        raise err("timeout", f"expected a non-negative number of seconds, got {value!r}")
-    return value or None
 
 
 def int_range(value, where, err, minimum=0, limit=1_000_000, maximum=None) -> list:

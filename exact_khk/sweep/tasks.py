@@ -60,11 +60,12 @@ import time
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from decimal import Decimal
 from fractions import Fraction
 from typing import Callable
 
 from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
-from exact_khk.parsing import any_int_digits
+from exact_khk.parsing import _short, any_int_digits
 
 #: version of a result line (``results.jsonl``)
 RECORD_FORMAT = 1
@@ -79,6 +80,9 @@ FAILED = ("ERROR", "TIMEOUT")
 ENGINE_VERDICTS = ("SINGULAR", "UNDEFINED", "UNDECIDED", "TIMEOUT", "ERROR")
 #: longest error/detail message kept in a record (characters)
 MAX_MESSAGE = 500
+#: the longest time a sweep accepts, in seconds (a task's time limit, the probe's sleep): a
+#: year, well within what ``signal.setitimer`` and ``threading.Timer`` take
+MAX_SECONDS = 365 * 24 * 3600
 
 
 class TaskTimeout(BaseException):
@@ -125,12 +129,20 @@ def _text(value, where, ctx=None):
 
 
 def _seconds(value, where, ctx=None):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) and type(value).__name__ != "Decimal":
-        raise InputError(f"{where}: expected a number of seconds, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value) or value < 0:
-        raise InputError(f"{where}: expected a non-negative number of seconds, got {value!r}")
-    return value
+    """A number of seconds from 0 to :data:`MAX_SECONDS` (a float; a TOML number is a Decimal)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, Decimal)):
+        raise InputError(f"{where}: expected a number of seconds, got {_short(value)}")
+    if isinstance(value, Decimal):
+        value = float(value)  # inf beyond the float range; an int is compared exactly
+    if not 0 <= value <= MAX_SECONDS:  # nan fails too
+        raise InputError(f"{where}: expected a number of seconds from 0 to {MAX_SECONDS:,} (a year), "
+                         f"got {_short(value)}")
+    return float(value)
+
+
+def checked_timeout(value, where="timeout"):
+    """A per-task time limit in seconds (:func:`_seconds`), None for 0 or None (no limit)."""
+    return None if value is None else _seconds(value, where) or None
 
 
 def _int_list(value, where, ctx=None):
@@ -177,6 +189,21 @@ def _claims(value, where, ctx=None):
         if c not in CLAIMS:
             raise InputError(f"{where}: unknown claim {c!r}; expected some of {', '.join(CLAIMS)}")
     return list(dict.fromkeys(value))
+
+
+def _gf(value, where, ctx=None):
+    """A ``gf:P`` arithmetic, read as the task reads it (:func:`~exact_khk.arith.get_arith`)."""
+    from exact_khk.arith import get_arith
+    from exact_khk.arith.cyclotomic import GFArith
+
+    name = _text(value, where)
+    try:
+        ar = get_arith(name)
+    except InputError as exc:
+        raise InputError(f"{where}: {exc}") from None
+    if not isinstance(ar, GFArith):
+        raise InputError(f"{where}: expected a gf:P arithmetic (P prime), got {ar.name!r}")
+    return ar.name
 
 
 def _method(value, where, ctx=None):
@@ -398,7 +425,7 @@ register(TaskKind(
     options={"signs": Option(_signs, "involutions: 'b0', 'default' or a list of sign patterns", "lie-poisson"),
              "poisson_points": Option(_positive_int, "Poisson-map checks at this many orbit points",
                                       "lie-poisson"),
-             "identities": Option(_text, "a gf:P arithmetic for the Schwartz–Zippel identity checks",
+             "identities": Option(_gf, "a gf:P arithmetic for the Schwartz–Zippel identity checks",
                                   "lie-poisson"),
              "prove": Option(_bool, "add the symbolic proofs (n = 2, 3)", "lie-poisson"),
              "claims": Option(_claims, "the claims to certify (system files)", "expressions")},
