@@ -172,8 +172,10 @@ class _ControlDegeneracy:
       perturbed coordinate (checked at three further points of the line).
     """
 
-    def __init__(self, system, x0, eps):
-        self.system, self.x0, self.eps = system, tuple(Fraction(t) for t in x0), Fraction(eps)
+    def __init__(self, system, x0=None, eps=None):
+        """``x0`` None: no point (the symbolic proofs, see :meth:`everywhere`)."""
+        self.system, self.x0 = system, None if x0 is None else tuple(Fraction(t) for t in x0)
+        self.eps = None if eps is None else Fraction(eps)
         self._ar = get_arith("fraction")
         self._cache = {}
 
@@ -202,10 +204,12 @@ class _ControlDegeneracy:
         if s.n != 2:
             return None
         al, be, ga = sum(s.a), sum(s.b), sum(s.c)
-        U, V = sum(self.x0[:2]), sum(self.x0[2:])
         if be * be == al * ga:
             return (f"n = 2: the control map is Phi_f with step 3 eps on the frequency-0 plane, where the "
                     f"planar field is degenerate (sum b^2 = sum a * sum c = {al * ga}): its Kahan maps commute")
+        if self.x0 is None:  # no point: the invariant lines below are points' properties
+            return None
+        U, V = sum(self.x0[:2]), sum(self.x0[2:])
         if al * U * U + 2 * be * U * V + ga * V * V == 0:
             return ("n = 2: (sum u, sum v) lies on an invariant line of the frequency-0 planar field "
                     "(sum a U^2 + 2 sum b UV + sum c V^2 = 0), where Kahan maps with different steps commute")
@@ -234,6 +238,11 @@ class _ControlDegeneracy:
 
     def commutation(self):
         return self.common() or self._planar() or self._self_paired()
+
+    def everywhere(self):
+        """Controls 1 and 2 as identities in x and eps (the symbolic proofs): the reasons
+        that hold at every point, i.e. that depend on the system only."""
+        return self._planar() or self._self_paired()
 
     def control_conserves(self):
         why = self.common() or self._planar() or self._self_paired()

@@ -26,6 +26,7 @@ True
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from fractions import Fraction
 
 import flint
@@ -228,32 +229,48 @@ def _record(name, claim, holds, residual, ar, t0, expected=True):
                  _evidence(holds, f"Q({', '.join(ar.symbols)})"))
 
 
+def _control(record, system):
+    """A control record that did not fail, recorded as inapplicable where the control cannot
+    fail for this system (as certify's controls 1 and 2, at every point: ``everywhere``)."""
+    from exact_khk.certification.lie_poisson import _ControlDegeneracy
+
+    why = None if record.holds is False else _ControlDegeneracy(system).everywhere()
+    if not why:
+        return record
+    return replace(record, applicable=False, detail=f"inapplicable: {why}",
+                   evidence=f"inapplicable: {why}; {record.evidence}")
+
+
 def prove_conservation(system, kind="f", signs=None):
     """Prove H̃(Φ(x, ε), ε) = H̃(x, ε) in Q(x, ε) for Φ = Φ_f, Φ_g (``kind='g'``,
     involution ``signs``, default B_0) or the control map (``kind='control'``:
-    the identity is false and the record says so: ``expected`` False)."""
+    the identity is false and the record says so: ``expected`` False; inapplicable where
+    it cannot fail, see :func:`_control`)."""
     t0 = time.perf_counter()
     ar, x, eps, field = _setup(system)
     fld = field(kind, signs)
     y = _kmap(fld, eps, ar).step(x)
     h = field("f")
     diff = Htilde(h, y, eps, ar) - Htilde(h, x, eps, ar)
-    return _record("proof:conservation" + (":control" if kind == "control" else ""),
-                   f"H~(Phi_{fld.label}(x, eps), eps) = H~(x, eps), n = {system.n}",
-                   ar.is_zero(diff), ar.format(diff), ar, t0, kind != "control")
+    record = _record("proof:conservation" + (":control" if kind == "control" else ""),
+                     f"H~(Phi_{fld.label}(x, eps), eps) = H~(x, eps), n = {system.n}",
+                     ar.is_zero(diff), ar.format(diff), ar, t0, kind != "control")
+    return _control(record, system) if kind == "control" else record
 
 
 def prove_commutation(system, kind="g", signs=None):
     """Prove Φ_f(Φ_g(x, ε), ε) = Φ_g(Φ_f(x, ε), ε) in Q(x, ε) (g: involution ``signs``,
-    default B_0; ``kind='control'`` for the negative control, ``expected`` False)."""
+    default B_0; ``kind='control'`` for the negative control, ``expected`` False, inapplicable
+    where it cannot fail)."""
     t0 = time.perf_counter()
     ar, x, eps, field = _setup(system)
     f, g = _kmap(field("f"), eps, ar), _kmap(field(kind, signs), eps, ar)
     d = [p - q for p, q in zip(f.step(g.step(x)), g.step(f.step(x)))]
     bad = next((ar.format(t) for t in d if not ar.is_zero(t)), "")
-    return _record("proof:commutation" + (":control" if kind == "control" else ""),
-                   f"Phi_f o Phi_{g.field.label} = Phi_{g.field.label} o Phi_f, n = {system.n}",
-                   not bad, bad or "0", ar, t0, kind != "control")
+    record = _record("proof:commutation" + (":control" if kind == "control" else ""),
+                     f"Phi_f o Phi_{g.field.label} = Phi_{g.field.label} o Phi_f, n = {system.n}",
+                     not bad, bad or "0", ar, t0, kind != "control")
+    return _control(record, system) if kind == "control" else record
 
 
 def jacobi_residual(system, symbolic_hessian=False, eps_zero=False, perturb=False):

@@ -20,7 +20,9 @@ The named results, in order:
   verifier can redo: Q (``fraction``, ``gmpy2``, ``flint``), Q(ζ_N) (``cyclo:N``,
   polynomials in z modulo Φ_N) or F_P (``gf:P``).  A floating or ball certificate
   holds approximations: it is reported **not checkable** (``checkable=False``,
-  ``ok=False``, this result failing) and only the status and verdict are checked;
+  ``ok=False``, this result failing) and only the status and verdict are checked; a
+  name that is no arithmetic of the library (``cyclo:0``, ``gf:4``) is malformed
+  input (:class:`~exact_khk.errors.InputError`);
 * ``orbit length`` — K + 1 points; ``orbit starts at x0`` — x_0 = x0;
 * ``Kahan step equations`` — (I − εf'(x_k)) x_{k+1} = (I + εL) x_k + 2εc for every
   k, verified by substitution, without solving (for homogeneous f: = x_k);
@@ -61,6 +63,7 @@ taken as recorded, and only their consistency with the status is checked.
 from __future__ import annotations
 
 import re
+import unicodedata
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
@@ -331,13 +334,10 @@ class _Cyc:
 
 
 class _PrimeField:
-    """F_P: elements are :class:`_Mod` (printed as the residue in [0, P))."""
+    """F_P, P a prime (checked by :func:`exact_field`): elements are :class:`_Mod` (printed as
+    the residue in [0, P))."""
 
     def __init__(self, P: int):
-        import sympy
-
-        if P < 2 or not sympy.isprime(P):
-            raise _Undefined(f"gf:{P}: P is not a prime")
         self.P, self.name = P, f"F_{P}"
         self.one, self.zero = _Mod(P, 1), _Mod(P, 0)
 
@@ -446,22 +446,48 @@ class _Mod:
 #: the largest N of a ``cyclo:N`` certificate re-checked: the library's own limit
 #: (:data:`exact_khk.arith.cyclotomic.MAX_CYCLOTOMIC_N`, not imported: this module stands alone)
 MAX_CYCLOTOMIC_N = 10_000
+#: the library's limits of ``gf:P`` (a prime 5 <= P < 2^64) and of ``mp:P``, ``ball:P`` (2 to 10^6 bits)
+GF_PRIMES, PRECISION_BITS = (5, 2 ** 64), (2, 1_000_000)
+#: the names of the library's arithmetics
+ARITH_NAMES = "fraction, gmpy2, flint, cyclo:N, gf:P, float, mp:P, ball:P"
 
 
 def exact_field(arith: str):
     """The field in which a certificate computed in ``arith`` is re-checked, or None
-    for an inexact arithmetic (floating point, balls)."""
+    for an inexact arithmetic (floating point, balls); InputError for a name that is
+    no arithmetic of the library."""
     if arith in RATIONAL_ARITHS:
         return _Rationals()
+    if arith == "float":
+        return None
     prefix, _, param = arith.partition(":")
-    if prefix in ("cyclo", "gf") and param.isdigit() and len(param) <= 25 and int(param) >= 1:
-        if prefix == "gf":
-            return _PrimeField(int(param))
-        if int(param) > MAX_CYCLOTOMIC_N:  # as get_arith: Φ_N has degree φ(N)
-            raise _Undefined(f"cyclo:{param}: N is above {MAX_CYCLOTOMIC_N}, the largest cyclo:N this "
-                             "library computes in (not checkable)")
-        return _Cyclotomic(int(param))
-    return None
+    if prefix not in ("cyclo", "gf", "mp", "ball"):
+        raise _invalid_name(arith, f"unknown; known: {ARITH_NAMES}")
+    if not re.fullmatch(r"[0-9]+", param, re.ASCII):
+        raise _invalid_name(arith, f"{prefix}: must be followed by an integer in ASCII digits")
+    value = int(param) if len(param) <= 30 else 10 ** 30  # a longer one is beyond every limit below
+    if prefix in ("mp", "ball"):
+        low, high = PRECISION_BITS
+        if not low <= value <= high:
+            raise _invalid_name(arith, f"the precision P of {prefix}:P is from {low} to {high} bits")
+        return None
+    if prefix == "gf":
+        import sympy
+
+        low, high = GF_PRIMES
+        if not (low <= value < high and sympy.isprime(value)):
+            raise _invalid_name(arith, f"gf:P needs a prime P with {low} <= P < 2^64")
+        return _PrimeField(value)
+    if value < 1:
+        raise _invalid_name(arith, "cyclo:N needs N >= 1")
+    if value > MAX_CYCLOTOMIC_N:  # as get_arith: Φ_N has degree φ(N)
+        raise _Undefined(f"cyclo:{param[:40]}: N is above {MAX_CYCLOTOMIC_N}, the largest cyclo:N this "
+                         "library computes in (not checkable)")
+    return _Cyclotomic(value)
+
+
+def _invalid_name(arith: str, why: str) -> InputError:
+    return InputError(f"arith: {arith[:60]!r} is not a valid arithmetic name ({why})")
 
 
 # --- linear algebra: plain Gaussian elimination over a field ------------------------
@@ -630,7 +656,11 @@ def _htilde(M, x, e, n):
 
 # --- a tiny evaluator of the integrals' expression text -------------------------------
 
-_TOKEN = re.compile(r"\s*(?:(\d+\.?\d*|\.\d+)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
+#: the numbers of system files: digits (any script's decimal digits, as Python's \d and int()
+#: read them), an optional point and exponent: 12, 1.5, .5, 1., 1e5, 2.5E-3
+_TOKEN = re.compile(r"\s*(?:((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
+#: the largest |exponent| of a number such as 1e-300 (the system-file parser's limit)
+MAX_DECIMAL_EXPONENT = 10_000
 
 
 class _Evaluate:
@@ -703,10 +733,14 @@ class _Evaluate:
 
     def atom(self, depth):
         tok = self.take()
-        if isinstance(tok, tuple):
-            whole, _, frac = tok[1].partition(".")
-            digits = (whole + frac).lstrip("0") or "0"
-            return self.F.of(parse_rational(digits, self.where) / 10 ** len(frac))
+        if isinstance(tok, tuple):  # digits[.digits][e±digits], exactly: 2.5e3 = 25 * 10^2
+            mantissa, _, exp = tok[1].lower().partition("e")
+            if exp and (len(exp) > 6 or abs(int(exp)) > MAX_DECIMAL_EXPONENT):
+                raise InputError(f"{self.where}: the exponent of {tok[1][:30]} is beyond the limit of "
+                                 f"{MAX_DECIMAL_EXPONENT}")
+            whole, _, frac = mantissa.partition(".")
+            digits = "".join(str(unicodedata.decimal(ch)) for ch in whole + frac).lstrip("0") or "0"
+            return self.F.of(parse_rational(digits, self.where) * Fraction(10) ** (int(exp or 0) - len(frac)))
         if tok == "(":
             if depth > 200:
                 raise InputError(f"{self.where}: parentheses nested too deeply")
