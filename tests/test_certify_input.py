@@ -140,3 +140,14 @@ def test_verify_inexact_arithmetic_still_not_checkable():
     data = certify(steps=1, arith="mp:64").to_json()
     report = verify(data)
     assert not report.ok and not report.checkable and "inexact" in report.verdict()
+
+
+def test_integrals_with_an_irrational_involution_names_the_option_and_the_way_out(capsys):
+    """K~ of '-+-' (n = 3) lies in Q(omega): refused at once, as certify refuses it (it ended in
+    a conversion error naming neither --signs nor cyclo:3), and computed in cyclo:3."""
+    assert main(["integrals", "--signs", "-+-"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "exact-khk: error: --signs: '-+-' is not a rational involution; it needs an arithmetic containing "
+        "omega = e^(2 pi i/3), e.g. --arith cyclo:3")
+    assert main(["integrals", "--signs", "-+-", "--arith", "cyclo:3"]) == 0
+    assert "K~[-+-] = " in capsys.readouterr().out

@@ -65,8 +65,8 @@ from exact_khk.linalg.flintmat import column, fmpq_mat, uses_flint
 from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dense import SingularMatrix, matvec, solve
 from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
-from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, default_system, divisor_classes,
-                      expresses_omega, is_rational_pattern,
+from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, check_signs_arith, default_system,
+                      divisor_classes, expresses_omega, is_rational_pattern,
                       nontrivial_sign_patterns, rational_sign_patterns)
 
 #: relative size of the perturbation of the last coordinate of x0 in the
@@ -341,10 +341,7 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     signs = list(dict.fromkeys(signs))
     if any(s in ("+" * n, "-" * n) for s in signs):
         raise InputError("signs: ±I are not involutions of interest (K~ = ±H~); leave them out")
-    cyclotomic = [s for s in signs if not is_rational_pattern(n, s)]
-    if cyclotomic and not expresses_omega(ar, n):
-        raise InputError(f"signs: {cyclotomic[0]!r} is not a rational involution; it needs an arithmetic "
-                         f"containing omega = e^(2 pi i/{n}), e.g. --arith cyclo:{n}")
+    check_signs_arith(n, signs, ar)
     if prove and not 2 <= n <= PROVE_MAX_N:
         raise InputError(f"prove: symbolic proofs are available for n = 2 and 3 only (got n = {n})")
     with ar.local():  # e.g. the working precision of a ball arithmetic

@@ -17,6 +17,7 @@ from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
 from exact_khk.systems.lie_poisson.invariants import Htilde
+from exact_khk.systems.lie_poisson.system import check_signs_arith
 from exact_khk.kahan.map import KahanMap
 from exact_khk.parsing import format_signs, parse_signs
 
@@ -144,6 +145,7 @@ def cmd_integrals(args):
     check_resources("integrals", system, phi, x0, args.steps,
                     dense=not structured_htilde or (phi.structure is None and not phi.split), final_solve=True)
     signs = _signs(args, system.n, ar)
+    check_signs_arith(system.n, signs, ar, "--signs")  # before the orbit: K~ of the others needs Q(omega)
     with Progress(args, args.steps, "orbit") as progress:
         x = phi.orbit(x0, args.steps, progress=progress)[-1]
     K = {}

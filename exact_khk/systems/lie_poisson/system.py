@@ -201,6 +201,15 @@ def expresses_omega(ar, n: int) -> bool:
     return True
 
 
+def check_signs_arith(n: int, signs, ar, option: str = "signs"):
+    """InputError unless ``ar`` holds the involution of every pattern of ``signs``: rational
+    patterns anywhere, the others only where ω = e^(2πi/n) is (:func:`expresses_omega`)."""
+    irrational = next((s for s in signs if not is_rational_pattern(n, s)), None)
+    if irrational is not None and not expresses_omega(ar, n):
+        raise InputError(f"{option}: {format_signs(parse_signs(irrational, n))!r} is not a rational involution; "
+                         f"it needs an arithmetic containing omega = e^(2 pi i/{n}), e.g. --arith cyclo:{n}")
+
+
 # --- the system -------------------------------------------------------------
 
 
