@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import random
 import time
+from dataclasses import replace
 
 from exact_khk.arith import get_arith
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME, CycloArith, GFArith
@@ -260,7 +261,8 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
     In ``cyclo:N`` (n | N) every pattern is exact; a rational arithmetic raises
     :class:`~exact_khk.errors.NotRationalError` for non-rational patterns.
     Evidence: "exact in Q(zeta_N) at K orbit points" (or Q, or F_P: a nonzero
-    residual mod P refutes a claim, zero residuals mod P do not prove it).
+    residual mod P refutes a claim, zero residuals mod P do not prove it).  At a degenerate
+    x0 a control that held is inapplicable and a rank below n undecided (:func:`_judged`).
     """
     ar = get_arith(arith)
     if not ar.exact:
@@ -282,8 +284,29 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
     where = f"exact in {_field_name(ar)} at {len(pts)} orbit points"
     if isinstance(ar, GFArith):
         where += " (mod P: a nonzero residual refutes, zero residuals do not prove)"
-    return _records(system, per_point, ar, time.perf_counter() - t0, lambda name, bad: where, where,
+    recs = _records(system, per_point, ar, time.perf_counter() - t0, lambda name, bad: where, where,
                     lambda ranks: all(r == system.n for r in ranks), _claims(system, patterns, pairs))
+    return _judged(system, x0, eps, recs)
+
+
+def _judged(system, x0, eps, recs):
+    """The records at orbit points judged by certify's rule (:class:`~exact_khk.certification.
+    lie_poisson._ControlDegeneracy`): a control that held where it cannot fail is inapplicable,
+    and a rank below n at a degenerate x0 (J(x0) singular, an equilibrium) undecided."""
+    from exact_khk.certification.lie_poisson import _ControlDegeneracy
+
+    degenerate = _ControlDegeneracy(system, x0, eps)
+    why = {"control:commutation": degenerate.commutation, "control:conservation": degenerate.control_conserves,
+           "rank": degenerate.common}
+    out = []
+    for r in recs:
+        reason = why[r.name]() if r.name in why and r.holds is not r.expected else None
+        if reason and not r.expected:
+            r = replace(r, applicable=False, detail=f"inapplicable: {reason}")
+        elif reason:
+            r = replace(r, holds=None, detail=f"undecided: the rank drops at such points: {reason}")
+        out.append(r)
+    return out
 
 
 def liouville_identities(system, arith=f"gf:{DEFAULT_PRIME}", trials=3, seed=0,

@@ -237,8 +237,7 @@ def _control(record, system):
     why = None if record.holds is False else _ControlDegeneracy(system).everywhere()
     if not why:
         return record
-    return replace(record, applicable=False, detail=f"inapplicable: {why}",
-                   evidence=f"inapplicable: {why}; {record.evidence}")
+    return replace(record, applicable=False, detail=f"inapplicable: {why}")
 
 
 def prove_conservation(system, kind="f", signs=None):

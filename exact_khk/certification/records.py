@@ -91,6 +91,15 @@ class Check:
         return _check_from_json(d, "check")
 
 
+def status_of(checks) -> str:
+    """``'VALID'`` when every claim of ``checks`` holds, every applicable control fails and
+    at least one control is applicable; else ``'INVALID'`` if a claim is decided false, else
+    ``'INCONCLUSIVE'`` (see the module docstring)."""
+    if checks and all(c.passed for c in checks) and any(not c.expected and c.applicable for c in checks):
+        return "VALID"
+    return "INVALID" if any(c.wrong for c in checks) else "INCONCLUSIVE"
+
+
 @dataclass(frozen=True)
 class Certificate:
     """All checks on one orbit: the system, x0, ε, steps, arithmetic, versions.
@@ -120,15 +129,12 @@ class Certificate:
     def valid(self) -> bool:
         """True iff every claim holds, every applicable control fails, and at least one
         control is applicable (otherwise nothing shows that the checks can fail here)."""
-        return (bool(self.checks) and all(c.passed for c in self.checks)
-                and any(not c.expected and c.applicable for c in self.checks))
+        return self.status == "VALID"
 
     @property
     def status(self) -> str:
-        """``'VALID'``, ``'INVALID'`` or ``'INCONCLUSIVE'`` (see the module docstring)."""
-        if self.valid:
-            return "VALID"
-        return "INVALID" if any(c.wrong for c in self.checks) else "INCONCLUSIVE"
+        """``'VALID'``, ``'INVALID'`` or ``'INCONCLUSIVE'`` (:func:`status_of` its checks)."""
+        return status_of(self.checks)
 
     def check(self, name: str) -> Check:
         """The check called ``name``."""

@@ -3,8 +3,14 @@
 ``liouville`` checks the n integrals, their conservation by Φ_f and every Φ_g,
 pairwise commutation, involutivity and rank n: exactly at orbit points for an
 exact arithmetic (``--arith cyclo:3``), or as identities by Schwartz–Zippel for
-``--arith gf:P``.  ``prove`` gives the symbolic proofs (n = 2, 3).  Exit 0 when
-every record is as expected (claims hold, controls fail), 1 otherwise.
+``--arith gf:P``.  ``prove`` gives the symbolic proofs (n = 2, 3).
+
+``liouville`` ends as ``certify`` does (exit 0 VALID, 1 INVALID, 4 INCONCLUSIVE):
+at a degenerate x0 (J(x0) singular, or an equilibrium) a control that held is
+*inapplicable* and a rank below n undecided, by certify's rule, never a failure.
+Its work (:func:`_check_work`) is estimated and refused up front beyond
+:data:`MAX_WORK_SECONDS`.  ``prove`` exits 0 when every record is as expected
+(claims hold, controls fail), 1 otherwise.
 """
 
 from __future__ import annotations
@@ -12,7 +18,7 @@ from __future__ import annotations
 from exact_khk.arith import get_arith
 from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
                                    write_json)
-from exact_khk.certification.records import library_versions
+from exact_khk.certification.records import library_versions, status_of
 from exact_khk.arith.cyclotomic import GFArith
 from exact_khk.errors import InputError, NotRationalError
 from exact_khk.parsing import format_signs, parse_signs
@@ -56,6 +62,13 @@ PROVE_DEFAULT_VECTORS = ("1,2", "0,1", "3,1")
 MAX_PATTERNS = 4096
 #: the most random points ``--trials`` may draw for gf:P
 MAX_TRIALS = 1000
+#: the most work ``liouville`` may plan, in estimated seconds (10 minutes: n = 7 takes about
+#: two, n = 8 with all pairs in cyclo:8 about four; n = 9 with all pairs about forty)
+MAX_WORK_SECONDS = 600
+#: seconds per solve (one Kahan step or one integral) per n and per degree of the arithmetic
+#: over Q (cyclo:N: phi(N); flint: 1), and per n in gf:P: measured 50-80 us (n = 4..10, cyclo:n)
+#: and 14-17 us (n = 6..8, gf:P) on a 2-core machine
+SOLVE_SECONDS = {"exact": 70e-6, "gf": 16e-6}
 
 
 def _patterns(n, spec):
@@ -72,18 +85,67 @@ def _patterns(n, spec):
     return out
 
 
-def _report(args, system, recs, extra):
+def _solves(n, patterns, pairs):
+    """The solves (Kahan steps and integrals) of
+    :func:`~exact_khk.certification.identities.residuals_at` at one point: every map's image and
+    the n integrals there, the pairs of maps composed both ways, the gradients, the controls."""
+    maps = 1 + patterns
+    composed = maps * (maps - 1) if pairs == "all" else 2 * (maps - 1)
+    return maps + n + maps * n + composed + 2 * (n + 1) + 5
+
+
+def _check_work(args, n, patterns, ar):
+    """Refuse up front a run whose estimated time (solves x :data:`SOLVE_SECONDS`) is beyond
+    :data:`MAX_WORK_SECONDS`, naming the options that set it."""
+    gf = isinstance(ar, GFArith)
+    points, option = (args.trials, "--trials") if gf else (args.steps + 1, "--steps")
+    solves = points * _solves(n, patterns, args.pairs)
+    degree = getattr(getattr(ar, "K", None), "degree", 1)
+    per_solve = n * (SOLVE_SECONDS["gf"] if gf else SOLVE_SECONDS["exact"] * degree)
+    if solves * per_solve > MAX_WORK_SECONDS:
+        ways = ["--pairs f", "--involutions basis", f"fewer {option}", "a smaller --n"]
+        ways += [] if gf else ["--arith gf:P"]
+        raise InputError(f"--n {n}, --involutions {args.involutions} ({patterns} involutions), --pairs {args.pairs}, "
+                         f"{option} {args.trials if gf else args.steps}: about {solves:,} solves (Kahan steps and "
+                         f"integrals) at {points} point(s), about {_duration(solves * per_solve)} in {ar.name} "
+                         f"(estimate: {per_solve * 1e3:.2g} ms per solve), beyond the budget of "
+                         f"{_duration(MAX_WORK_SECONDS)} (MAX_WORK_SECONDS); choose {', '.join(ways[:-1])} "
+                         f"or {ways[-1]}")
+
+
+def _duration(seconds) -> str:
+    for unit, size in (("days", 86400), ("hours", 3600), ("minutes", 60)):
+        if seconds >= 2 * size:
+            return f"{seconds / size:.3g} {unit}"
+    return f"{seconds:.3g} s"
+
+
+#: the mark of a record by its status (:attr:`~exact_khk.certification.records.Check.status`)
+MARKS = {"ok": "ok  ", "inapplicable": "n/a ", "UNDECIDED": "??  "}
+
+
+def _report(args, system, recs, extra, status=None):
+    """Print or write the records; the exit status: by ``status`` (VALID, INVALID, INCONCLUSIVE)
+    when given, else 0 when every record is as expected and 1 otherwise."""
+    ok = status == "VALID" if status else all(r.passed for r in recs)
     if args.json is not None:
         write_json({"system": system.to_json(), **extra, "records": [r.to_json() for r in recs],
-                    "ok": all(r.passed for r in recs), "versions": library_versions()}, args.json)
+                    "ok": ok, **({"status": status} if status else {}), "versions": library_versions()}, args.json)
     else:
         print(system.describe())
         for r in recs:
-            mark = "ok  " if r.passed else "FAIL"
-            print(f"{mark} {r.name:<26} holds={str(r.holds):<5} {r.evidence}")
+            print(f"{MARKS.get(r.status, 'FAIL')} {r.name:<26} holds={str(r.holds):<5} {r.evidence}")
             if r.residual != "0":
                 print(f"     residual: {r.residual[:200]}")
-    return 0 if all(r.passed for r in recs) else 1
+            if r.detail:
+                print(f"     {r.detail[:300]}")
+        if status:
+            print(status)
+    from exact_khk.cli.main import EXIT
+
+    if status:
+        return EXIT[{"VALID": "ok", "INVALID": "invalid", "INCONCLUSIVE": "inconclusive"}[status]]
+    return EXIT["ok"] if ok else EXIT["invalid"]
 
 
 def cmd_liouville(args):
@@ -101,6 +163,7 @@ def cmd_liouville(args):
                     orbits=1 + len(pats), per_point=1 + system.dim, cube_numbers=2)
     if not isinstance(ar, GFArith) and not ar.exact:
         raise InputError(f"--arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), got {ar.name}")
+    _check_work(args, system.n, len(pats), ar)
     with Progress(args, None, "liouville", unit="solve") as progress:
         if isinstance(ar, GFArith):
             recs = liouville_identities(system, ar, trials=args.trials, seed=args.draw_seed,
@@ -114,7 +177,7 @@ def cmd_liouville(args):
                 raise InputError(f"--arith: {ar.name} cannot represent the involutions over Q(omega) ({exc}); "
                                  f"use --arith cyclo:{system.n} or gf:P") from None
             extra = {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
-    return _report(args, system, recs, {**extra, "involutions": pats})
+    return _report(args, system, recs, {**extra, "involutions": pats}, status_of(recs))
 
 
 def cmd_prove(args):

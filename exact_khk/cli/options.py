@@ -21,7 +21,10 @@ an :class:`~exact_khk.errors.InputError` that names it and states the estimate:
   :data:`STRUCTURED_STEP_BYTES_PER_BIT` · n · (h + 2h₀) bytes from a point of
   height h₀ to an output of height h bits (so one exact step at n = 20 000, about
   670 000 bits per coordinate, is refused: about 67 GB, and its output alone is
-  about 3 GB; the float and mp:P structured steps are O(n));
+  about 3 GB; the float and mp:P structured steps are O(n)); a system file has
+  only the dense N×N path (:func:`check_dense`, checked as soon as the file is read,
+  before its default point is searched for), and the refusal names its N variables;
+* an empty path for ``--out``, ``--plot`` or ``--json`` (:data:`OUTPUT_OPTIONS`);
 * precisions, ``cyclo:N`` and ``gf:P`` are bounded in :mod:`exact_khk.arith`.
 
 A run that lasts more than about 2 s shows progress on stderr (a tqdm bar,
@@ -44,13 +47,27 @@ from exact_khk.parsing import MAX_N, MAX_STEPS, parse_rational, parse_vector  # 
 # --help`` imports this module (for :class:`Parser`) and nothing else of the library.
 
 
+#: the options that name an output file or folder, in every command (an empty one is refused:
+#: it would be silently ignored, or fail only when the results are written)
+OUTPUT_OPTIONS = ("--out", "--plot", "--json")
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with a one-line error message and exit status 2; an option defined
-    twice (a command's own ``--quiet`` after the shared one) replaces the first."""
+    twice (a command's own ``--quiet`` after the shared one) replaces the first; an
+    empty path for one of :data:`OUTPUT_OPTIONS` is refused."""
 
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("conflict_handler", "resolve")
         super().__init__(*args, **kwargs)
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, rest = super().parse_known_args(args, namespace)
+        for action in self._actions:
+            for option in set(action.option_strings) & set(OUTPUT_OPTIONS):
+                if getattr(namespace, action.dest, None) == "":
+                    self.error(f"argument {option}: expected a file or folder name, got an empty string")
+        return namespace, rest
 
     def error(self, message):
         where = self.prog.removeprefix("exact-khk").strip()
@@ -173,14 +190,14 @@ def system_from_args(args, reals=None, point=True):
     if not point:
         return system, None, None
     # a seeded point is off the degenerate sets (random_point), also those of this system and eps
-    return _point_and_eps(args, system, reals, DEFAULT_EPS, DEFAULT_X0,
+    return _point_and_eps(args, system, reals, DEFAULT_EPS, lambda: DEFAULT_X0,
                           lambda eps: random_point(system.n, args.seed, system=system, eps=eps))
 
 
 def _point_and_eps(args, system, reals, default_eps, default_x0, seeded):
     """(system, x0, eps) from ``--eps``, ``--x0``/``--seed`` (``seeded(eps)``: the seed's
-    point) and ``--steps``; ``--x0``/``--eps`` come back as None when ``reals`` is given
-    (the command reads them as reals itself)."""
+    point; ``default_x0()``: the point without either) and ``--steps``; ``--x0``/``--eps``
+    come back as None when ``reals`` is given (the command reads them as reals itself)."""
     eps = default_eps if args.eps is None else None if reals is not None else parse_rational(args.eps, "--eps")
     if eps == 0:
         raise InputError("--eps: the step size must be nonzero")
@@ -189,7 +206,7 @@ def _point_and_eps(args, system, reals, default_eps, default_x0, seeded):
     elif args.seed is not None:
         x0 = seeded(eps)
     else:
-        x0 = parse_vector(list(default_x0), "--x0", system.dim)
+        x0 = parse_vector(list(default_x0()), "--x0", system.dim)
     if args.steps is not None:
         if args.steps < 0:
             raise InputError(f"--steps: expected a non-negative integer, got {args.steps}")
@@ -231,7 +248,10 @@ def _named_system(args, reals=None):
     if clash:
         raise InputError(f"--system: {clash[0]} describes the Lie–Poisson family; it cannot be combined with --system")
     system = resolve(args.system)
-    return _point_and_eps(args, system, reals, system.default_eps, system.default_x0,
+    # every command steps the system's Kahan map by dense N x N solves: refused before a file's
+    # default point is searched for (N^3 work)
+    check_dense(getattr(args, "command", None) or "this command", system)
+    return _point_and_eps(args, system, reals, system.default_eps, lambda: system.default_x0,
                           lambda eps: system.random_point(args.seed))
 
 
@@ -321,6 +341,29 @@ def _growth(phi, x0, steps, ar):
     return h0, int(n * (2 * math.log2(n) + GROWTH_BITS_PER_N)) + 2 * h0
 
 
+def check_dense(what, system, ar=None, dense=True, cube_numbers=0):
+    """Refuse at once (:class:`InputError`) a run of ``what`` whose dense N×N path (``dense``) and
+    ``cube_numbers``·N³ further numbers of ``ar`` need more than :func:`max_memory`, naming what
+    sets N: ``--n`` for the Lie–Poisson family, the number of variables of a system file."""
+    N, limit = system.dim, max_memory()
+    per_cube = (DENSE_BYTES_PER_CUBE if dense else 0) + (cube_numbers * _number_bytes(ar, 64) if cube_numbers else 0)
+    need = per_cube * N ** 3
+    if need <= limit:
+        return
+    cube = "(2n)^3" if system.kind == "lie-poisson" else "N^3"
+    about = (f"which need about {human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x {cube}"
+             + (f" + {cube_numbers} x {cube} numbers" if cube_numbers else "")
+             + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY)")
+    if system.kind != "lie-poisson":
+        fits = int((limit / per_cube) ** (1 / 3))
+        raise InputError(f"--system: {system.name} has {N} variables, and {what} solves dense {N}x{N} systems, "
+                         f"{about}; within that limit a system has at most about {fits} variables")
+    hint = (" (the structured path, --method structured, needs O(n) memory with --arith float or mp:P; "
+            f"an exact structured step about {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (its output's + "
+            f"twice its input's height in bits))" if what == "orbit" else "")
+    raise InputError(f"--n: {what} at n = {N // 2} solves dense {N}x{N} systems, {about}{hint}")
+
+
 def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_point=1, cube_numbers=0,
                     final_solve=False):
     """Refuse at once (:class:`InputError`, with the estimate and the limit) a run whose
@@ -333,16 +376,7 @@ def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_poi
     check_steps(steps)
     ar, N, limit = phi.arith, system.dim, max_memory()
     n = N // 2
-    if dense or cube_numbers:
-        need = (DENSE_BYTES_PER_CUBE if dense else 0) * N ** 3 + cube_numbers * N ** 3 * _number_bytes(ar, 64)
-        if need > limit:
-            hint = (" (the structured path, --method structured, needs O(n) memory with --arith float or mp:P; "
-                    f"an exact structured step about {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (its output's + "
-                    f"twice its input's height in bits))" if what == "orbit" else "")
-            raise InputError(f"--n: {what} at n = {n} solves dense {N}x{N} systems, which need about "
-                             f"{human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x (2n)^3"
-                             + (f" + {cube_numbers} x (2n)^3 numbers" if cube_numbers else "")
-                             + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY){hint}")
+    check_dense(what, system, ar, dense, cube_numbers)
     solves = steps + 1 if final_solve else steps
     h0, g = _growth(phi, x0, solves, ar)
     if phi.structure is not None and ar.exact and solves:  # the last structured division

@@ -12,7 +12,7 @@ import math
 import pathlib
 import sys
 
-from exact_khk.cli.options import add_system_options, shows_progress, system_from_args
+from exact_khk.cli.options import add_system_options, check_dense, check_resources, shows_progress, system_from_args
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
@@ -38,6 +38,17 @@ def _check_dim(system, what):
         raise InputError(f"{what}: dimension {system.dim} is beyond the limit of {MAX_STUDY_DIM} for precision "
                          f"studies (MAX_STUDY_DIM; every arithmetic solves a dense {system.dim}x{system.dim} system "
                          f"per step)")
+
+
+def _check_reference(what, system, x0, eps, steps):
+    """Refuse up front, by the estimate of ``orbit`` (:func:`~exact_khk.cli.options.check_resources`),
+    an exact reference orbit (python-flint, as :func:`~exact_khk.studies.scaling.exact_prefix`
+    computes it) beyond the memory limit."""
+    from exact_khk.kahan.map import KahanMap
+
+    phi = KahanMap(system.field("f"), eps, "flint")
+    check_resources(f"{what} (its exact reference orbit)", system, phi, x0, steps,
+                    dense=phi.structure is None and not phi.split)
 
 
 def _check_digits(digits, option="--digits"):
@@ -163,6 +174,7 @@ def cmd_scale(args):
     _check_digits(args.digits)
     _check_dim(system, "scale")
     ariths = _ariths(args.ariths, lohner=True)
+    _check_reference("scale", system, x0, eps, args.steps)
     if args.out:
         prepare_folder(args.out)
     print(system.describe())
@@ -260,6 +272,7 @@ def cmd_hard(args):
         from exact_khk.systems.catalogue import resolve
 
         system = resolve(args.system)
+        check_dense("hard", system)  # before the cases search the file's default point (N^3 work)
         x0 = None if args.x0 is None else parse_vector(args.x0, "--x0", system.dim)
         eps = None if args.eps is None else parse_rational(args.eps, "--eps")
         if eps == 0:
@@ -277,7 +290,8 @@ def cmd_hard(args):
                                  progress=shows_progress(args))
     table = hard.markdown_table(results)
     legend = ("cells: ok / WARN (NearSingularWarning, κ = condition estimate, @step) / SINGULAR "
-              "(SingularStepError) / UNDECIDED (ball pivot not certain); err = relative error of the "
+              "(SingularStepError) / UNDECIDED (ball pivot not certain) / OUT OF RANGE (the arithmetic "
+              "cannot hold x0 or ε, e.g. beyond float64); err = relative error of the "
               "last point vs the exact orbit (balls: midpoint), rad = certified ball radius; "
               "**UNFLAGGED** = a wrong number returned without a flag")
     if args.markdown:
@@ -335,8 +349,6 @@ def cmd_enclose(args):
     eps = parse_real(eps_text, args.prec, "--eps") if eps_text is not None else parse_real(str(eps_default), args.prec)
     if eps.contains(0):
         raise InputError("--eps: the step size must be nonzero (the interval must not contain 0)")
-    if args.out:
-        prepare_folder(args.out)
     exact = None
     if args.check_exact:
         if getattr(system, "prec", None) is not None:
@@ -348,6 +360,10 @@ def cmd_enclose(args):
             raise InputError("--check-exact needs a rational --x0 and --eps (the exact orbit is the reference)")
         xq = x0_default if x0_text is None else parse_vector(x0_text, "--x0", system.dim)
         eq = eps_default if eps_text is None else parse_rational(eps_text, "--eps")
+        _check_reference("enclose --check-exact", system, xq, eq, args.steps)
+    if args.out:
+        prepare_folder(args.out)
+    if args.check_exact:
         exact, _, _ = scaling.exact_prefix(system.field("f"), xq, eq, args.steps)
     integrals = None if args.no_diagnostics else scaling.declared(system)[0]
     print(system.describe())

@@ -47,6 +47,10 @@ from .functions import PolynomialTensor, RationalFunction
 from .quadratic import QuadraticField
 
 MAX_FILE = 10_000_000     # bytes in a system file
+#: variables in a system file: the polynomial ring of N variables holds N² exponents (10 000: about
+#: 0.1 GB and a second; 100 000 exhausts FLINT's memory, which aborts the process), and each step
+#: solves N×N systems (the commands refuse beyond a few hundred variables at 4 GB)
+MAX_VARIABLES = 10_000
 EPS = "eps"
 CLAIMS = ("reversibility", "integrals", "poisson", "commutation", "jacobian", "cmoq")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
@@ -136,7 +140,8 @@ def _components(value, variables, where: str) -> dict:
         value = dict(zip(variables, value))
     value = _table(value, where)
     missing = [v for v in variables if v not in value]
-    extra = [k for k in value if k not in variables]
+    known = set(variables)
+    extra = [k for k in value if k not in known]
     if missing or extra:
         raise InputError(f"{where}: " + "; ".join(
             ([f"missing component(s) {', '.join(missing)}"] if missing else []) +
@@ -184,13 +189,18 @@ class ExpressionSystem(System):
         variables = t["variables"]
         if not isinstance(variables, (list, tuple)) or not variables:
             raise InputError(at("variables: expected a non-empty list of names"))
+        if len(variables) > MAX_VARIABLES:
+            raise InputError(at(f"variables: {len(variables)} variables, beyond the limit of {MAX_VARIABLES:,} "
+                                f"(MAX_VARIABLES; every step solves dense N x N systems)"))
         for i, v in enumerate(variables):
             if not isinstance(v, str):
                 raise InputError(at(f"variables[{i}]: expected a name (a string), got {v!r}"))
+        seen = set()  # not variables.count(v): N² for N variables
         for v in variables:
-            if not _NAME.match(v) or v == EPS or variables.count(v) > 1:
-                raise InputError(at(f"variables: {v!r} is " + ("used twice" if variables.count(v) > 1 else
+            if not _NAME.match(v) or v == EPS or v in seen:
+                raise InputError(at(f"variables: {v!r} is " + ("used twice" if v in seen else
                                     "reserved for the step size" if v == EPS else "not a valid name")))
+            seen.add(v)
         self.variables, self.dim = tuple(variables), len(variables)
         spec = {"format": 1, "kind": self.kind, "name": self.name, "title": self.title,
                 "source": self.source, "variables": list(variables)}
@@ -210,6 +220,7 @@ class ExpressionSystem(System):
         self._values = {p: self._ring.constant(flint.fmpq(q.numerator, q.denominator))
                         for p, q in self.parameters.items()}
         self._names = dict(zip(variables, gens), **self._values)
+        self._scopes = {}
 
         self._fields, self._hamiltonian = {}, None
         f = self._read_hamiltonian(t.get("hamiltonian"))
@@ -241,14 +252,21 @@ class ExpressionSystem(System):
     def _parse(self, text, where, eps=True, constant=False):
         """Parse ``text``: variables, parameters and (if ``eps``) ε allowed; only
         parameters if ``constant``."""
-        names = dict(self._values) if constant else dict(self._names, **({EPS: self._eps} if eps else {}))
-        refused = {v: f"{v} is a variable, and this entry must be constant" for v in self.variables}
-        refused[EPS] = ("eps is not allowed here: it is the step size, and a vector field does not "
-                        "depend on it" if not constant else "eps is not allowed in a constant")
-        allowed = "; ".join(s for s in ("" if constant else "variables " + ", ".join(self.variables),
-                                        "parameters " + ", ".join(self._values) if self._values else "",
-                                        EPS if EPS in names else "") if s)
-        return Parser(text, self._at(where), self._ring, names, refused, "allowed: " + (allowed or "numbers only"))
+        return Parser(text, self._at(where), self._ring, *self._scope(eps and not constant, constant))
+
+    def _scope(self, eps, constant):
+        """(names, refused, allowed) for :meth:`_parse`, built once per kind of entry: they
+        list every variable, and a file of N components must not cost N² to read."""
+        if (eps, constant) not in self._scopes:
+            names = dict(self._values) if constant else dict(self._names, **({EPS: self._eps} if eps else {}))
+            refused = {v: f"{v} is a variable, and this entry must be constant" for v in self.variables}
+            refused[EPS] = ("eps is not allowed here: it is the step size, and a vector field does not "
+                            "depend on it" if not constant else "eps is not allowed in a constant")
+            allowed = "; ".join(s for s in ("" if constant else "variables " + ", ".join(self.variables),
+                                            "parameters " + ", ".join(self._values) if self._values else "",
+                                            EPS if eps else "") if s)
+            self._scopes[eps, constant] = (names, refused, "allowed: " + (allowed or "numbers only"))
+        return self._scopes[eps, constant]
 
     def _read_field(self, comps, key):
         return [checked_polynomial(self._parse(comps[v], f"{key} {v}", eps=False), self.variables, 2,
@@ -328,9 +346,9 @@ class ExpressionSystem(System):
                 raise InputError(self._at(f"defaults x0: expected a list of {self.dim} numbers (one per "
                                           f"variable), got {x0!r}"[:200]))
             spec["x0"] = [_spec_value(v, self._at(f"defaults x0[{i}]")) for i, v in enumerate(x0)]
-            self.default_x0 = tuple(_rational(v, self._at(f"defaults x0[{i}]")) for i, v in enumerate(x0))
-        else:
-            self.default_x0 = self._regular_point(self.default_eps)
+            self._default_x0 = tuple(_rational(v, self._at(f"defaults x0[{i}]")) for i, v in enumerate(x0))
+        else:  # searched when first asked for (:attr:`default_x0`): N³ work, after the size limits
+            self._default_x0 = None
         if spec:
             self._spec["defaults"] = spec
 
@@ -349,6 +367,16 @@ class ExpressionSystem(System):
                 raise InputError(self._at(f"claims: {c!r} needs a [{_NEEDS[c]}] section"))
         self.claims = tuple(dict.fromkeys(claims))
         self._spec["claims"] = list(self.claims)
+
+    @property
+    def default_x0(self) -> tuple:
+        """``[defaults] x0``, else the first small random point where every declared function
+        is finite and every step matrix invertible (:meth:`_regular_point`: a determinant of
+        size N per field and draw, so searched only when first asked for, not while the file
+        is read: a command checks the file's size first)."""
+        if self._default_x0 is None:
+            self._default_x0 = self._regular_point(self.default_eps)
+        return self._default_x0
 
     def _regular_point(self, eps):
         """The first small random point where every declared function is finite and
@@ -401,6 +429,8 @@ class ExpressionSystem(System):
             table = tomllib.loads(text, parse_float=Decimal)
         except (tomllib.TOMLDecodeError, ValueError) as exc:
             raise InputError(f"{origin}: not valid TOML: {exc}") from None
+        except RecursionError:  # tomllib reads nested arrays and tables recursively
+            raise InputError(f"{origin}: arrays or tables nested too deeply to read") from None
         return cls(table, origin)
 
     @classmethod
