@@ -175,7 +175,7 @@ def test_empty_out_is_refused(tmp_path, capsys, monkeypatch, mode):
     monkeypatch.chdir(here)
     code, _, err = run(capsys, "sweep", spec, "--out", "", "--workers", "0", "--no-plots", *mode)
     assert code == 2, err
-    assert err == "exact-khk: error: argument --out: expected a file or folder name, got an empty string\n"
+    assert err == "exact-khk: error: sweep: argument --out: expected a file or folder name, got an empty string\n"
     assert list(here.iterdir()) == []
     with pytest.raises(InputError, match="--out: expected a folder"):
         run_sweep(parse_spec(PROBE), "", workers=0, plots=False)
