@@ -126,6 +126,17 @@ def test_prove_all_is_for_n2_and_3():
         prove_all(LiePoissonSystem.random(4, seed=1))
 
 
+def test_prove_all_refuses_coefficients_beyond_its_bits_at_once():
+    """A 5000-digit coefficient ran SymPy for minutes: refused before any proof starts."""
+    from exact_khk import InputError
+    from exact_khk.certification.proofs import PROVE_MAX_BITS
+
+    big = LiePoissonSystem.from_vectors([2 ** PROVE_MAX_BITS, 1], "0,1", "3,1")
+    with pytest.raises(InputError, match=rf"a coefficient of {PROVE_MAX_BITS + 1} bits is beyond the "
+                                         rf"{PROVE_MAX_BITS} bits"):
+        prove_all(big, progress=lambda stage: pytest.fail(f"a proof started: {stage}"))
+
+
 @pytest.mark.slow
 def test_n3_proofs_and_their_controls():
     """n = 3 (about 11 CPU minutes since Henrici's arithmetic; before it, conservation alone

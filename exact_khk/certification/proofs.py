@@ -329,6 +329,10 @@ def prove_jacobi(system, symbolic_hessian=False, eps_zero=False, perturb=False):
 #: its control, commutation and its control, under 130 MB; before Henrici's arithmetic
 #: conservation alone did not finish in 13 minutes); n ≥ 4 was not attempted and is refused
 PROVE_MAX_N = 3
+#: the largest coefficient (bits of a numerator or denominator of a, b, c) the proofs take: SymPy's
+#: rational functions grow with them (`prove --n 2` with a_0 = 2^b + 1: 1.9 s at b = 64, 4.8 s at
+#: 512, 25 s at 2048, 67 s at 4096)
+PROVE_MAX_BITS = 1024
 
 
 def prove_all(system, progress=None):
@@ -342,6 +346,12 @@ def prove_all(system, progress=None):
         raise InputError(f"n: symbolic proofs of conservation and commutation are offered for n = 2 "
                          f"(seconds) and 3 (minutes), got n = {system.n} (use prove_jacobi, or "
                          f"liouville_identities over gf:P)")
+    bits = max(max(abs(q.numerator).bit_length(), q.denominator.bit_length())
+               for q in (*system.a, *system.b, *system.c))
+    if bits > PROVE_MAX_BITS:
+        raise InputError(f"a, b, c: a coefficient of {bits} bits is beyond the {PROVE_MAX_BITS} bits the symbolic "
+                         f"proofs take (PROVE_MAX_BITS: they grow to minutes); liouville_identities over gf:P "
+                         f"(exact-khk liouville --arith gf:P) checks the same claims as identities")
     steps = [("conservation", lambda: prove_conservation(system)),
              ("conservation control", lambda: prove_conservation(system, kind="control")),
              ("commutation", lambda: prove_commutation(system)),
