@@ -3,7 +3,7 @@
 ``certify(LiePoissonSystem.random(n, seed), x0=random_point(n, seed), steps=K)``
 with default options: every claim of the paper is true, so INVALID would be a
 false alarm.  Negative controls that cannot fail at the chosen point (the
-degenerate sets of :class:`exact_khk.certification.lie_poisson._ControlDegeneracy`)
+degenerate sets of :class:`exact_khk.certification.lie_poisson.ControlDegeneracy`)
 must be reported inapplicable, and :func:`random_point` avoids the degenerate
 point sets (J(x) singular).  INCONCLUSIVE (a claim undefined at every orbit
 point, e.g. after a singular step of another map) and singular steps are
@@ -21,7 +21,7 @@ from fractions import Fraction
 import pytest
 
 from exact_khk import LiePoissonSystem, SingularStepError, certify
-from exact_khk.certification.lie_poisson import _ControlDegeneracy, non_admissible_hessian
+from exact_khk.certification.lie_poisson import ControlDegeneracy, non_admissible_hessian
 from exact_khk.systems.lie_poisson.system import hankel_singular, random_point
 
 CONTROLS = ("control: commutation with non-associated field", "control: integral H~ conserved by Phi_control",
@@ -181,20 +181,20 @@ def test_degenerate_planar_field_n2():
     """n = 2 with sum b^2 = sum a * sum c: the frequency-0 field is nilpotent, its Kahan maps
     commute for every step."""
     system = LiePoissonSystem.from_vectors("1,0", "1,1", "4,0")  # (1, 2, 4): 4 = 1 * 4
-    degen = _ControlDegeneracy(system, [1, 2, 0, 1], "1/10")
+    degen = ControlDegeneracy(system, [1, 2, 0, 1], "1/10")
     assert "degenerate" in degen.commutation()
-    assert _ControlDegeneracy(LiePoissonSystem.from_vectors("1,0", "1,1", "3,0"), [1, 2, 0, 1],
+    assert ControlDegeneracy(LiePoissonSystem.from_vectors("1,0", "1,1", "3,0"), [1, 2, 0, 1],
                               "1/10").commutation() is None
 
 
 def test_control_degeneracy_reasons():
     s3 = LiePoissonSystem.random(3, 1)
-    assert "J(x0) is singular" in _ControlDegeneracy(s3, [1, 1, 1, 0, 1, 2], "1/10").common()
-    assert "J(x0) is singular" in _ControlDegeneracy(s3, [1, -1, 0, 0, 1, 2], "1/10").common()
-    assert _ControlDegeneracy(s3, [1, 2, 0, 0, 1, 2], "1/10").common() is None
+    assert "J(x0) is singular" in ControlDegeneracy(s3, [1, 1, 1, 0, 1, 2], "1/10").common()
+    assert "J(x0) is singular" in ControlDegeneracy(s3, [1, -1, 0, 0, 1, 2], "1/10").common()
+    assert ControlDegeneracy(s3, [1, 2, 0, 0, 1, 2], "1/10").common() is None
     # an equilibrium: Hs x0 = 0 with J(x0) regular (a = c, b = -a: Hs (u, u) = 0)
     eq = LiePoissonSystem.from_vectors("1,2,0", "-1,-2,0", "1,2,0")
-    assert "equilibrium" in _ControlDegeneracy(eq, [1, 2, 0, 1, 2, 0], "1/10").common()
+    assert "equilibrium" in ControlDegeneracy(eq, [1, 2, 0, 1, 2, 0], "1/10").common()
     cert = certify(eq, x0=["1", "2", "0", "1", "2", "0"], steps=2)
     assert cert.status != "INVALID"
     assert all(not cert.check(name).applicable for name in CONTROLS[:2])
@@ -211,7 +211,7 @@ def test_self_paired_b_c_make_controls_inapplicable():
         assert cert.status == "VALID", cert.verdict()
         assert [cert.check(name).applicable for name in CONTROLS] == [False, False, False, True]
     s4 = LiePoissonSystem.from_vectors("1,2,0,-1", "1,-2,1,-2", "3,0,3,0")  # period 2: frequencies 0 and 2
-    degen = _ControlDegeneracy(s4, [1, 2, 0, 0, 1, 0, 0, 2], "1/10")
+    degen = ControlDegeneracy(s4, [1, 2, 0, 0, 1, 0, 0, 2], "1/10")
     assert "period 2" in degen.commutation() and degen.non_admissible() is None
 
 

@@ -139,7 +139,7 @@ def non_admissible_hessian(system):
     return M
 
 
-class _ControlDegeneracy:
+class ControlDegeneracy:
     """Where a negative control of :func:`_run_checks` cannot fail, decided exactly
     (in Fractions, independently of the checks' arithmetic); each method returns
     the reason, or None.  A control that did not fail at a point of these sets is
@@ -606,10 +606,10 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
         f"(functional independence, proved by one orbit point of full rank) on the Phi_f orbit",
         rank_fn(lambda k: [[grad("f", k)[s] for s in shift_index(n, i)] for i in range(n)], n))
     # 7. negative controls (each with the degenerate sets where it cannot fail:
-    # there it is recorded as inapplicable, see _ControlDegeneracy)
+    # there it is recorded as inapplicable, see ControlDegeneracy)
     ctrl = system.field("control")
     phi_c = KahanMap(ctrl, eps, ar)
-    degen = _ControlDegeneracy(system, x0, eps)
+    degen = ControlDegeneracy(system, x0, eps)
     add("control: commutation with non-associated field",
         f"[control, must fail] Phi_f commutes with the Kahan map of the control field "
         f"({'A Hs' if n >= 3 else '(2I + A) Hs'}) at the points of the Phi_f orbit",

@@ -232,9 +232,9 @@ def _record(name, claim, holds, residual, ar, t0, expected=True):
 def _control(record, system):
     """A control record that did not fail, recorded as inapplicable where the control cannot
     fail for this system (as certify's controls 1 and 2, at every point: ``everywhere``)."""
-    from exact_khk.certification.lie_poisson import _ControlDegeneracy
+    from exact_khk.certification.lie_poisson import ControlDegeneracy
 
-    why = None if record.holds is False else _ControlDegeneracy(system).everywhere()
+    why = None if record.holds is False else ControlDegeneracy(system).everywhere()
     if not why:
         return record
     return replace(record, applicable=False, detail=f"inapplicable: {why}")
