@@ -8,16 +8,15 @@ are started in a subprocess with a timeout, so that the test fails instead of ha
 import json
 import subprocess
 import sys
-import time
 from argparse import Namespace
 
 import pytest
 
 from exact_khk.cli.main import EXIT, main
 
-#: seconds a refusal may take in a subprocess (interpreter start-up included)
-QUICK = 5
-#: seconds after which a command that was not refused is stopped (the test then fails)
+#: seconds after which a command that was not refused is stopped and the test fails (a refusal
+#: takes about a second with the interpreter's start-up; the commands it guards ran for minutes;
+#: no speed is asserted)
 STOP = 15
 
 
@@ -28,14 +27,13 @@ def run(capsys, *argv):
 
 
 def run_process(*argv):
-    """(exit status, stderr, seconds) of ``exact-khk ARGV`` in a fresh interpreter."""
-    start = time.perf_counter()
+    """(exit status, stderr) of ``exact-khk ARGV`` in a fresh interpreter."""
     try:
         proc = subprocess.run([sys.executable, "-m", "exact_khk", *argv], capture_output=True, text=True,
                               timeout=STOP)
     except subprocess.TimeoutExpired:
         pytest.fail(f"exact-khk {' '.join(argv)} was still running after {STOP} s: not refused up front")
-    return proc.returncode, proc.stderr, time.perf_counter() - start
+    return proc.returncode, proc.stderr
 
 
 def system_file(path, n, x0=False):
@@ -56,8 +54,8 @@ def system_file(path, n, x0=False):
 def test_a_large_system_file_without_x0_is_refused_before_its_default_point(tmp_path, command):
     """3000 variables and no [defaults] x0: the default point (a determinant of size N per draw)
     was searched for while the file was read, before any limit: minutes, or out of memory."""
-    code, err, seconds = run_process(command, "--system", system_file(tmp_path / "big.toml", 3000))
-    assert code == EXIT["input"] and seconds < QUICK, (err, seconds)
+    code, err = run_process(command, "--system", system_file(tmp_path / "big.toml", 3000))
+    assert code == EXIT["input"], err
     assert "3000 variables" in err and len(err.strip().splitlines()) == 1
 
 
@@ -65,8 +63,8 @@ def test_a_system_file_beyond_max_variables_is_refused_while_read(tmp_path):
     """100 000 variables: the polynomial ring alone exhausted FLINT's memory (an abort, no message)."""
     from exact_khk.systems.expressions import MAX_VARIABLES
 
-    code, err, seconds = run_process("orbit", "--system", system_file(tmp_path / "big.toml", MAX_VARIABLES + 1))
-    assert code == EXIT["input"] and seconds < QUICK, (err, seconds)
+    code, err = run_process("orbit", "--system", system_file(tmp_path / "big.toml", MAX_VARIABLES + 1))
+    assert code == EXIT["input"], err
     assert "MAX_VARIABLES" in err and "big.toml" in err
 
 
@@ -90,8 +88,8 @@ def test_the_size_refusal_of_a_system_file_names_its_variables_not_n(capsys, tmp
     ["enclose", "--steps", "100000", "--check-exact"],
 ], ids=" ".join)
 def test_the_exact_reference_orbit_is_estimated_up_front(argv):
-    code, err, seconds = run_process(*argv)
-    assert code == EXIT["input"] and seconds < QUICK, (err, seconds)
+    code, err = run_process(*argv)
+    assert code == EXIT["input"], err
     assert err.startswith("exact-khk: error: --steps:") and "exact reference orbit" in err and "in flint" in err
 
 
@@ -104,8 +102,8 @@ def test_the_exact_reference_orbit_is_estimated_up_front(argv):
     ["--n", "11", "--seed", "1", "--arith", "gf:4611686018420360881"],
 ], ids=" ".join)
 def test_liouville_refuses_work_far_beyond_its_budget(argv):
-    code, err, seconds = run_process("liouville", *argv)
-    assert code == EXIT["input"] and seconds < QUICK, (err, seconds)
+    code, err = run_process("liouville", *argv)
+    assert code == EXIT["input"], err
     assert "MAX_WORK_SECONDS" in err and "--pairs f" in err and "a smaller --n" in err, err
 
 
