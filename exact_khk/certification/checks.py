@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 from exact_khk.certification.records import Check
 from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
@@ -116,13 +117,20 @@ def run_check(name, claim, ar, fn, expected=True, degenerate=None) -> Check:
         holds, residual, detail = fn()
     except (SingularStepError, UndecidedError, PoleError) as exc:
         holds, residual, detail = None, "n/a", f"not evaluable: {exc}"
-    applicable = True
-    if not expected and holds is not False and degenerate is not None:
-        why = degenerate()
-        if why:
-            applicable, detail = False, f"inapplicable: {why}" + (f"; {detail}" if detail else "")
-    return Check(name, claim, expected, holds, residual, ar.name, time.perf_counter() - t0,
-                 evidence_of(ar), detail, applicable)
+    return inapplicable_if(Check(name, claim, expected, holds, residual, ar.name, time.perf_counter() - t0,
+                                 evidence_of(ar), detail), degenerate)
+
+
+def inapplicable_if(check: Check, degenerate) -> Check:
+    """``check``, recorded as inapplicable when it is a control (``expected`` False) that did
+    not fail and ``degenerate()`` names why it cannot fail here (None: it can)."""
+    if check.expected or check.holds is False or degenerate is None:
+        return check
+    why = degenerate()
+    if not why:
+        return check
+    return replace(check, applicable=False,
+                   detail=f"inapplicable: {why}" + (f"; {check.detail}" if check.detail else ""))
 
 
 # --- item generators (lazy, so a failing control stops early) -------------------

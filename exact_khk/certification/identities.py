@@ -43,7 +43,7 @@ from dataclasses import replace
 from exact_khk.arith import get_arith
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME, CycloArith, GFArith
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.certification.checks import rank
+from exact_khk.certification.checks import inapplicable_if, rank
 from exact_khk.certification.records import Check
 from exact_khk.systems.lie_poisson.invariants import Htilde, Pi, grad_Htilde
 from exact_khk.kahan.map import KahanMap
@@ -296,14 +296,12 @@ def _judged(system, x0, eps, recs):
     from exact_khk.certification.lie_poisson import ControlDegeneracy
 
     degenerate = ControlDegeneracy(system, x0, eps)
-    why = {"control:commutation": degenerate.commutation, "control:conservation": degenerate.control_conserves,
-           "rank": degenerate.common}
+    why = {"control:commutation": degenerate.commutation, "control:conservation": degenerate.control_conserves}
     out = []
     for r in recs:
-        reason = why[r.name]() if r.name in why and r.holds is not r.expected else None
-        if reason and not r.expected:
-            r = replace(r, applicable=False, detail=f"inapplicable: {reason}")
-        elif reason:
+        if not r.expected:
+            r = inapplicable_if(r, why.get(r.name))
+        elif r.name == "rank" and r.holds is not True and (reason := degenerate.common()):
             r = replace(r, holds=None, detail=f"undecided: the rank drops at such points: {reason}")
         out.append(r)
     return out

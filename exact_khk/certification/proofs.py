@@ -26,13 +26,13 @@ True
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 from fractions import Fraction
 
 import flint
 
 from exact_khk.arith import Arith, _as_fraction
 from exact_khk.errors import InputError
+from exact_khk.certification.checks import inapplicable_if
 from exact_khk.certification.records import Check
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.kahan.map import KahanMap
@@ -234,10 +234,7 @@ def _control(record, system):
     fail for this system (as certify's controls 1 and 2, at every point: ``everywhere``)."""
     from exact_khk.certification.lie_poisson import ControlDegeneracy
 
-    why = None if record.holds is False else ControlDegeneracy(system).everywhere()
-    if not why:
-        return record
-    return replace(record, applicable=False, detail=f"inapplicable: {why}")
+    return inapplicable_if(record, lambda: ControlDegeneracy(system).everywhere())
 
 
 def prove_conservation(system, kind="f", signs=None):
