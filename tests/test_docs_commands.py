@@ -143,10 +143,54 @@ def commands_in(text):
     return out
 
 
+def prose(text):
+    """The text with its fenced blocks blanked (line numbers kept): what inline code sits in."""
+    lines, fence = text.splitlines(), None
+    for k, line in enumerate(lines):
+        m = re.match(r"^\s*(```+|~~~+)", line)
+        if fence or m:
+            fence = None if fence and m and m.group(1).startswith(fence) else (fence or m.group(1))
+            lines[k] = ""
+    return "\n".join(lines)
+
+
+#: a command in inline code: ``exact-khk`` (or ``python -m exact_khk``) and its arguments
+INLINE_COMMAND = re.compile(r"^(?:\w+=\S*\s+)*(?:exact-khk|python3? -m exact_khk)(?:\s|$)")
+#: an exit status stated right after an inline command: "`...` (exit 4)", "`...` exits 2", "`...`: exit status 1"
+INLINE_EXIT = re.compile(r"^[\s,:;]*\(?\s*exit(?:s)?(?:\s+with)?(?:\s+status)?\s*(\d+)", re.I)
+
+
+def inline_commands_in(text):
+    """[(line, command, expected exit status)] of the ``exact-khk ...`` commands in the inline
+    code of a text's prose (which may run over a line break); the exit status is 0 unless the
+    words right after the span state one (``(exit 4)``, ``exits 2``)."""
+    out, body = [], prose(text)
+    for m in re.finditer(r"`([^`]+)`", body):
+        code = " ".join(m.group(1).split())
+        if INLINE_COMMAND.match(code):
+            code = re.sub(r"^(python3?) -m exact_khk\b", "exact-khk", code)
+            stated = INLINE_EXIT.match(body[m.end():m.end() + 60])
+            out.append((body.count("\n", 0, m.start()) + 1, code, int(stated.group(1)) if stated else 0))
+    return out
+
+
 def extract():
-    """[(file, line, block line, command, expected exit status)] for every documented command."""
-    return [(path.relative_to(ROOT).as_posix(), *item) for path in doc_files()
-            for item in commands_in(path.read_text(encoding="utf-8"))]
+    """[(file, line, block line, command, expected exit status)] for every documented command:
+    those of the shell blocks (block line: the block's first line, whose commands share one
+    working folder), then those of inline code, each (command, exit status) once (block line
+    None: a folder of its own)."""
+    out, seen = [], set()
+    for path in doc_files():
+        text, name = path.read_text(encoding="utf-8"), path.relative_to(ROOT).as_posix()
+        out += [(name, *item) for item in commands_in(text)]
+    seen = {(c[3], c[4]) for c in out}
+    for path in doc_files():
+        name = path.relative_to(ROOT).as_posix()
+        for line, command, expected in inline_commands_in(path.read_text(encoding="utf-8")):
+            if (command, expected) not in seen:
+                seen.add((command, expected))
+                out.append((name, line, None, command, expected))
+    return out
 
 
 COMMANDS = extract()
@@ -206,7 +250,7 @@ def test_documented_command(command, expected, path, line, block, tmp_path_facto
     unfilled = [a for a in argv[1:] if PLACEHOLDER.search(a) and not a.startswith("-")]
     assert not unfilled, (f"{path}:{line}: {command!r} has a placeholder {unfilled}; list it in ALLOW "
                           f"(tests/test_docs_commands.py) with the reason it cannot run")
-    monkeypatch.chdir(_block_folder(path, block, tmp_path_factory))
+    monkeypatch.chdir(_block_folder(path, block if block is not None else f"inline {line}", tmp_path_factory))
     code = main(argv[1:])
     err = capsys.readouterr().err
     assert "Traceback" not in err
@@ -239,17 +283,11 @@ def script_commands_in(text):
     """[(line, command)] of the ``python scripts/NAME.py ...`` commands in a text: in shell
     blocks, and in inline code (which may run over a line break)."""
     out = [(line, seg) for line, _, seg, _ in segments(text) if SCRIPT.match(seg)]
-    lines, fence = text.splitlines(), None
-    for k, line in enumerate(lines):  # the prose: fenced blocks blanked, line numbers kept
-        m = re.match(r"^\s*(```+|~~~+)", line)
-        if fence or m:
-            fence = None if fence and m and m.group(1).startswith(fence) else (fence or m.group(1))
-            lines[k] = ""
-    prose = "\n".join(lines)
-    for m in re.finditer(r"`([^`]+)`", prose):
+    body = prose(text)
+    for m in re.finditer(r"`([^`]+)`", body):
         code = " ".join(m.group(1).split())
         if SCRIPT.match(code):
-            out.append((prose.count("\n", 0, m.start()) + 1, code))
+            out.append((body.count("\n", 0, m.start()) + 1, code))
     return out
 
 
