@@ -1,10 +1,14 @@
 """Every documented command works.
 
 Every ``exact-khk ...`` command line shown in a shell block (```bash, ```sh,
-```shell, ```console) of README.md and docs/*.md is extracted and run in-process
+```shell, ```console) of README.md and docs/*.md, and every one in inline code
+in their prose (`` `exact-khk orbit --steps 5` ``), is extracted and run in-process
 through :func:`exact_khk.cli.main.main`, in a fresh temporary folder, and must
 end with the exit status the text implies: 0, unless the line's own comment
-says otherwise (``# exit 4``, ``# exits with status 1``, ``# -> exit 2``).
+says otherwise (``# exit 4``, ``# exits with status 1``, ``# -> exit 2``), or, for
+inline code, the words right after it (`` `...` (exit 2)``, `` `...` exits 4``).
+Where the text names the verdict a command prints (``# VALID``, ``# last line
+VERIFIED: ...``, ``the verdict, e.g. `VALID: ...` ``), its output must contain it.
 
 Extraction is deliberately tolerant of the docs being rewritten: shell prompts
 (``$ ``), line continuations (``\\``), chains (``&&``, ``;``, ``|``: the
@@ -47,8 +51,15 @@ ALLOW = {
     r"--scheduler\s+\S*:\d+": "needs a running Dask scheduler at that address",
 }
 
-#: commands that take long (more than about 10 s): run only under ``-m slow``
+#: commands that take long (more than about 10 s): run only under ``-m slow``; a pattern is
+#: matched against the command and against "path: command"
 SLOW = {
+    r"^docs/benchmarks\.md: ": "the commands measured in the benchmarks (seconds to minutes each)",
+    r"^exact-khk liouville --n ([5-9]|\d\d)": "liouville at n >= 5: 5 s over F_P, 20 s to minutes in Q(zeta_n)",
+    r"^exact-khk prove --n 3": "symbolic proofs for n = 3 (about 11 CPU minutes)",
+    r"^exact-khk certify .*--arith cyclo:": "certificates over Q(zeta_N) with every involution (several seconds)",
+    r"^exact-khk certify --n ([6-9]|\d\d)": "certificates at n >= 6 (ten seconds and more)",
+    r"^exact-khk orbit --n (\d{3,}|[6-9]\d)": "exact orbits at n >= 60",
     r"^exact-khk hard(\s|$)(?!.*--only)": "the whole hard-case catalogue (about 30 s or more)",
     r"^exact-khk scale .*--digits": "precision searches over many precisions",
     r"^exact-khk scale .*--steps\s+200": "200 steps in eleven arithmetics",
@@ -121,8 +132,9 @@ def _split_comment(line):
 
 
 def segments(text):
-    """(line, block line, command, expected exit status) of every command of the shell blocks
-    of a text (chains split at &&, ||, ;, |; prompts and comments removed)."""
+    """(line, block line, command, expected exit status, verdict words its comment claims) of
+    every command of the shell blocks of a text (chains split at &&, ||, ;, |; prompts and
+    comments removed)."""
     for lineno, block in shell_blocks(text):
         for offset, raw in logical_lines(block):
             line = re.sub(r"^\s*(\$|>|%)\s+", "", raw)  # a prompt
@@ -130,16 +142,26 @@ def segments(text):
             m = EXIT_COMMENT.search(comment)
             expected = int(m.group(1)) if m else 0
             for segment in re.split(r"&&|\|\||;|\|", code):
-                yield lineno + offset, lineno, " ".join(segment.split()), expected
+                yield lineno + offset, lineno, " ".join(segment.split()), expected, claimed_words(comment)
+
+
+#: verdict words a comment or the text may claim a command prints (checked in its output)
+VERDICT = re.compile(r"\b(VALID|INVALID|INCONCLUSIVE|VERIFIED|NOT VERIFIED|FOUND|NONE)\b")
+
+
+def claimed_words(text):
+    """The verdict words a comment claims, e.g. "# VALID, exit 0" -> ["VALID"]."""
+    return VERDICT.findall(text or "")
 
 
 def commands_in(text):
-    """[(line, block line, command, expected exit status)] of the exact-khk commands in a text."""
+    """[(line, block line, command, expected exit status, claimed verdict words)] of the exact-khk
+    commands in the shell blocks of a text."""
     out = []
-    for line, block, seg, expected in segments(text):
+    for line, block, seg, expected, claims in segments(text):
         seg = re.sub(r"^(python3?|\S*/python3?) -m exact_khk\b", "exact-khk", seg)
         if re.match(r"^(\w+=\S*\s+)*exact-khk(\s|$)", seg):
-            out.append((line, block, seg, expected))
+            out.append((line, block, seg, expected, claims))
     return out
 
 
@@ -175,7 +197,8 @@ def inline_commands_in(text):
 
 
 def extract():
-    """[(file, line, block line, command, expected exit status)] for every documented command:
+    """[(file, line, block line, command, expected exit status, claimed verdict words)] for every
+    documented command:
     those of the shell blocks (block line: the block's first line, whose commands share one
     working folder), then those of inline code, each (command, exit status) once (block line
     None: a folder of its own)."""
@@ -189,26 +212,28 @@ def extract():
         for line, command, expected in inline_commands_in(path.read_text(encoding="utf-8")):
             if (command, expected) not in seen:
                 seen.add((command, expected))
-                out.append((name, line, None, command, expected))
+                out.append((name, line, None, command, expected, []))
     return out
 
 
 COMMANDS = extract()
 
 
-def _reason(table, command):
-    return next((why for pattern, why in table.items() if re.search(pattern, command)), None)
+def _reason(table, command, path=None):
+    """The reason of the first pattern of ``table`` that matches the command (or "path: command")."""
+    texts = [command] + ([f"{path}: {command}"] if path else [])
+    return next((why for pattern, why in table.items() if any(re.search(pattern, s) for s in texts)), None)
 
 
 def _param(item):
-    path, line, block, command, expected = item
+    path, line, block, command, expected, claims = item
     marks = []
-    if _reason(SLOW, command):
+    if _reason(SLOW, command, path):
         marks.append(pytest.mark.slow)
     known = _reason(KNOWN, f"{path}: {command}")
     if known:
         marks.append(pytest.mark.xfail(strict=False, reason=known))
-    return pytest.param(command, expected, path, line, block, marks=marks, id=f"{path}:{line}: {command[:70]}")
+    return pytest.param(command, expected, claims, path, line, block, marks=marks, id=f"{path}:{line}: {command[:70]}")
 
 
 def test_commands_were_found():
@@ -237,9 +262,9 @@ def _block_folder(path, block, factory):
     return _FOLDERS[key]
 
 
-@pytest.mark.parametrize("command, expected, path, line, block", [_param(c) for c in COMMANDS])
-def test_documented_command(command, expected, path, line, block, tmp_path_factory, monkeypatch, capsys):
-    why = _reason(ALLOW, command)
+@pytest.mark.parametrize("command, expected, claims, path, line, block", [_param(c) for c in COMMANDS])
+def test_documented_command(command, expected, claims, path, line, block, tmp_path_factory, monkeypatch, capsys):
+    why = _reason(ALLOW, command, path)
     if why:
         pytest.skip(f"{path}:{line}: not run here: {why}")
     argv = shlex.split(command)
@@ -252,9 +277,11 @@ def test_documented_command(command, expected, path, line, block, tmp_path_facto
                           f"(tests/test_docs_commands.py) with the reason it cannot run")
     monkeypatch.chdir(_block_folder(path, block if block is not None else f"inline {line}", tmp_path_factory))
     code = main(argv[1:])
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert "Traceback" not in err
     assert code == expected, f"{path}:{line}: {command!r} exited {code}, the text implies {expected}: {err[-500:]}"
+    missing = [w for w in claims if not re.search(rf"\b{w}\b", out + err)]
+    assert not missing, f"{path}:{line}: {command!r}: the text claims {missing} in its output: {(out + err)[-500:]}"
 
 
 def test_extraction_rules():
@@ -263,10 +290,33 @@ def test_extraction_rules():
         "pip install . && exact-khk systems | head", "python -m exact_khk --version",
         "exact-khk certify --eps 0  # exit 2", "echo hi", "```", "```python", "exact-khk not-a-shell-block", "```",
         "  ```sh", "  EXACT_KHK_MAX_MEMORY=8G exact-khk orbit", "  ```"])
-    found = [(command, expected) for _, _, command, expected in commands_in(text)]
+    found = [(command, expected) for _, _, command, expected, _ in commands_in(text)]
     assert found == [("exact-khk orbit --steps 2", 0), ("exact-khk certify --steps 2", 0),
                      ("exact-khk systems", 0), ("exact-khk --version", 0), ("exact-khk certify --eps 0", 2),
                      ("EXACT_KHK_MAX_MEMORY=8G exact-khk orbit", 0)]
+
+
+def test_inline_extraction_rules():
+    """Inline code in prose: commands found (over a line break too), exit statuses stated right
+    after the span, fenced blocks and other code spans left alone, verdict words of comments."""
+    text = "\n".join([
+        "Run `exact-khk orbit --steps 2` first; `exact-khk certify --eps 0` (exit 2) is refused,",
+        "and `python -m exact_khk certify",
+        "--steps 3` exits 4 here. `exact-khk:` is an error prefix, `exact_khk.certify` a function.",
+        "```bash", "exact-khk in-a-block  # VALID, exit 0", "```", "`exact-khk systems`"])
+    assert [(c, e) for _, c, e in inline_commands_in(text)] == [
+        ("exact-khk orbit --steps 2", 0), ("exact-khk certify --eps 0", 2), ("exact-khk certify --steps 3", 4),
+        ("exact-khk systems", 0)]
+    assert [line for line, _, _ in inline_commands_in(text)] == [1, 1, 2, 7]
+    assert [c[4] for c in commands_in(text)] == [["VALID"]]
+    assert claimed_words("# last line VERIFIED: ..., exit 0") == ["VERIFIED"]
+    assert claimed_words("# exit 4: an orbit meets a singular step") == []
+
+
+def test_inline_commands_were_found():
+    inline = [c for c in COMMANDS if c[2] is None]
+    assert len(inline) >= 10, inline
+    assert any(c[0] == "README.md" for c in inline) and any(c[0].startswith("docs/") for c in inline)
 
 
 # --- documented scripts: ``python scripts/NAME.py ...`` --------------------------------
@@ -282,7 +332,7 @@ TREE_PLACEHOLDER = "OLD_TREE"
 def script_commands_in(text):
     """[(line, command)] of the ``python scripts/NAME.py ...`` commands in a text: in shell
     blocks, and in inline code (which may run over a line break)."""
-    out = [(line, seg) for line, _, seg, _ in segments(text) if SCRIPT.match(seg)]
+    out = [(line, seg) for line, _, seg, _, _ in segments(text) if SCRIPT.match(seg)]
     body = prose(text)
     for m in re.finditer(r"`([^`]+)`", body):
         code = " ".join(m.group(1).split())
