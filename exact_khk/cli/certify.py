@@ -49,7 +49,10 @@ def register(sub):
                        description="Certify the theorems of Petrera & Suris on the orbit of x0 (with no "
                        "options: the built-in n = 3 system, x0 and eps = 1/10, 20 steps), or with --system what "
                        "a catalogue system or a system file declares. Exit status 0 VALID, 1 INVALID (a claim "
-                       "is false), 4 INCONCLUSIVE.")
+                       "is false), 2 malformed input or a run beyond a limit, 3 a singular step of Phi_f (or an "
+                       "integral at its pole, or a floating result with no trustworthy bit), 4 INCONCLUSIVE (a "
+                       "check undecided, or a control that did not fail or cannot fail), 5 an output that cannot "
+                       "be written or memory exhausted, 70 an internal error, 130 interrupted.")
     add_system_options(p, steps_default=None)
     p.add_argument("--signs", action="append", metavar="SIGNS",
                    help="involution of an associated field, e.g. '-++' (repeatable; default: every "

@@ -31,7 +31,7 @@ def register(sub):
                        description="Check the n integrals, conservation by Φ_f and every Φ_g, "
                        "commutation, involutivity and rank n: exactly at orbit points "
                        "(--arith cyclo:N, flint, ...; default cyclo:n for n >= 3, where the involutions "
-                       "need Q(omega)) or as identities over gf:P (Schwartz–Zippel).")
+                       "need Q(omega), and flint for n = 2) or as identities over gf:P (Schwartz–Zippel).")
     add_system_options(p, steps_default=2, lie_poisson_only=True)
     p.add_argument("--involutions", default="all",
                    help="'all' (2^n - 2 sign patterns), 'basis' (B_0..B_{n-1}) or a comma list "

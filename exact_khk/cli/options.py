@@ -83,7 +83,8 @@ def add_system_options(p, steps_default=20, lie_poisson_only=False, arith=True):
     ``--arith``, for commands that choose their own arithmetic)."""
     from exact_khk.systems.lie_poisson.system import DEFAULT_EPS
 
-    g = p.add_argument_group("system (default: the built-in n = 3 Lie–Poisson system, see README)")
+    g = p.add_argument_group("system (default: the built-in n = 3 Lie–Poisson system of the README, unless the "
+                             "description above names another)")
     if lie_poisson_only:
         p.set_defaults(system=None)
     else:
@@ -97,7 +98,9 @@ def add_system_options(p, steps_default=20, lie_poisson_only=False, arith=True):
     g.add_argument("--c", help="third Hessian block vector")
     g.add_argument("--seed", type=int, help="draw a, b, c (and x0 if not given) as small random integers")
     g.add_argument("--x0", help="initial point: comma-separated rationals (2n for the Lie–Poisson family)")
-    g.add_argument("--eps", default=None, help=f"step size, a nonzero rational (default {DEFAULT_EPS})")
+    g.add_argument("--eps", default=None, help=f"step size eps, a nonzero rational: one Kahan step approximates the "
+                   f"flow over time 2*eps (Kahan's step h = 2 eps) (default {DEFAULT_EPS}; with --system: the "
+                   f"system's)")
     g.add_argument("--steps", type=int, default=steps_default,
                    help=f"number of steps K (default {steps_default})" if steps_default is not None else
                    "number of steps K (default 20, or the system file's [defaults] steps)")
@@ -118,7 +121,8 @@ def arith_help() -> str:
     from exact_khk.arith.cyclotomic import MAX_CYCLOTOMIC_N, MIN_PRIME
 
     names = arith_names()
-    return ("arithmetic: " + ", ".join(names) + " (default: fastest exact). flint, gmpy2, fraction: exact "
+    return ("arithmetic: " + ", ".join(names) + " (default: flint, the fastest exact one, unless the description "
+            "above names another). flint, gmpy2, fraction: exact "
             "rationals; float: IEEE float64; mp:P: mpmath at P bits; ball:P: certified arb balls at P bits "
             f"(2 <= P <= {MAX_PRECISION_BITS}); cyclo:N: exact Q(zeta_N), N <= {MAX_CYCLOTOMIC_N}; gf:P: the "
             f"prime field F_P, P prime, {MIN_PRIME} <= P < 2^64")

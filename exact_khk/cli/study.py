@@ -109,7 +109,8 @@ def register(sub):
                    help="build the cases from a catalogue system or a system file (.toml) instead of "
                         "running the Lie–Poisson catalogue")
     h.add_argument("--x0", help="with --system: the point of the cases (default: the system's x0)")
-    h.add_argument("--eps", help="with --system: the step size of the long orbit (default: the system's)")
+    h.add_argument("--eps", help="with --system: the step size eps of the long orbit; one Kahan step approximates the "
+                                 "flow over time 2*eps (h = 2 eps) (default: the system's)")
     h.add_argument("--ariths", default=HARD_ARITHS,
                    help="comma-separated floating/ball arithmetics (default: %(default)s)")
     h.add_argument("--digits", type=int, default=10,

@@ -20,10 +20,11 @@ def register(sub):
     p = sub.add_parser(
         "sweep", help="run one task over many systems, points and step sizes (locally or on Dask)",
         description="Run the task of a sweep spec (TOML: the systems, points, step sizes, arithmetics "
-                    "and the task: certify, orbit, scale, probe) on every combination. One JSON line per "
-                    "task is appended to DIR/results.jsonl as tasks finish; rerunning the same command "
-                    "skips the tasks already done. A summary (counts by verdict, tables, the slowest "
-                    "tasks, plots) is written to DIR and printed. See docs/sweeps.md.")
+                    "and the task: certify, orbit, scale, degrees, find-integrals, probe) on every "
+                    "combination. One JSON line per task is appended to DIR/results.jsonl as tasks "
+                    "finish; rerunning the same command skips the tasks already done. A summary (counts "
+                    "by verdict, tables, the slowest tasks, plots) is written to DIR and printed. See "
+                    "docs/sweeps.md.")
     p.add_argument("spec", metavar="SPEC", help="the sweep spec file (TOML; see docs/sweeps.md)")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="folder for results.jsonl, sweep.json and the summary (created if missing)")
