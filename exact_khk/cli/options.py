@@ -214,8 +214,16 @@ def _point_and_eps(args, system, reals, default_eps, default_x0, seeded):
     return system, x0, eps
 
 
+def add_json_option(p, what="the result"):
+    """The one output option of every command: ``--json [PATH]``, ``what`` as JSON to PATH
+    (written atomically, :func:`write_json`), or to stdout with no PATH or ``-``."""
+    p.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH",
+                   help=f"write {what} as JSON to PATH (atomically), or to stdout with no PATH or '-' "
+                        f"(then instead of the table)")
+
+
 def write_json(obj, target):
-    """Write ``obj`` to a path (atomically), or to stdout for ``-``."""
+    """Write ``obj`` to a path (atomically), or to stdout for ``-`` (or None)."""
     text = json.dumps(obj, indent=1)
     if target in (None, "-"):
         print(text)

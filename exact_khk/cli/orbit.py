@@ -7,8 +7,8 @@ import math
 from fractions import Fraction
 
 from exact_khk.arith import get_arith, point_height
-from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_resources, field_name,
-                                   system_from_args, write_json)
+from exact_khk.cli.options import (Progress, add_field_options, add_json_option, add_system_options, check_output,
+                                   check_resources, field_name, system_from_args, write_json)
 from exact_khk.kahan.map import METHODS, KahanMap
 
 
@@ -22,11 +22,12 @@ def register(sub):
                    help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
                         "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n < 16: "
                         "2x2 over each factor of t^n - 1); default auto: the fastest measured path")
-    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    add_json_option(p, "the orbit (exact 'p/q' strings, all digits of floats)")
     p.set_defaults(func=cmd_orbit)
 
 
 def cmd_orbit(args):
+    check_output(args.json)
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
     fld = _field(system, args, ar)
@@ -35,7 +36,7 @@ def cmd_orbit(args):
     with Progress(args, args.steps, "orbit") as progress:
         pts = phi.orbit(x0, args.steps, progress=progress)
     growth = _height_growth(ar, pts)
-    if args.json:
+    if args.json is not None:
         from exact_khk.certification.records import library_versions
 
         write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
@@ -44,8 +45,9 @@ def cmd_orbit(args):
                     "x0": [str(t) for t in x0],
                     "orbit": [[ar.format(t) for t in p] for p in pts],
                     "height_growth": growth.to_json() if growth else None,
-                    "versions": library_versions()}, "-")
-        return 0
+                    "versions": library_versions()}, args.json)
+        if args.json == "-":
+            return 0
     print(system.describe())
     kind = "exact" if ar.exact else f"{ar.prec}-bit floating point"
     print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
