@@ -12,7 +12,7 @@ from exact_khk.arith import get_arith
 from exact_khk.certification.generic import CLAIMS, certify_system
 from exact_khk.certification.lie_poisson import certify, default_signs
 from exact_khk.cli.options import (Progress, add_json_option, add_system_options, check_output, check_resources,
-                                   system_from_args, write_json)
+                                   invocation, system_from_args, write_json)
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
@@ -110,8 +110,14 @@ def cmd_certify(args):
         print(cert.table())
         print(cert.verdict())
     if args.json is not None:
-        write_json(cert.to_json(), args.json)
+        write_json(_with_invocation(cert, args, x0, eps), args.json)
     return EXIT_STATUS[cert.status]
+
+
+def _with_invocation(cert, args, x0, eps) -> dict:
+    """The certificate's JSON with the informational key ``invocation`` (the command line and
+    its resolved options; the verifier does not read it)."""
+    return {**cert.to_json(), "invocation": invocation(args, arith=cert.arith, x0=x0, eps=eps, steps=args.steps)}
 
 
 def _certify_system(args, system, x0, eps):
@@ -129,7 +135,7 @@ def _certify_system(args, system, x0, eps):
         print(cert.table())
         print(cert.verdict())
     if args.json is not None:
-        write_json(cert.to_json(), args.json)
+        write_json(_with_invocation(cert, args, x0, eps), args.json)
     return EXIT_STATUS[cert.status]
 
 

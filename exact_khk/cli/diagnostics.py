@@ -24,7 +24,8 @@ def register(sub):
     p.add_argument("--exact", type=int, default=0, metavar="K",
                    help="also compose the first K iterates exactly over Q (where affordable) to confirm")
     p.add_argument("--confirm", type=int, default=3,
-                   help="terms beyond the fit that must confirm the recurrence before growth is classified (default 3)")
+                   help="terms beyond the fit that must confirm the recurrence before growth is classified "
+                        "(default and minimum 3)")
     p.add_argument("--no-heights", action="store_true", help="skip the heights of the exact orbit of x0")
     p.add_argument("--max-bits", type=int, default=100_000, help="stop the height orbit past this height (default 100000)")
     p.add_argument("--plot", metavar="FILE.png", help="plot degree and log-height against the step (needs matplotlib)")
@@ -78,7 +79,7 @@ def cmd_degrees(args):
                                   confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits,
                                   progress=progress)
     except InputError as exc:  # name the command-line options
-        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits):",
+        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits|confirm):",
                                 lambda m: "--" + m.group(1).replace("_", "-") + ":", str(exc))) from None
     if args.plot:
         plot_growth(args.plot, degrees=res, heights=res.heights,

@@ -233,6 +233,19 @@ def write_json(obj, target):
         write_atomic(target, text + "\n", "--json")
 
 
+def invocation(args, **resolved) -> dict:
+    """The command line (``argv``) and its options after defaults (``options``), with what the
+    command resolved from them (``resolved``: the arithmetic, ε, x0, ...): an informational
+    record for a document the command writes (a certificate's ``invocation``)."""
+    plain = (str, int, float, bool, type(None))
+    options = {k: v for k, v in sorted(vars(args).items())
+               if k not in ("func", "argv") and (isinstance(v, plain) or
+                                                 isinstance(v, list) and all(isinstance(t, plain) for t in v))}
+    return {"argv": list(getattr(args, "argv", [])), "options": options,
+            "resolved": {k: v if isinstance(v, plain) else [str(t) for t in v] if isinstance(v, (list, tuple))
+                         else str(v) for k, v in resolved.items()}}
+
+
 def check_output(target, what="--json"):
     """Check an output path (not ``-``) before the work starts."""
     if target not in (None, "-"):

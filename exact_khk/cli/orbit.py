@@ -50,7 +50,7 @@ def cmd_orbit(args):
             return 0
     print(system.describe())
     kind = "exact" if ar.exact else f"{ar.prec}-bit floating point"
-    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
+    print(f"field {fld.label}, eps = {_abbreviate(eps)}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
           f"method {args.method}: {phi.path}")
     if not (ar.rational or not ar.exact):  # Q(zeta), F_p: no real approximation to show
         for k, p in enumerate(pts):
@@ -102,6 +102,10 @@ def _display(ar, t) -> str:
             return f"{v:.8g}"
     except (OverflowError, ValueError, ZeroDivisionError):
         pass
+    if ar.rational:  # beyond the float range: the leading digits of a 64-bit arb ball, cheap at any height
+        import flint
+
+        return _leading(*_parts(t))
     try:
         q = ar.to_fraction(t)
     except (TypeError, ValueError, ArithmeticError):
@@ -120,6 +124,37 @@ def _display(ar, t) -> str:
         digits, e = digits // 10, e + 1
     text = str(digits)
     return f"{sign}{text[0]}.{text[1:].rstrip('0') or '0'}e{e:+d}"
+
+
+def _parts(t):
+    """(numerator, denominator) of an exact rational of any backend (fmpq, mpq, Fraction)."""
+    return (t.p, t.q) if hasattr(t, "p") else (t.numerator, t.denominator)
+
+
+#: the most characters a number takes in the header; beyond, its leading digits and size
+MAX_SHOWN_CHARS = 60
+
+
+def _leading(p, q) -> str:
+    """p/q to 8 significant digits by a 64-bit arb ball (p, q integers of any size)."""
+    import flint
+
+    with flint.ctx.workprec(64):
+        text = (flint.arb(flint.fmpz(p)) / flint.arb(flint.fmpz(q))).mid().str(8, radius=False)
+    mantissa, e, exponent = text.partition("e")
+    if "." in mantissa:
+        mantissa = mantissa.rstrip("0").rstrip(".") if e else mantissa
+    return mantissa + e + exponent
+
+
+def _abbreviate(q) -> str:
+    """A rational in full, or beyond :data:`MAX_SHOWN_CHARS` characters (estimated from bit
+    lengths: printing a 10^5-digit integer costs seconds) its 8 leading digits and its size."""
+    p, d = _parts(q)
+    digits = [int(abs(v).bit_length() * 0.30103) + 1 for v in (p, d)]
+    if sum(digits) + 1 <= MAX_SHOWN_CHARS:
+        return str(q)
+    return f"{_leading(p, d)} (a rational of about {digits[0]:,}/{digits[1]:,} digits; --json prints it exactly)"
 
 
 def _names(system):

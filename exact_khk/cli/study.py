@@ -12,7 +12,8 @@ import math
 import pathlib
 import sys
 
-from exact_khk.cli.options import add_system_options, check_dense, check_resources, shows_progress, system_from_args
+from exact_khk.cli.options import (Progress, add_system_options, check_dense, check_resources, shows_progress,
+                                   system_from_args)
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
@@ -267,7 +268,8 @@ def cmd_hard(args):
         for opt, value in (("--x0", args.x0), ("--eps", args.eps)):
             if value is not None:
                 raise InputError(f"{opt} applies only with --system (the catalogue fixes its own points and steps)")
-        cases = hard.catalogue(long_steps=args.long_steps)
+        with Progress(args, None, "hard: building the cases", unit="s") as progress:
+            cases = hard.catalogue(long_steps=args.long_steps)
     else:
         from exact_khk.systems.catalogue import resolve
 
@@ -277,7 +279,8 @@ def cmd_hard(args):
         eps = None if args.eps is None else parse_rational(args.eps, "--eps")
         if eps == 0:
             raise InputError("--eps: the step size must be nonzero")
-        cases = hard.system_cases(system, x0, eps, long_steps=args.long_steps)
+        with Progress(args, None, "hard: building the cases", unit="s") as progress:
+            cases = hard.system_cases(system, x0, eps, long_steps=args.long_steps)
         title = f"hard cases of {system.describe()}, x0 = ({', '.join(str(t) for t in cases[-1].x0)})"
         if not any(c.name.startswith("near-root") for c in cases):
             title += "; det(I - eps f'(x0)) has no real root in eps: no near-singular case"
@@ -286,8 +289,9 @@ def cmd_hard(args):
         cases = [c for c in cases if args.only.lower() in c.name.lower()]
         if not cases:
             raise InputError(f"--only: no case name contains {args.only!r}")
-    results = hard.run_catalogue(cases, ariths, args.digits, precision=not args.no_precision,
-                                 progress=shows_progress(args))
+    precision = not args.no_precision
+    with Progress(args, len(cases) * hard.case_stages(ariths, precision), "hard", unit="stage") as progress:
+        results = hard.run_catalogue(cases, ariths, args.digits, precision=precision, progress=progress)
     table = hard.markdown_table(results)
     legend = ("cells: ok / WARN (NearSingularWarning, κ = condition estimate, @step) / SINGULAR "
               "(SingularStepError) / UNDECIDED (ball pivot not certain) / OUT OF RANGE (the arithmetic "
