@@ -19,6 +19,10 @@ COMMANDS = [
     (["degrees", "--system", "lotka-volterra", "--steps", "5", "--no-heights"], "degrees"),
     (["find-integrals", "--system", "euler-top", "--degree", "1"], "system"),
     (["liouville", "--n", "2", "--seed", "1", "--steps", "1"], "records"),
+    # the commands that write several files with --out DIR also give their main document by --json
+    (["scale", "--steps", "3", "--ariths", "float", "--no-diagnostics"], "runs"),
+    (["enclose", "--steps", "3", "--methods", "naive"], "runs"),
+    (["hard", "--only", "long", "--long-steps", "5", "--no-precision", "--ariths", "float"], "cases"),
 ]
 
 

@@ -246,6 +246,24 @@ def invocation(args, **resolved) -> dict:
                          else str(v) for k, v in resolved.items()}}
 
 
+def json_command(run):
+    """A command ``run(args) -> JSON document`` with ``--json [PATH]``: its printed tables are
+    dropped when the document goes to stdout; the document is then written (:func:`write_json`)."""
+    def cmd(args):
+        import contextlib
+        import io
+
+        check_output(args.json)
+        with contextlib.redirect_stdout(io.StringIO()) if args.json == "-" else contextlib.nullcontext():
+            doc = run(args)
+        if args.json is not None:
+            write_json(doc, args.json)
+        return 0
+
+    cmd.__doc__ = run.__doc__
+    return cmd
+
+
 def check_output(target, what="--json"):
     """Check an output path (not ``-``) before the work starts."""
     if target not in (None, "-"):
