@@ -24,7 +24,7 @@ MAX_CERTIFICATE = 200_000_000
 def register(sub):
     p = sub.add_parser("verify", help="re-check a saved certificate (orbit, integral values, status) "
                        "by a separate minimal exact code path",
-                       description="Re-check a certificate written by 'exact-khk certify --json FILE': every "
+                       description="Re-check a certificate written by 'exact-khk certify --json PATH': every "
                        "orbit point is the Kahan step of the previous one (the linear equation, checked by "
                        "substitution, and a nonzero determinant), every recorded integral value is recomputed, "
                        "conservation and the status agree with the recorded checks. Plain Fraction arithmetic, "
