@@ -103,8 +103,6 @@ def _display(ar, t) -> str:
     except (OverflowError, ValueError, ZeroDivisionError):
         pass
     if ar.rational:  # beyond the float range: the leading digits of a 64-bit arb ball, cheap at any height
-        import flint
-
         return _leading(*_parts(t))
     try:
         q = ar.to_fraction(t)
