@@ -16,11 +16,10 @@ from their modules on first use (module ``__getattr__``), so that the command
 line starts without the numerical libraries a command does not need.
 """
 
-from __future__ import annotations
+from importlib import import_module as _import_module
 
-import importlib
-
-TYPE_CHECKING = False  # as typing.TYPE_CHECKING (type checkers read it as True), without importing typing
+TYPE_CHECKING = False  # as typing.TYPE_CHECKING (type checkers read it as True), without importing typing;
+# deleted at the end: the namespace holds the public names only
 __version__ = "0.1.0"
 
 #: where each public name lives (imported on first access)
@@ -59,9 +58,9 @@ __all__ = [  # the names of _EXPORTS (a test checks that they agree), literal fo
 
 def __getattr__(name):
     if name in _WHERE:
-        value = getattr(importlib.import_module(_WHERE[name]), name)
+        value = getattr(_import_module(_WHERE[name]), name)
     elif name in _MODULES:
-        value = importlib.import_module(_MODULES[name])
+        value = _import_module(_MODULES[name])
     else:
         raise AttributeError(f"module 'exact_khk' has no attribute {name!r}")
     globals()[name] = value
@@ -69,7 +68,7 @@ def __getattr__(name):
 
 
 def __dir__():
-    return sorted(set(globals()) | set(__all__) | set(_MODULES))
+    return sorted(set(__all__) | set(_MODULES) | {n for n in globals() if n.startswith("__")})
 
 
 if TYPE_CHECKING:  # for type checkers and linters; at run time the names come from __getattr__
@@ -88,3 +87,5 @@ if TYPE_CHECKING:  # for type checkers and linters; at run time the names come f
     from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs,
                                                       involution_circulant, rational_sign_patterns)
     from exact_khk.systems.quadratic import QuadraticField
+
+del TYPE_CHECKING

@@ -233,7 +233,7 @@ ROWS += [row(["--version"], 0), row(["--help"], 0), row([], 2, id="no command")]
                                         "hard", "enclose")] + [
     row(["bogus"], 2), row(["orbit", "--bogus"], 2), row(["orbit", "--steps"], 2),
     row(["orbit", "--eps", "--steps", "3"], 2), row(["systems", "extra"], 2), row(["systems"], 0),
-    row(["systems", "--json"], 0), row(["certify", "--json"], 2, id="certify --json without FILE"),
+    row(["systems", "--json"], 0), row(["certify", "--steps", "1", "--json"], 0, id="certify --json without PATH: stdout"),
 ]
 
 

@@ -176,8 +176,15 @@ def _digits(n) -> str:
         return str(n)
 
 
+class UnreadableNumber(InputError, TypeError):
+    """A value that is not a number of the kind asked for (an :class:`InputError`; also a
+    ``TypeError``, as operators and ``except TypeError`` around conversions expect)."""
+
+
 def _as_fraction(value) -> Fraction:
-    """An exact rational from int, Fraction, or anything with numerator/denominator."""
+    """An exact rational from int, Fraction, or anything with numerator/denominator;
+    anything else raises :class:`UnreadableNumber` (``Arith.convert``'s error for every
+    value it cannot read: NaN, None, text, lists)."""
     if isinstance(value, Fraction):
         return value
     if isinstance(value, int):
@@ -185,7 +192,8 @@ def _as_fraction(value) -> Fraction:
     for num, den in (("numerator", "denominator"), ("p", "q")):
         if hasattr(value, num) and hasattr(value, den):
             return Fraction(int(getattr(value, num)), int(getattr(value, den)))
-    raise TypeError(f"cannot convert {value!r} ({type(value).__name__}) to an exact rational")
+    raise UnreadableNumber(f"cannot convert {_short(value)} ({type(value).__name__}) to an exact rational "
+                           f"(read numbers such as '1/3' with ar(value))")
 
 
 def bareiss_solve(M, B):
@@ -545,12 +553,26 @@ _CACHE: dict[str, Arith] = {}
 _PARAM_LETTER: dict[str, str] = {"cyclo": "N"}
 
 
-def register_arith(prefix: str, factory, parametrized: bool = True, letter: str = "P"):
+def register_arith(prefix: str, factory, parametrized: bool = True, letter: str = "P", replace: bool = False):
     """Make ``prefix:PARAM`` (or a plain ``prefix``) a name for :func:`get_arith`.
 
     ``factory(int_param)`` (or ``factory()``) returns an :class:`Arith`;
-    ``letter`` names the parameter in :func:`arith_names` (``cyclo:N``).
+    ``letter`` names the parameter in :func:`arith_names` (``cyclo:N``).  A name that is
+    already known (``flint``, ``mp``, ...) is refused unless ``replace=True``: silently
+    replacing a built-in arithmetic would change every result computed under its name.
     """
+    if not isinstance(prefix, str) or not re.fullmatch(r"[a-z][a-z0-9_]*", prefix, re.ASCII):
+        raise InputError(f"register_arith: expected a lower-case name such as 'myarith', got {_short(prefix)}")
+    if not callable(factory):
+        raise InputError(f"register_arith: the factory must be callable, got {_short(factory)}")
+    if prefix in _FIXED or prefix in _PARAMETRIZED:
+        if not replace:
+            raise InputError(f"register_arith: {prefix!r} is already an arithmetic; pass replace=True to "
+                             f"replace it")
+        _FIXED.pop(prefix, None)
+        _PARAMETRIZED.pop(prefix, None)
+        for key in [k for k in _CACHE if k.partition(":")[0] == prefix]:  # instances of the old factory
+            del _CACHE[key]
     (_PARAMETRIZED if parametrized else _FIXED)[prefix] = factory
     if parametrized:
         _PARAM_LETTER[prefix] = letter
@@ -649,8 +671,11 @@ def to_element(ar, value, name: str = "value"):
         value = parse_rational(value, name)
     try:  # exact rationals, backend rationals, elements of a subfield, a Dual over a base, ...
         return ar.convert(value)
-    except InputError:
-        raise
+    except InputError as exc:
+        if not isinstance(exc, UnreadableNumber):
+            raise
+        raise InputError(f"{name}: cannot read {_short(value)} ({type(value).__name__}) as a number of "
+                         f"{ar.name}") from None
     except (TypeError, ValueError, ArithmeticError) as exc:
         raise InputError(f"{name}: cannot read {_short(value)} ({type(value).__name__}) as a number of "
                          f"{ar.name} ({exc})") from None

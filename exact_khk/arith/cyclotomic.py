@@ -584,5 +584,5 @@ class GFArith(Arith):
         return [[X[i, j] for j in range(X.ncols())] for i in range(X.nrows())]
 
 
-register_arith("cyclo", CycloArith, letter="N")
-register_arith("gf", GFArith)
+register_arith("cyclo", CycloArith, letter="N", replace=True)  # the deferred factories of exact_khk.arith
+register_arith("gf", GFArith, replace=True)

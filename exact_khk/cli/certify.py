@@ -11,8 +11,8 @@ from __future__ import annotations
 from exact_khk.arith import get_arith
 from exact_khk.certification.generic import CLAIMS, certify_system
 from exact_khk.certification.lie_poisson import certify, default_signs
-from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
-                                   write_json)
+from exact_khk.cli.options import (Progress, add_json_option, add_system_options, check_output, check_resources,
+                                   invocation, system_from_args, write_json)
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
@@ -69,7 +69,7 @@ def register(sub):
     p.add_argument("--claims", metavar="LIST",
                    help="with --system: comma-separated claims to certify, some of " + ", ".join(CLAIMS)
                    + " (default: the system file's list, else everything it declares)")
-    p.add_argument("--json", metavar="FILE", help="write the certificate as JSON to FILE ('-': stdout, no table)")
+    add_json_option(p, "the certificate")
     p.set_defaults(func=cmd_certify)
 
     q = sub.add_parser("integrals", help="print H~ and every K~ at a point",
@@ -78,8 +78,7 @@ def register(sub):
     add_system_options(q, steps_default=0)
     q.add_argument("--signs", action="append", metavar="SIGNS",
                    help="involution for K~ (repeatable; default as for certify)")
-    q.add_argument("--json", action="store_true",
-                   help='print {"Htilde": "p/q", "Ktilde": {"<signs>": "p/q", ...}, ...}')
+    add_json_option(q, 'the values ({"Htilde": "p/q", "Ktilde": {"<signs>": "p/q", ...}, ...})')
     q.set_defaults(func=cmd_integrals)
 
 
@@ -114,8 +113,14 @@ def cmd_certify(args):
         print(cert.table())
         print(cert.verdict())
     if args.json is not None:
-        write_json(cert.to_json(), args.json)
+        write_json(_with_invocation(cert, args, x0, eps), args.json)
     return EXIT_STATUS[cert.status]
+
+
+def _with_invocation(cert, args, x0, eps) -> dict:
+    """The certificate's JSON with the informational key ``invocation`` (the command line and
+    its resolved options; the verifier does not read it)."""
+    return {**cert.to_json(), "invocation": invocation(args, arith=cert.arith, x0=x0, eps=eps, steps=args.steps)}
 
 
 def _certify_system(args, system, x0, eps):
@@ -133,11 +138,12 @@ def _certify_system(args, system, x0, eps):
         print(cert.table())
         print(cert.verdict())
     if args.json is not None:
-        write_json(cert.to_json(), args.json)
+        write_json(_with_invocation(cert, args, x0, eps), args.json)
     return EXIT_STATUS[cert.status]
 
 
 def cmd_integrals(args):
+    check_output(args.json)
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
     if system.kind != "lie-poisson":
@@ -164,10 +170,11 @@ def cmd_integrals(args):
 
 def _show_integrals(args, system, x, eps, ar, data, lines):
     """Print the integrals' values at x (``lines``: name -> value), or ``data`` as JSON."""
-    if args.json:
+    if args.json is not None:
         write_json({**data, "system": system.to_json(), "x": [ar.format(t) for t in x], "step": args.steps,
-                    "eps": str(eps), "arith": ar.name, "exact": ar.exact, "versions": library_versions()}, "-")
-        return 0
+                    "eps": str(eps), "arith": ar.name, "exact": ar.exact, "versions": library_versions()}, args.json)
+        if args.json == "-":
+            return 0
     print(system.describe())
     at = "x0" if args.steps == 0 else f"x_{args.steps} = Phi_f^{args.steps}(x0)"
     print(f"at {at} = ({', '.join(ar.format(t) for t in x)}), eps = {eps}, arithmetic {ar.name}")

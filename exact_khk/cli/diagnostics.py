@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import re
 
-from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_output, field_name,
-                                   system_from_args, write_json)
+from exact_khk.cli.options import (Progress, add_field_options, add_json_option, add_system_options, check_output,
+                                   field_name, system_from_args, write_json)
 from exact_khk.errors import InputError
 
 
@@ -24,11 +24,12 @@ def register(sub):
     p.add_argument("--exact", type=int, default=0, metavar="K",
                    help="also compose the first K iterates exactly over Q (where affordable) to confirm")
     p.add_argument("--confirm", type=int, default=3,
-                   help="terms beyond the fit that must confirm the recurrence before growth is classified (default 3)")
+                   help="terms beyond the fit that must confirm the recurrence before growth is classified "
+                        "(default and minimum 3)")
     p.add_argument("--no-heights", action="store_true", help="skip the heights of the exact orbit of x0")
     p.add_argument("--max-bits", type=int, default=100_000, help="stop the height orbit past this height (default 100000)")
     p.add_argument("--plot", metavar="FILE.png", help="plot degree and log-height against the step (needs matplotlib)")
-    p.add_argument("--json", action="store_true", help="print one JSON object instead of the summary")
+    add_json_option(p, "the degrees, recurrence and heights")
     p.set_defaults(func=cmd_degrees)
 
     q = sub.add_parser("find-integrals", help="discover conserved rational functions from orbits (HK bases)",
@@ -45,7 +46,7 @@ def register(sub):
     q.add_argument("--primes", default="2", help="initial number of random primes, or a list (default 2)")
     q.add_argument("--line-seed", type=int, default=0, help="seed of the random orbits and primes (default 0)")
     q.add_argument("--verify-steps", type=int, default=6, help="steps of the fresh exact orbit of the check (default 6)")
-    q.add_argument("--json", action="store_true", help="print one JSON object instead of the summary")
+    add_json_option(q, "the integrals found")
     q.set_defaults(func=cmd_find_integrals)
 
 
@@ -67,6 +68,7 @@ def cmd_degrees(args):
 
         plot_format(args.plot)
         check_output(args.plot, "--plot")
+    check_output(args.json)
     system, x0, eps = system_from_args(args)
     primes = _primes(args.primes)
     try:
@@ -77,14 +79,14 @@ def cmd_degrees(args):
                                   confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits,
                                   progress=progress)
     except InputError as exc:  # name the command-line options
-        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits):",
+        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits|confirm):",
                                 lambda m: "--" + m.group(1).replace("_", "-") + ":", str(exc))) from None
     if args.plot:
         plot_growth(args.plot, degrees=res, heights=res.heights,
                     title=f"{res.label}, ε = {eps}, x0 = ({', '.join(map(str, x0))})")
-    if args.json:
-        write_json({"system": system.to_json(), **res.to_json()}, "-")
-    else:
+    if args.json is not None:
+        write_json({"system": system.to_json(), **res.to_json()}, args.json)
+    if args.json != "-":
         print(system.describe())
         print(res.summary())
         if args.plot:
@@ -95,6 +97,7 @@ def cmd_degrees(args):
 def cmd_find_integrals(args):
     from exact_khk.diagnostics import find_integrals
 
+    check_output(args.json)
     system, x0, eps = system_from_args(args)
     kw = dict(field=field_name(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
               steps=args.steps or None, primes=_primes(args.primes), seed=args.line_seed,
@@ -115,9 +118,9 @@ def cmd_find_integrals(args):
                 msg = "--" + name.replace("_", "-") + msg[len(name):]
                 break
         raise InputError(msg) from None
-    if args.json:
-        write_json({"system": system.to_json(), "eps": str(eps), **res.to_json()}, "-")
-    else:
+    if args.json is not None:
+        write_json({"system": system.to_json(), "eps": str(eps), **res.to_json()}, args.json)
+    if args.json != "-":
         print(system.describe())
         print(res.summary())
     return 0

@@ -16,8 +16,8 @@ Its work (:func:`_check_work`) is estimated and refused up front beyond
 from __future__ import annotations
 
 from exact_khk.arith import get_arith
-from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
-                                   write_json)
+from exact_khk.cli.options import (Progress, add_json_option, add_system_options, check_output, check_resources,
+                                   system_from_args, write_json)
 from exact_khk.certification.records import library_versions, status_of
 from exact_khk.arith.cyclotomic import GFArith
 from exact_khk.errors import InputError, NotRationalError
@@ -40,8 +40,7 @@ def register(sub):
                    help="commutation of all pairs of maps, or of Φ_f with each Φ_g")
     p.add_argument("--trials", type=int, default=3, help="random points for gf:P (default 3)")
     p.add_argument("--draw-seed", type=int, default=0, help="seed of the random points for gf:P")
-    p.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH",
-                   help="write the records as JSON (to PATH, default stdout)")
+    add_json_option(p, "the records")
     p.set_defaults(func=cmd_liouville)
 
     q = sub.add_parser("prove", help="symbolic proofs for small n (n = 2 in seconds, n = 3 in minutes)",
@@ -51,7 +50,7 @@ def register(sub):
                        "system options: the n = 2 system a = %s, b = %s, c = %s of docs/evidence.md)."
                        % PROVE_DEFAULT_VECTORS)
     add_system_options(q, steps_default=0, lie_poisson_only=True, arith=False)
-    q.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH")
+    add_json_option(q, "the records")
     q.set_defaults(func=cmd_prove)
 
 
@@ -131,7 +130,7 @@ def _report(args, system, recs, extra, status=None):
     if args.json is not None:
         write_json({"system": system.to_json(), **extra, "records": [r.to_json() for r in recs],
                     "ok": ok, **({"status": status} if status else {}), "versions": library_versions()}, args.json)
-    else:
+    if args.json != "-":
         print(system.describe())
         for r in recs:
             print(f"{MARKS.get(r.status, 'FAIL')} {r.name:<26} holds={str(r.holds):<5} {r.evidence}")

@@ -152,6 +152,7 @@ def _run(argv) -> int:
         argv = list(sys.argv[1:] if argv is None else argv)
         parser = build_parser([_command(argv)])
         args = parser.parse_args(_join_values(argv, parser))
+        args.argv = ["exact-khk", *argv]  # as typed (a certificate records it: options.invocation)
         if args.command is None:
             parser.print_help()
             return EXIT["input"]

@@ -218,8 +218,16 @@ def _point_and_eps(args, system, reals, default_eps, default_x0, seeded):
     return system, x0, eps
 
 
+def add_json_option(p, what="the result"):
+    """The one output option of every command: ``--json [PATH]``, ``what`` as JSON to PATH
+    (written atomically, :func:`write_json`), or to stdout with no PATH or ``-``."""
+    p.add_argument("--json", nargs="?", const="-", default=None, metavar="PATH",
+                   help=f"write {what} as JSON to PATH (atomically), or to stdout with no PATH or '-' "
+                        f"(then instead of the table)")
+
+
 def write_json(obj, target):
-    """Write ``obj`` to a path (atomically), or to stdout for ``-``."""
+    """Write ``obj`` to a path (atomically), or to stdout for ``-`` (or None)."""
     text = json.dumps(obj, indent=1)
     if target in (None, "-"):
         print(text)
@@ -227,6 +235,37 @@ def write_json(obj, target):
         from exact_khk.studies.output import write_atomic
 
         write_atomic(target, text + "\n", "--json")
+
+
+def invocation(args, **resolved) -> dict:
+    """The command line (``argv``) and its options after defaults (``options``), with what the
+    command resolved from them (``resolved``: the arithmetic, ε, x0, ...): an informational
+    record for a document the command writes (a certificate's ``invocation``)."""
+    plain = (str, int, float, bool, type(None))
+    options = {k: v for k, v in sorted(vars(args).items())
+               if k not in ("func", "argv") and (isinstance(v, plain) or
+                                                 isinstance(v, list) and all(isinstance(t, plain) for t in v))}
+    return {"argv": list(getattr(args, "argv", [])), "options": options,
+            "resolved": {k: v if isinstance(v, plain) else [str(t) for t in v] if isinstance(v, (list, tuple))
+                         else str(v) for k, v in resolved.items()}}
+
+
+def json_command(run):
+    """A command ``run(args) -> JSON document`` with ``--json [PATH]``: its printed tables are
+    dropped when the document goes to stdout; the document is then written (:func:`write_json`)."""
+    def cmd(args):
+        import contextlib
+        import io
+
+        check_output(args.json)
+        with contextlib.redirect_stdout(io.StringIO()) if args.json == "-" else contextlib.nullcontext():
+            doc = run(args)
+        if args.json is not None:
+            write_json(doc, args.json)
+        return 0
+
+    cmd.__doc__ = run.__doc__
+    return cmd
 
 
 def check_output(target, what="--json"):

@@ -7,8 +7,8 @@ import math
 from fractions import Fraction
 
 from exact_khk.arith import get_arith, point_height
-from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_resources, field_name,
-                                   system_from_args, write_json)
+from exact_khk.cli.options import (Progress, add_field_options, add_json_option, add_system_options, check_output,
+                                   check_resources, field_name, system_from_args, write_json)
 from exact_khk.kahan.map import METHODS, KahanMap
 
 
@@ -22,11 +22,12 @@ def register(sub):
                    help="how each step is solved: dense (one 2n x 2n solve), structured (2x2 over "
                         "Q[t]/(t^n - 1), or the DFT for floating arithmetics), split (exact, n < 16: "
                         "2x2 over each factor of t^n - 1); default auto: the fastest measured path")
-    p.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    add_json_option(p, "the orbit (exact 'p/q' strings, all digits of floats)")
     p.set_defaults(func=cmd_orbit)
 
 
 def cmd_orbit(args):
+    check_output(args.json)
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
     fld = _field(system, args, ar)
@@ -35,7 +36,7 @@ def cmd_orbit(args):
     with Progress(args, args.steps, "orbit") as progress:
         pts = phi.orbit(x0, args.steps, progress=progress)
     growth = _height_growth(ar, pts)
-    if args.json:
+    if args.json is not None:
         from exact_khk.certification.records import library_versions
 
         write_json({"system": system.to_json(), "field": fld.label, "signs": getattr(fld, "signs", None),
@@ -44,11 +45,12 @@ def cmd_orbit(args):
                     "x0": [str(t) for t in x0],
                     "orbit": [[ar.format(t) for t in p] for p in pts],
                     "height_growth": growth.to_json() if growth else None,
-                    "versions": library_versions()}, "-")
-        return 0
+                    "versions": library_versions()}, args.json)
+        if args.json == "-":
+            return 0
     print(system.describe())
     kind = "exact" if ar.exact else f"{ar.prec}-bit floating point"
-    print(f"field {fld.label}, eps = {eps}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
+    print(f"field {fld.label}, eps = {_abbreviate(eps)}, {args.steps} steps, arithmetic {ar.name} ({kind}), "
           f"method {args.method}: {phi.path}")
     if not (ar.rational or not ar.exact):  # Q(zeta), F_p: no real approximation to show
         for k, p in enumerate(pts):
@@ -100,6 +102,8 @@ def _display(ar, t) -> str:
             return f"{v:.8g}"
     except (OverflowError, ValueError, ZeroDivisionError):
         pass
+    if ar.rational:  # beyond the float range: the leading digits of a 64-bit arb ball, cheap at any height
+        return _leading(*_parts(t))
     try:
         q = ar.to_fraction(t)
     except (TypeError, ValueError, ArithmeticError):
@@ -118,6 +122,37 @@ def _display(ar, t) -> str:
         digits, e = digits // 10, e + 1
     text = str(digits)
     return f"{sign}{text[0]}.{text[1:].rstrip('0') or '0'}e{e:+d}"
+
+
+def _parts(t):
+    """(numerator, denominator) of an exact rational of any backend (fmpq, mpq, Fraction)."""
+    return (t.p, t.q) if hasattr(t, "p") else (t.numerator, t.denominator)
+
+
+#: the most characters a number takes in the header; beyond, its leading digits and size
+MAX_SHOWN_CHARS = 60
+
+
+def _leading(p, q) -> str:
+    """p/q to 8 significant digits by a 64-bit arb ball (p, q integers of any size)."""
+    import flint
+
+    with flint.ctx.workprec(64):
+        text = (flint.arb(flint.fmpz(p)) / flint.arb(flint.fmpz(q))).mid().str(8, radius=False)
+    mantissa, e, exponent = text.partition("e")
+    if "." in mantissa:
+        mantissa = mantissa.rstrip("0").rstrip(".") if e else mantissa
+    return mantissa + e + exponent
+
+
+def _abbreviate(q) -> str:
+    """A rational in full, or beyond :data:`MAX_SHOWN_CHARS` characters (estimated from bit
+    lengths: printing a 10^5-digit integer costs seconds) its 8 leading digits and its size."""
+    p, d = _parts(q)
+    digits = [int(abs(v).bit_length() * 0.30103) + 1 for v in (p, d)]
+    if sum(digits) + 1 <= MAX_SHOWN_CHARS:
+        return str(q)
+    return f"{_leading(p, d)} (a rational of about {digits[0]:,}/{digits[1]:,} digits; --json prints it exactly)"
 
 
 def _names(system):

@@ -12,7 +12,8 @@ import math
 import pathlib
 import sys
 
-from exact_khk.cli.options import add_system_options, check_dense, check_resources, shows_progress, system_from_args
+from exact_khk.cli.options import (Progress, add_json_option, add_system_options, check_dense, check_resources,
+                                   json_command, shows_progress, system_from_args)
 from exact_khk.certification.records import library_versions
 from exact_khk.errors import InputError
 from exact_khk.parsing import parse_rational, parse_vector
@@ -71,6 +72,7 @@ def register(sub):
                    "steps (P - 1 not) and fit bits = D*log2(10) + c*K + const")
     p.add_argument("--out", help="directory for scaling.csv, scaling.json, work_precision.png, "
                    "error_vs_step.png (and enclosure.json with --digits)")
+    add_json_option(p, "the study (as scaling.json)")
     p.add_argument("--no-plots", action="store_true", help="with --out: skip the PNG figures")
     p.add_argument("--no-diagnostics", action="store_true",
                    help="only the orbit error (skip the integral drifts and the residuals)")
@@ -97,6 +99,7 @@ def register(sub):
                         "the exact orbit's height grows along it)")
     e.add_argument("--no-diagnostics", action="store_true", help="skip the integrals' drift")
     e.add_argument("--out", help="folder for enclosure.json and enclosure_radius.png")
+    add_json_option(e, "the enclosure (as enclosure.json)")
     e.set_defaults(func=cmd_enclose)
 
     h = sub.add_parser("hard", help="run the catalogue of hard cases (near-singular steps, ...)",
@@ -120,6 +123,7 @@ def register(sub):
     h.add_argument("--no-precision", action="store_true", help="skip the precision-needed searches")
     h.add_argument("--markdown", action="store_true", help="print the table as GitHub markdown")
     h.add_argument("--out", help="directory for hard_cases.json and hard_cases.md")
+    add_json_option(h, "the results (as hard_cases.json)")
     h.add_argument("--quiet", action="store_true", help="no progress bar")
     h.set_defaults(func=cmd_hard)
 
@@ -166,6 +170,7 @@ def _fmt(v, spec=".1f"):
     return "-" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
 
 
+@json_command
 def cmd_scale(args):
     system, x0, eps = system_from_args(args)
     if args.arith is not None:
@@ -226,7 +231,7 @@ def cmd_scale(args):
         stale = scaling.remove_stale(out, paths)
         if stale:
             print("removed from an earlier run in the same folder: " + ", ".join(str(p) for p in stale))
-    return 0
+    return doc
 
 
 def _digits_report(system, x0, eps, args, study):
@@ -254,6 +259,7 @@ def _digits_report(system, x0, eps, args, study):
     return rep
 
 
+@json_command
 def cmd_hard(args):
     from exact_khk.studies import hard  # SymPy (the certified roots): only when the command runs
 
@@ -268,7 +274,8 @@ def cmd_hard(args):
         for opt, value in (("--x0", args.x0), ("--eps", args.eps)):
             if value is not None:
                 raise InputError(f"{opt} applies only with --system (the catalogue fixes its own points and steps)")
-        cases = hard.catalogue(long_steps=args.long_steps)
+        with Progress(args, None, "hard: building the cases", unit="s") as progress:
+            cases = hard.catalogue(long_steps=args.long_steps)
     else:
         from exact_khk.systems.catalogue import resolve
 
@@ -278,7 +285,8 @@ def cmd_hard(args):
         eps = None if args.eps is None else parse_rational(args.eps, "--eps")
         if eps == 0:
             raise InputError("--eps: the step size must be nonzero")
-        cases = hard.system_cases(system, x0, eps, long_steps=args.long_steps)
+        with Progress(args, None, "hard: building the cases", unit="s") as progress:
+            cases = hard.system_cases(system, x0, eps, long_steps=args.long_steps)
         title = f"hard cases of {system.describe()}, x0 = ({', '.join(str(t) for t in cases[-1].x0)})"
         if not any(c.name.startswith("near-root") for c in cases):
             title += "; det(I - eps f'(x0)) has no real root in eps: no near-singular case"
@@ -287,8 +295,9 @@ def cmd_hard(args):
         cases = [c for c in cases if args.only.lower() in c.name.lower()]
         if not cases:
             raise InputError(f"--only: no case name contains {args.only!r}")
-    results = hard.run_catalogue(cases, ariths, args.digits, precision=not args.no_precision,
-                                 progress=shows_progress(args))
+    precision = not args.no_precision
+    with Progress(args, len(cases) * hard.case_stages(ariths, precision), "hard", unit="stage") as progress:
+        results = hard.run_catalogue(cases, ariths, args.digits, precision=precision, progress=progress)
     table = hard.markdown_table(results)
     legend = ("cells: ok / WARN (NearSingularWarning, κ = condition estimate, @step) / SINGULAR "
               "(SingularStepError) / UNDECIDED (ball pivot not certain) / OUT OF RANGE (the arithmetic "
@@ -307,17 +316,17 @@ def cmd_hard(args):
             if r.bits_needed is not None:
                 print(f"  precision for {r.digits} digits: mp {r.bits_needed} bits, ball {r.ball_bits_needed} bits")
         print(legend)
+    doc = {"cases": [hard.result_json(r) for r in results], "legend": legend, "versions": library_versions()}
     if args.out:
         out = pathlib.Path(args.out)
-        doc = {"cases": [hard.result_json(r) for r in results], "legend": legend,
-               "versions": library_versions()}
         write_atomic(out / "hard_cases.json", json.dumps(doc, indent=1) + "\n", "--out")
         write_atomic(out / "hard_cases.md", (title + "\n\n" if title else "") + table + "\n\n" + legend + "\n",
                      "--out")
         print(f"wrote {out / 'hard_cases.json'}, {out / 'hard_cases.md'}", file=sys.stderr)
-    return 0
+    return doc
 
 
+@json_command
 def cmd_enclose(args):
     from exact_khk.arith.reals import is_rational_text, parse_real, parse_real_vector
     from exact_khk.studies import enclosure
@@ -414,7 +423,7 @@ def cmd_enclose(args):
         plots.enclosure_radius(series, f"{system.name}, {args.prec} bits, K={args.steps}: certified enclosure "
                                f"radius", out / "enclosure_radius.png", target_bits=100)
         print(f"wrote {out / 'enclosure.json'}, {out / 'enclosure_radius.png'}")
-    return 0
+    return scaling.jsonable(doc)
 
 
 def _flint_prec(prec):

@@ -10,9 +10,10 @@ exactly); 2 an unreadable or malformed file (one line on stderr).
 from __future__ import annotations
 
 import json
+import sys
 
 from exact_khk.certification.verify import verify
-from exact_khk.cli.options import write_json
+from exact_khk.cli.options import add_json_option, check_output, write_json
 from exact_khk.errors import InputError
 from exact_khk.parsing import read_text_file
 
@@ -23,14 +24,14 @@ MAX_CERTIFICATE = 200_000_000
 def register(sub):
     p = sub.add_parser("verify", help="re-check a saved certificate (orbit, integral values, status) "
                        "by a separate minimal exact code path",
-                       description="Re-check a certificate written by 'exact-khk certify --json FILE': every "
+                       description="Re-check a certificate written by 'exact-khk certify --json PATH': every "
                        "orbit point is the Kahan step of the previous one (the linear equation, checked by "
                        "substitution, and a nonzero determinant), every recorded integral value is recomputed, "
                        "conservation and the status agree with the recorded checks. Plain Fraction arithmetic, "
                        "independent of the library's solvers (docs/verify.md). Exit status 0 VERIFIED, "
                        "1 NOT VERIFIED, 2 unreadable or malformed file.")
-    p.add_argument("certificate", metavar="CERT.json", help="the certificate file")
-    p.add_argument("--json", action="store_true", help="print the report as one JSON object")
+    p.add_argument("certificate", metavar="CERT.json", nargs="?", help="the certificate file")
+    add_json_option(p, "the report")
     p.set_defaults(func=cmd_verify)
 
 
@@ -50,13 +51,21 @@ def read_certificate(path) -> dict:
 
 
 def cmd_verify(args):
+    if args.certificate is None and args.json not in (None, "-"):
+        # the spelling from before --json took a PATH: 'verify --json CERT.json'
+        print(f"exact-khk: note: 'verify --json {args.json}' is deprecated (--json now takes an output PATH); "
+              f"write 'verify {args.json} --json'", file=sys.stderr)
+        args.certificate, args.json = args.json, "-"
+    if args.certificate is None:
+        raise InputError("verify: the following arguments are required: CERT.json")
+    check_output(args.json)
     data = read_certificate(args.certificate)
     try:
         report = verify(data)
     except InputError as exc:
         raise InputError(f"{args.certificate}: {exc}") from None
-    if args.json:
-        write_json(report.to_json(), "-")
-    else:
+    if args.json is not None:
+        write_json(report.to_json(), args.json)
+    if args.json != "-":
         print(report.summary())
     return 0 if report.ok else 1

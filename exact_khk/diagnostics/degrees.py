@@ -511,6 +511,12 @@ def exact_degrees(fld, eps, steps, max_terms=200_000):
 
 # --- the result ------------------------------------------------------------------------
 
+#: the fewest later terms that must confirm the fitted recurrence before the growth is
+#: classified: with one, the integrable cmoq-cubic's d_0..d_6 = 1, 3, 5, 9, 13, 21, 29 fit an
+#: order-3 recurrence with a root > 1 ("exponential"; its degrees grow quadratically, the
+#: order-6 recurrence of 13 terms says so); a classifier that a short run fools is refused
+MIN_CONFIRM = 3
+
 
 @dataclass(frozen=True)
 class DegreeSequence:
@@ -544,7 +550,7 @@ class DegreeSequence:
                           "route": self.routes[j] if j < len(self.routes) else None}
                          for j, (p, i, d) in enumerate(self.runs)],
                 "disagreeing_runs": [list(t) for t in self.disagreeing], "failed_runs": self.failed_runs,
-                "exact_degrees": list(self.exact), "undercount_bound": self.undercount_bound,
+                "exact_degrees": [int(d) for d in self.exact], "undercount_bound": self.undercount_bound,
                 "fit": self.fit.to_json(), "seconds": self.seconds,
                 "heights": self.heights.to_json() if self.heights is not None else None,
                 "notes": list(self.notes)}
@@ -594,7 +600,11 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
     check_count(lines, "lines", 1, 64)
     check_count(exact, "exact", 0, 50)
     check_count(max_degree, "max_degree", 1, 10 ** 7)
-    check_count(confirm, "confirm", 1, 1000)
+    if isinstance(confirm, int) and not isinstance(confirm, bool) and 1 <= confirm < MIN_CONFIRM:
+        raise InputError(f"confirm: at least {MIN_CONFIRM} later terms must confirm the recurrence (MIN_CONFIRM), "
+                         f"got {confirm}: with fewer, short runs of integrable maps fit recurrences of "
+                         f"exponential growth; raise steps instead")
+    check_count(confirm, "confirm", MIN_CONFIRM, 1000)
     check_count(exact_terms, "exact_terms", 0, 10 ** 8)
     if fld.dim > MAX_DIM:
         raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")

@@ -292,10 +292,19 @@ def classify(run, exact_failed_step=None):
     return flagged, not flagged and (wrong or beyond)
 
 
+#: the stages of one case reported to ``progress``: the exact orbit, each arithmetic, and
+#: with ``precision`` the two precision searches (mp and ball)
+def case_stages(ariths, precision=True) -> int:
+    return 1 + len(ariths) + (2 if precision else 0)
+
+
 def run_case(case: HardCase, ariths=DEFAULT_ARITHS, digits: int = 10,
-             precision: bool = True) -> CaseResult:
-    """Run ``case`` in exact arithmetic and in every arithmetic of ``ariths``."""
+             precision: bool = True, progress=None) -> CaseResult:
+    """Run ``case`` in exact arithmetic and in every arithmetic of ``ariths``; ``progress(stage)``
+    (optional) is called with the name of each stage (:func:`case_stages`) as it starts."""
+    report = progress if progress is not None else (lambda stage: None)
     fld = case.system.field("f")
+    report(f"{case.name}: exact")
     if case.reference is not None:
         (exact, t_exact), err = case.reference, None
         exact = list(exact)
@@ -306,6 +315,7 @@ def run_case(case: HardCase, ariths=DEFAULT_ARITHS, digits: int = 10,
     outcomes = []
     for name in ariths:
         ar = get_arith(name)
+        report(f"{case.name}: {ar.name}")
         t = time.perf_counter()
         run = run_orbit(case.system, case.x0, case.eps, case.steps, ar, exact, diagnostics=False)
         dt = time.perf_counter() - t
@@ -318,8 +328,13 @@ def run_case(case: HardCase, ariths=DEFAULT_ARITHS, digits: int = 10,
                                     last.radius_log10 if last else None, run.encloses,
                                     flagged, silent, dt, run.message))
     bits = ball_bits = None
+    if precision:
+        report(f"{case.name}: precision (mp)")
     if precision and err is None:
         bits = precision_needed(case.system, case.x0, case.eps, case.steps, digits, "mp", exact).bits
+    if precision:
+        report(f"{case.name}: precision (ball)")
+    if precision and err is None:
         ball_bits = precision_needed(case.system, case.x0, case.eps, case.steps, digits, "ball", exact).bits
     return CaseResult(case, "ok" if err is None else "singular", None if err is None else err.step,
                       t_exact, tuple(outcomes), digits, bits, ball_bits)
@@ -330,8 +345,12 @@ def _first_warned(run):
 
 
 def run_catalogue(cases=None, ariths=DEFAULT_ARITHS, digits=10, precision=True, progress=True):
-    """Run every case (default: :func:`catalogue`); returns a list of :class:`CaseResult`."""
+    """Run every case (default: :func:`catalogue`); returns a list of :class:`CaseResult`.
+    ``progress``: True for a tqdm bar over the cases on stderr, or a callable given each
+    stage's name (:func:`run_case`)."""
     cases = catalogue() if cases is None else cases
+    if callable(progress):
+        return [run_case(c, ariths, digits, precision, progress) for c in cases]
     if progress:
         import sys
 

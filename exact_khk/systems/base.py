@@ -136,8 +136,14 @@ class System:
         return None
 
     def random_point(self, seed: int, bound: int = 3) -> tuple:
-        """A reproducible small-integer point (not all zero)."""
+        """A reproducible small-integer point (not all zero), coordinates in [-bound, bound]."""
         import random
+
+        from exact_khk.parsing import check_count
+
+        check_count(bound, "bound", 1, 10 ** 18)
+        if not isinstance(seed, (int, str)) or isinstance(seed, bool):
+            raise InputError(f"seed: expected an integer, got {seed!r}"[:200])
 
         rng = random.Random(f"x0-{seed}")
         while True:

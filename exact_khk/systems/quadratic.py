@@ -29,6 +29,7 @@ from math import lcm
 
 from ..arith import _as_fraction
 from ..errors import InputError
+from ..parsing import _short
 from ..linalg.paths import coefficients_native
 
 
@@ -131,7 +132,10 @@ class QuadraticField:
         return out
 
     def evaluate(self, ar, x):
-        """f(x) as a list of elements of ``ar``."""
+        """f(x) as a list of elements of ``ar`` (x: a sequence of ``dim`` of them)."""
+        if not hasattr(x, "__len__") or len(x) != self.dim:
+            got = f"{len(x)}" if hasattr(x, "__len__") else _short(x)
+            raise InputError(f"x: expected {self.dim} coordinates, got {got}")
         fterms, _, lin, cst = self._converted(ar)
         out = []
         for i in range(self.dim):
