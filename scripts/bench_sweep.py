@@ -17,6 +17,7 @@ the table gives the minimum wall time of each and its ratio to ``loop`` (or ``lo
 the parent's CPU time, and the load average.  Markdown on stdout:
 
     python scripts/bench_sweep.py [--tasks 1000] [--workers 2] [--rounds 3] [--dask]
+    python scripts/bench_sweep.py --spec SPEC.toml --dask     # real tasks instead of no-ops
 """
 
 from __future__ import annotations
@@ -62,8 +63,15 @@ def main():
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--dask", action="store_true", help="also a Dask LocalCluster (needs distributed)")
+    ap.add_argument("--spec", help="a sweep spec file to run instead of the no-op probes (--tasks ignored)")
     args = ap.parse_args()
-    sp = spec(args.tasks)
+    if args.spec:
+        from exact_khk.sweep import load_spec
+
+        sp = load_spec(args.spec)
+        args.tasks = sp.count()
+    else:
+        sp = spec(args.tasks)
     payloads = [t.payload(60) for t in sp.tasks()]
     tmp = Path(tempfile.mkdtemp(prefix="bench-sweep-"))
     runs = {"loop": [], "local": [], "loop-inline": [], "inline": []}
@@ -91,7 +99,8 @@ def main():
     base = {"local": "loop", "dask": "loop", "inline": "loop-inline", "loop": "loop", "loop-inline": "loop-inline"}
     best = {k: min(v) for k, v in runs.items()}
     load = os.getloadavg() if hasattr(os, "getloadavg") else None
-    print(f"{args.tasks} no-op probe tasks, {args.workers} workers, best of {args.rounds} interleaved rounds; "
+    what = f"{sp.task} tasks of {args.spec}" if args.spec else "no-op probe tasks"
+    print(f"{args.tasks} {what}, {args.workers} workers, best of {args.rounds} interleaved rounds; "
           f"{os.cpu_count()} cores, Python {platform.python_version()}"
           + (f", load average {load[0]:.1f} at the end" if load else "") + "\n")
     print("| engine | wall s (min) | tasks/s | per task | × plain loop | parent CPU s |")

@@ -711,6 +711,8 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
         stray = sum(1 for k in latest if k not in keys)
         todo = select(tasks, latest, only)
         engine = engine or make_engine(workers, dask, client)
+        if isinstance(engine, InlineEngine):
+            _refuse_crash_inline(todo)
         meta = _read_meta(out)
         done_before = sum(1 for t in tasks if t.key in latest)
         say(f"sweep {spec.name}: {len(tasks)} {spec.task} tasks, {done_before} already done"
@@ -766,6 +768,17 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
         files = write_summary(summary, out, plots=plots)
     return SweepResult(spec, tasks, records, ran, len(todo), engine.describe(), wall, task_seconds,
                        getattr(engine, "slots", 1), interrupted, stray, store.bad_lines, summary, files)
+
+
+def _refuse_crash_inline(tasks):
+    """:class:`InputError` when a task to run in this process is a ``probe`` that kills
+    the process running it (option ``crash``): in this process, that is the sweep itself."""
+    seeds = [t.params["system"].get("seed") for t in tasks if t.params.get("task") == "probe"
+             and t.params["system"].get("seed") in (t.params.get("options") or {}).get("crash", ())]
+    if seeds:
+        raise InputError(f"--workers: {len(seeds)} probe task(s) with 'crash' (system seeds "
+                         f"{', '.join(map(str, seeds[:5]))}{', ...' if len(seeds) > 5 else ''}) kill the process "
+                         f"running them, which with --workers 0 is this command; use --workers 1 or more")
 
 
 def _read_meta(out: Path) -> dict:
