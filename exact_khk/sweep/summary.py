@@ -15,7 +15,8 @@ time, every scalar figure — named ``figure:NAME`` where NAME is also a column
 of the axes) and, with matplotlib, ``verdicts.png`` (verdict
 counts against the first axis, one panel per value of the second),
 ``time.png`` (time per task against the first axis) and ``figures.png``
-(mean of each main figure against the first axis).
+(mean of each main figure that varies against the first axis; the constant ones are named
+in its title).
 """
 
 from __future__ import annotations
