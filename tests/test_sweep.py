@@ -248,6 +248,47 @@ def test_a_task_that_kills_its_worker_is_recorded(tmp_path):
     assert got[2]["verdict"] == "ERROR" and "worker process died" in got[2]["error"]
 
 
+def test_a_crash_probe_in_this_process_is_refused(tmp_path):
+    """``--workers 0`` runs tasks in the command's own process: a probe that kills the process
+    running it is refused before anything runs (one line, exit 2), not a silent exit 137."""
+    spec = tmp_path / "probe.toml"
+    spec.write_text('task = "probe"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = "0-3"\n'
+                    '[options]\ncrash = [2]\n')
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "exact_khk", "sweep", str(spec), "--out", str(out), "--workers",
+                           "0", "--no-plots"], capture_output=True, text=True, timeout=120)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(err) == 1, (proc.returncode, proc.stderr)
+    assert "--workers" in err[0] and "crash" in err[0] and "seeds 2" in err[0]
+    assert not (out / "results.jsonl").exists() or not lines(out)
+    # without the crashing seed the same sweep runs in this process
+    spec.write_text(spec.read_text().replace("crash = [2]", "crash = [7]"))
+    res = run_sweep(load_spec(spec), out, workers=0, plots=False)
+    assert res.ran == 4 and res.summary.counts == {"OK": 4}
+
+
+def test_results_lines_are_written_at_once_and_synced_in_batches(tmp_path, monkeypatch):
+    """Every line reaches the file (the OS) when append returns — what a kill -9 cannot take
+    back — while fsync runs in batches: far fewer than one per line, and once more at close."""
+    import exact_khk.sweep.run as run_mod
+
+    synced = []
+    real = os.fsync
+    monkeypatch.setattr(run_mod.os, "fsync", lambda fd: (synced.append(fd), real(fd)))
+    store = ResultStore(tmp_path, sync_seconds=0.05).open()
+    for i in range(200):
+        store.append({"key": f"k{i}", "verdict": "OK"})
+        assert (tmp_path / "results.jsonl").read_bytes().count(b"\n") == i + 1
+    t0 = time.monotonic()
+    while not synced and time.monotonic() - t0 < 30:  # the background sync comes within the window
+        time.sleep(0.01)
+    background = len(synced)
+    assert 1 <= background < 200
+    store.close()
+    assert len(synced) == background + 1
+    assert [r["key"] for r in ResultStore(tmp_path).read()] == [f"k{i}" for i in range(200)]
+
+
 class _BreaksBeforeSubmit(LocalEngine):
     """A local engine whose pool breaks between a wait and the next submission: before
     submission ``at`` one worker is killed and the pool is seen broken, so that submission
@@ -364,7 +405,8 @@ def test_resume_after_interruption(tmp_path, capsys, how):
     else:
         os.killpg(proc.pid, signal.SIGINT)
         assert proc.wait(30) == 130
-        assert "resumes" in proc.stderr.read().decode()
+        err = proc.stderr.read().decode().strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("exact-khk: interrupted:") and "resumes" in err[0], err
     before = ResultStore(out).read()
     assert 6 <= len(before) < 30
     code, text, _ = run(capsys, "sweep", spec, "--out", out, "--workers", "2", "--no-plots")
@@ -380,7 +422,7 @@ def test_resume_after_interruption(tmp_path, capsys, how):
 
 def test_ctrl_c_on_a_local_dask_cluster_is_one_line_per_message(tmp_path):
     """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during a sweep on
-    ``--dask local``: status 130, the two lines of the local engine, no traceback from the
+    ``--dask local``: status 130, the one line of the local engine, no traceback from the
     worker processes (they start with SIGINT ignored), finished tasks kept."""
     spec = tmp_path / "probe.toml"
     spec.write_text('task = "probe"\n[system]\nfamily = "lie-poisson"\nn = 2\nseeds = "0-29"\n'
@@ -393,7 +435,8 @@ def test_ctrl_c_on_a_local_dask_cluster_is_one_line_per_message(tmp_path):
     os.killpg(proc.pid, signal.SIGINT)
     assert proc.wait(60) == 130
     err = proc.stderr.read().decode()
-    assert "Traceback" not in err and len(err.strip().splitlines()) == 2, err[-2000:]
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err[-2000:]
+    assert err.startswith("exact-khk: interrupted:") and "resumes" in err
     assert 2 <= len(ResultStore(out).read()) < 30
 
 

@@ -77,10 +77,10 @@ def cmd_sweep(args):
                            timeout="spec" if args.timeout is None else args.timeout,
                            progress=shows_progress(args), plots=not args.no_plots,
                            echo=None if args.summary else print)
-    except KeyboardInterrupt:
-        print(f"exact-khk sweep: interrupted; finished tasks are kept in {args.out}/results.jsonl and the same "
-              "command resumes", file=sys.stderr)
-        raise
+    except KeyboardInterrupt:  # one line, as for any command, saying what is kept
+        print(f"exact-khk: interrupted: stopped by the user (Ctrl-C); finished tasks are kept in "
+              f"{args.out}/results.jsonl and the same command resumes", file=sys.stderr)
+        return 130
     if result.ran:
         over = result.overhead_per_task
         print(f"ran {result.ran} tasks in {result.wall_seconds:.1f} s on {result.engine}: "

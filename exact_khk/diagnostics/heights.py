@@ -167,7 +167,8 @@ def plot_growth(path, degrees=None, heights=None, title=""):
     panels = [p for p in (degrees, heights) if p is not None]
     if not panels:
         raise InputError("plot: nothing to plot")
-    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 4), squeeze=False)
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 5.2),
+                             squeeze=False)
     axes = axes[0]
     i = 0
     if degrees is not None:
@@ -185,8 +186,8 @@ def plot_growth(path, degrees=None, heights=None, title=""):
             ax.set_yscale("log")
         ax.set_xlabel("step k")
         ax.set_ylabel("degree d_k of Φ^k" + (" (log scale)" if fit.growth == "exponential" else ""))
-        ax.legend(fontsize=8, loc="upper left", title=f"χ = {fit.characteristic_text()}: {label}",
-                  title_fontsize=8)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.16), frameon=False,  # below: off the data
+                  title=f"χ = {fit.characteristic_text()}: {label}", title_fontsize=8)
         ax.margins(x=0.04, y=0.12)
         i += 1
     if heights is not None:
@@ -194,17 +195,20 @@ def plot_growth(path, degrees=None, heights=None, title=""):
         ks = list(range(len(heights.heights)))
         hs = [max(h, 1) for h in heights.heights]
         ax.semilogy(ks, hs, "o", ms=4, color="C0", label="height of x_k (bits)", zorder=3)
-        for model, colour in zip(MODELS, ("C1", "C2", "C3")):
-            mark = " (chosen)" if model == heights.growth else ""
-            curve = [heights.curve(model, k) for k in ks[1:]]
-            # a polynomial fit may dip below zero, where a log axis cannot show it: leave those out
-            ax.semilogy(ks[1:], [v if v > 0 else float("nan") for v in curve], "-", color=colour,
-                        lw=2 if mark else 1, label=f"{model} fit, rel. error {heights.models[model][1]:.2g}{mark}")
+        # only the chosen model is drawn: a rejected polynomial fit can dip below zero, where the log
+        # axis shows it as broken fragments; the rejected models' errors are named in the legend
+        if heights.growth in MODELS:
+            curve = [heights.curve(heights.growth, k) for k in ks[1:]]
+            ax.semilogy(ks[1:], [v if v > 0 else float("nan") for v in curve], "-", color="C3", lw=2,
+                        label=f"{heights.growth} fit, rel. error {heights.models[heights.growth][1]:.2g}")
+        rejected = [f"{m} {heights.models[m][1]:.2g}" for m in MODELS if m != heights.growth and m in heights.models]
+        if rejected:
+            ax.plot([], [], " ", label="rejected fits (not drawn), rel. error: " + ", ".join(rejected))
         ax.set_ylim(min(hs) / 1.5, max(hs) * 1.5)   # the data's range, not a diverging fit's
         ax.set_xlabel("step k")
         ax.set_ylabel("height of x_k (bits, log scale)")
-        ax.legend(fontsize=8, loc="lower right", title=f"height growth: {heights.growth} (heuristic fit)",
-                  title_fontsize=8)
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(0, -0.16), frameon=False,  # below: off the data
+                  title=f"height growth: {heights.growth} (heuristic fit)", title_fontsize=8)
     if title:
         fig.suptitle(title, fontsize=10)
     fig.tight_layout()

@@ -4,9 +4,10 @@ Every arithmetic keeps one colour and one marker in every figure
 (:func:`style`), labels sit in legends outside the data (never annotations that
 may overlap), and every title names the system, ε and the number of steps.
 
-* :func:`work_precision` — log10 error at the last step against time per step (log
-  axis); ball and Lohner enclosures by their certified radius; the
-  exact arithmetic's time as a vertical line;
+* :func:`work_precision` — correct bits at the last step against CPU time per step (log
+  axis); ball and Lohner enclosures by their certified radius; arithmetics of more
+  than :data:`FEW_BITS` bits in a panel of their own; the exact arithmetic's time as a
+  vertical line;
 * :func:`bits_lost` — bits lost against the step, relative to each precision P:
   P + log2(relative error), so that float's and mp:53's drift of a few bits is
   visible next to mp:4096;
@@ -69,34 +70,56 @@ def _curve(ax, styles, name, i, pts):
             lw=3.0 if i == 0 else 1.2, ls=_LINES[i % 2], label=name)
 
 
-def work_precision(points, title, exact_seconds, path, styles=None):
-    """``points``: [(name, seconds per step, log10 error or radius at step K, kind)] with kind
-    ``'error'``, ``'radius'`` or ``'stopped'`` (no point at step K: drawn at 0 with ×).  The
-    error axis is log10 itself (errors reach 10⁻¹²⁰⁰, below the range of a double)."""
+#: the work-precision diagram puts arithmetics carrying more bits than this in a panel of their
+#: own (mp:4096's 4 000 correct bits would squeeze float's 50 and mp:256's 240 into one cluster)
+FEW_BITS = 256
+
+
+def work_precision(points, title, exact_seconds, path, styles=None, repeats=1):
+    """``points``: [(label, precision P or None, CPU seconds per step, correct bits at step K, kind)]
+    with kind ``'error'`` (bits = −log2 of the relative error), ``'radius'`` (−log2 of the
+    certified relative radius: certified correct bits) or ``'stopped'`` (no point at step K:
+    drawn hollow at 0 bits).  Arithmetics with P > :data:`FEW_BITS` go in a second panel
+    with its own bit scale; the time axis (log) is shared, the exact orbit's time a dashed
+    line in each panel."""
     plt = _plt()
     st = _pick(styles, [p[0] for p in points])
-    fig, ax = plt.subplots(figsize=(7.6, 4.8), dpi=110)
-    for name, sec, y, kind in points:
-        if sec is None:
-            continue
-        color, marker = st[name]
-        if kind == "stopped":
-            ax.plot(sec, 0.0, marker="x", color=color, ms=9, mew=2, ls="none", label=f"{name} (stopped before K)")
-        else:
-            ax.plot(sec, y, marker=marker, color=color, ms=8,
-                    ls="none", label=name + (" (certified radius)" if kind == "radius" else ""))
-    if exact_seconds:
-        ax.axvline(exact_seconds, color="gray", ls="--", lw=1.2, label=f"exact (flint), error 0: "
-                                                                         f"{exact_seconds * 1e3:.3g} ms/step")
-    ax.set_xscale("log")
+    drawn = [p for p in points if p[2] is not None]
+    groups = [(f"P ≤ {FEW_BITS} bits", [p for p in drawn if (p[1] or 53) <= FEW_BITS]),
+              (f"P > {FEW_BITS} bits", [p for p in drawn if (p[1] or 53) > FEW_BITS])]
+    groups = [(head, g) for head, g in groups if g] or [("", [])]
+    fig, axes = plt.subplots(1, len(groups), figsize=(4.6 * len(groups) + 2.8, 4.8), dpi=110, sharex=True,
+                             squeeze=False)
     from matplotlib.ticker import NullFormatter
 
-    ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("time per step [s] (log scale)")
-    ax.set_ylabel("log10 relative error at step K (balls/Lohner: radius)")
-    ax.set_title(title, fontsize=10)
-    ax.grid(True, which="major", alpha=0.3)
-    _save(fig, path, legend_axes=[ax])
+    for ax, (head, group) in zip(axes[0], groups):
+        for label, prec, sec, bits, kind in group:
+            color, marker = st[label]
+            if kind == "stopped":
+                ax.plot(sec, 0.0, marker=marker, color=color, mfc="none", mew=1.6, ms=9, ls="none", label=label)
+            else:
+                ax.plot(sec, bits, marker=marker, color=color, ms=8, ls="none", label=label)
+        if exact_seconds:
+            ax.axvline(exact_seconds, color="gray", ls="--", lw=1.2,
+                       label=f"exact (flint), every bit: {exact_seconds * 1e3:.3g} ms/step")
+        ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("CPU time per step [s] (log scale)" + (f", least of {repeats} runs" if repeats > 1 else ""))
+        ax.set_ylabel("correct bits at step K = −log2(relative error)")
+        ax.set_ylim(bottom=min(0.0, ax.get_ylim()[0]) - 0.03 * ax.get_ylim()[1])
+        ax.set_title(head, fontsize=9)
+        ax.grid(True, which="major", alpha=0.3)
+    handles = {}  # the points in the order given, the exact orbit's line last
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    order = [p[0] for p in drawn] + [lab for lab in handles if lab.startswith("exact")]
+    handles = {lab: handles[lab] for lab in order if lab in handles}
+    width = 4.6 * len(groups) + 2.8
+    fig.legend(list(handles.values()), list(handles), fontsize=8, loc="center right", frameon=False)
+    fig.suptitle(title + "\nfilled: error against the exact orbit; balls/Lohner: certified radius; "
+                 "hollow at 0: no certified bit at step K", fontsize=9)
+    _save(fig, path, rect=(0, 0, 1 - 2.8 / width, 1))
 
 
 def bits_lost(series, title, path, styles=None):

@@ -23,10 +23,13 @@ Engines (each runs :func:`exact_khk.sweep.tasks.run_task` on plain JSON payloads
 * :class:`InlineEngine` — in this process, one task after the other
   (``--workers 0``; debugging, and the engine-free baseline of docs/sweeps.md).
 
-The results file ``DIR/results.jsonl`` has one JSON object per line, appended
-(then flushed and fsync'ed) as each task finishes.  A rerun reads it, drops a
-last line cut short by a crash, and skips every task of the spec whose key has a
-record; the latest record of a key counts.  ``--only VERDICTS`` reruns the
+The results file ``DIR/results.jsonl`` has one JSON object per line, written to
+the operating system (one ``write``) as each task finishes — a sweep killed
+with ``kill -9`` loses no finished task — and fsync'ed in batches, at most
+:data:`SYNC_SECONDS` after it was written and when the sweep ends: a machine
+crash or power cut loses at most that window's lines (their tasks run again).
+A rerun reads the file, drops a last line cut short by a crash, and skips every
+task of the spec whose key has a record; the latest record of a key counts.  ``--only VERDICTS`` reruns the
 tasks whose latest record has one of those verdicts (``failed`` = ERROR and
 TIMEOUT).  One sweep at a time may write to DIR (a lock file, POSIX).
 """
@@ -54,6 +57,10 @@ META = "sweep.json"
 LOCK = ".sweep.lock"
 #: verdict groups understood by ``--only``
 GROUPS = {"failed": FAILED}
+#: a results line is fsync'ed at most this many seconds after it was written (a background
+#: thread syncs the file while lines wait).  One fsync per line cost 0.2–5 ms on the 2-core test
+#: machine, up to ten times a no-op task (scripts/bench_sweep.py).
+SYNC_SECONDS = 1.0
 #: modules imported once by the fork server, before it forks the local workers
 PRELOAD = ["exact_khk.sweep.tasks", "exact_khk.certification.lie_poisson", "exact_khk.certification.generic",
            "exact_khk.studies.scaling"]
@@ -102,13 +109,17 @@ def checked_out(out_dir):
 
 
 class ResultStore:
-    """``DIR/results.jsonl``: read (tolerating a cut last line), appended line by line."""
+    """``DIR/results.jsonl``: read (tolerating a cut last line), appended line by line
+    (each line one ``write``; fsync'ed by a background thread within ``sync_seconds``
+    and on :meth:`close`)."""
 
-    def __init__(self, out_dir):
+    def __init__(self, out_dir, sync_seconds=None):
         self.dir = Path(checked_out(out_dir))
         self.path = self.dir / RESULTS
         self.bad_lines = 0
+        self.sync_seconds = SYNC_SECONDS if sync_seconds is None else sync_seconds
         self._fh = None
+        self._syncer = None
 
     def read(self) -> list:
         """Every record in file order (lines that are not JSON objects are counted in
@@ -154,25 +165,93 @@ class ResultStore:
                     data = fh.read()
                     if data and not data.endswith(b"\n"):
                         fh.truncate(data.rfind(b"\n") + 1)
-            self._fh = open(self.path, "a", encoding="utf-8")
+            # unbuffered: one write per line, whole lines only reach the file
+            self._fh = open(self.path, "ab", buffering=0)
         except OSError as exc:
             raise OutputError(f"--out: cannot write {str(self.path)!r}: {exc.strerror or exc}") from None
+        self._syncer = _Syncer(self._fh.fileno(), self.sync_seconds)
         return self
 
     def append(self, record: dict) -> None:
-        """One line, flushed and fsync'ed before returning."""
-        line = json.dumps(record, ensure_ascii=False, separators=(",", ":"))
+        """One line, handed to the operating system in one write before returning (it
+        survives the sweep's process being killed); fsync'ed within ``sync_seconds``."""
+        line = json.dumps(record, ensure_ascii=False, separators=(",", ":")) + "\n"
         try:
-            self._fh.write(line + "\n")
-            self._fh.flush()
-            os.fsync(self._fh.fileno())
+            self._syncer.check()
+            data = line.encode("utf-8")
+            while data:  # a regular file takes the whole line at once; a short write is finished
+                data = data[self._fh.write(data):]
+            self._syncer.dirty()
         except OSError as exc:
             raise OutputError(f"--out: cannot write {str(self.path)!r}: {exc.strerror or exc}") from None
 
     def close(self):
-        if self._fh is not None:
+        """Sync what is not yet synced, then close."""
+        if self._fh is None:
+            return
+        syncer, self._syncer = self._syncer, None
+        try:
+            syncer.stop()
+        except OSError as exc:
+            raise OutputError(f"--out: cannot write {str(self.path)!r}: {exc.strerror or exc}") from None
+        finally:
             self._fh.close()
             self._fh = None
+
+
+class _Syncer:
+    """fsync of one file descriptor in a background thread, at most ``window`` seconds
+    after :meth:`dirty`; :meth:`stop` syncs a last time (in the caller) and ends the thread.
+    A failed background sync is raised by the next :meth:`check` or :meth:`stop`."""
+
+    def __init__(self, fd, window):
+        import threading
+
+        self.fd, self.window, self.error = fd, window, None
+        self._dirty = False
+        self._wake = threading.Condition()
+        self._stopped = False
+        self._thread = threading.Thread(target=self._run, name="results-fsync", daemon=True)
+        self._thread.start()
+
+    def dirty(self):
+        if not self._dirty:
+            with self._wake:
+                self._dirty = True
+                self._wake.notify()
+
+    def check(self):
+        if self.error is not None:
+            raise self.error
+
+    def _run(self):
+        with self._wake:
+            while True:
+                while not self._dirty and not self._stopped:
+                    self._wake.wait()
+                deadline = time.monotonic() + self.window  # let the lines of one window gather
+                while not self._stopped and deadline > time.monotonic():
+                    self._wake.wait(deadline - time.monotonic())
+                if self._stopped:
+                    return  # stop() syncs
+                self._dirty = False  # a line written from now on waits for the next sync
+                self._wake.release()
+                try:
+                    os.fsync(self.fd)  # stop() joins this thread before the file is closed
+                except OSError as exc:
+                    self.error = exc
+                finally:
+                    self._wake.acquire()
+                if self.error is not None:
+                    return
+
+    def stop(self):
+        with self._wake:
+            self._stopped = True
+            self._wake.notify()
+        self._thread.join()
+        self.check()
+        os.fsync(self.fd)
 
 
 def _line_text(line: bytes) -> str:
@@ -632,6 +711,8 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
         stray = sum(1 for k in latest if k not in keys)
         todo = select(tasks, latest, only)
         engine = engine or make_engine(workers, dask, client)
+        if isinstance(engine, InlineEngine):
+            _refuse_crash_inline(todo)
         meta = _read_meta(out)
         done_before = sum(1 for t in tasks if t.key in latest)
         say(f"sweep {spec.name}: {len(tasks)} {spec.task} tasks, {done_before} already done"
@@ -687,6 +768,17 @@ def run_sweep(spec, out_dir, *, workers=None, dask=None, client=None, only=None,
         files = write_summary(summary, out, plots=plots)
     return SweepResult(spec, tasks, records, ran, len(todo), engine.describe(), wall, task_seconds,
                        getattr(engine, "slots", 1), interrupted, stray, store.bad_lines, summary, files)
+
+
+def _refuse_crash_inline(tasks):
+    """:class:`InputError` when a task to run in this process is a ``probe`` that kills
+    the process running it (option ``crash``): in this process, that is the sweep itself."""
+    seeds = [t.params["system"].get("seed") for t in tasks if t.params.get("task") == "probe"
+             and t.params["system"].get("seed") in (t.params.get("options") or {}).get("crash", ())]
+    if seeds:
+        raise InputError(f"--workers: {len(seeds)} probe task(s) with 'crash' (system seeds "
+                         f"{', '.join(map(str, seeds[:5]))}{', ...' if len(seeds) > 5 else ''}) kill the process "
+                         f"running them, which with --workers 0 is this command; use --workers 1 or more")
 
 
 def _read_meta(out: Path) -> dict:

@@ -15,7 +15,8 @@ time, every scalar figure — named ``figure:NAME`` where NAME is also a column
 of the axes) and, with matplotlib, ``verdicts.png`` (verdict
 counts against the first axis, one panel per value of the second),
 ``time.png`` (time per task against the first axis) and ``figures.png``
-(mean of each main figure against the first axis).
+(mean of each main figure that varies against the first axis; the constant ones are named
+in its title).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import json
 import math
 import statistics
 from collections import Counter
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field, fields
 from fractions import Fraction
 from pathlib import Path
 
@@ -73,9 +74,8 @@ class Summary:
     rows: list = field(default_factory=list, repr=False)
 
     def to_json(self) -> dict:
-        d = asdict(self)
-        d.pop("rows")
-        return _jsonable(d)
+        # not dataclasses.asdict: it would deep-copy every row first (a third of a no-op sweep's time)
+        return _jsonable({f.name: getattr(self, f.name) for f in fields(self) if f.name != "rows"})
 
     def text(self) -> str:
         return summary_text(self)
@@ -330,10 +330,11 @@ def plot_summary(s: Summary, out_dir) -> list:
     timed = [r for r in s.rows if _number(r["seconds"]) and r["seconds"] > 0]
     if timed:
         fig, ax = plt.subplots(figsize=(5.5, 3.6))
-        for i, r in enumerate(timed):
-            jitter = ((i * 0.618034) % 1 - 0.5) * 0.3
-            ax.plot(pos[r["axes"].get(first)] + jitter, r["seconds"], ".", ms=3, alpha=0.5,
-                    color=COLORS.get(r["verdict"], "#888888"))
+        for v in sorted({r["verdict"] for r in timed}, key=_verdict_sort):  # one colour per verdict, in the legend
+            pts = [(pos[r["axes"].get(first)] + ((i * 0.618034) % 1 - 0.5) * 0.3, r["seconds"])
+                   for i, r in enumerate(timed) if r["verdict"] == v]
+            ax.plot(*zip(*pts), "o", ms=4, alpha=0.7, color=COLORS.get(v, "#888888"), mec="#444444", mew=0.3,
+                    ls="none", label=f"{v} ({len(pts)})")
         med = [s.by_axis[first][i]["seconds_median"] for i in range(len(levels))]
         ax.plot([i for i, m in enumerate(med) if m], [m for m in med if m], "k-" if first in ORDERED_AXES else "k_",
                 ms=12, lw=1.2, label="median")
@@ -342,15 +343,21 @@ def plot_summary(s: Summary, out_dir) -> list:
             ax.set_yscale("log")
         ax.set_xticks(range(len(levels)), [str(v) for v in levels], rotation=45 if len(levels) > 8 else 0)
         ax.set_xlabel(first)
-        ax.set_ylabel("seconds per task")
-        ax.legend(fontsize=7)
+        ax.set_ylabel("seconds per task" + (" (log scale)" if ax.get_yscale() == "log" else ""))
+        ax.legend(fontsize=7, title="verdict (tasks)", title_fontsize=7, loc="center left",
+                  bbox_to_anchor=(1.01, 0.5), frameon=False)
         ax.set_title(f"{s.name}: time per task", fontsize=10)
         fig.tight_layout()
         paths.append(_save(fig, out / "time.png"))
         plt.close(fig)
 
-    # numeric figures against the first axis (means; one line per value of the second)
-    figs = [f for f in s.shown if f not in ("n", "seed")][:6]
+    # numeric figures against the first axis (means; one line per value of the second); a figure
+    # with one value in every task is named in the title, not drawn (its panel would be a flat line)
+    figs, constant = [], []
+    for f in (f for f in s.shown if f not in ("n", "seed")):
+        vals = {r["figures"][f] for r in s.rows if _number(r["figures"].get(f))}
+        (figs if len(vals) > 1 else constant).append(f if len(vals) > 1 else f"{f} = {_fmt(next(iter(vals)))}")
+    figs = figs[:6]
     if figs:
         cols = min(3, len(figs))
         nrows = math.ceil(len(figs) / cols)
@@ -366,17 +373,23 @@ def plot_summary(s: Summary, out_dir) -> list:
                         ys.append(statistics.fmean(vals))
                 if xs:
                     ax.plot(xs, ys, "o-" if first in ORDERED_AXES else "o", ms=3, lw=1,
-                            label=None if sv is None else f"{second}={sv}")
+                            label=None if sv is None else str(sv))
             ax.set_title(f, fontsize=9)
+            ax.set_ylabel(f"mean {f} per task", fontsize=8)
             ax.set_xticks(range(len(levels)), [str(v) for v in levels], fontsize=7,
                           rotation=45 if len(levels) > 8 else 0)
             ax.set_xlabel(first, fontsize=8)
-            if second and f == figs[0]:
-                ax.legend(fontsize=6)
+            ax.grid(True, alpha=0.3)
         for ax in list(axs.flat)[len(figs):]:
             ax.axis("off")
-        fig.suptitle(f"{s.name}: figures (means)", fontsize=10)
-        fig.tight_layout()
+        handles, labels = axs[0][0].get_legend_handles_labels()
+        width = 3.6 * cols + (1.4 if second else 0)
+        fig.set_size_inches(width, 2.9 * nrows + 0.4)
+        if second:
+            fig.legend(handles, labels, fontsize=7, loc="center right", frameon=False, title=second, title_fontsize=7)
+        fig.suptitle(f"{s.name}: figures (means over the tasks of each {first})"
+                     + (f"\nthe same in every task: {', '.join(constant)}" if constant else ""), fontsize=10)
+        fig.tight_layout(rect=(0, 0, 1 - (1.4 / width if second else 0), 1))
         paths.append(_save(fig, out / "figures.png"))
         plt.close(fig)
     return paths
