@@ -202,7 +202,7 @@ LP_MUTATIONS = {
     "x0": (_set(["x0", 1], lambda t: "3"), "orbit starts at x0"),
     "value of H~": (_set(["values", "H~", 2], _plus_tiny), "values of H~"),
     "value of K~": (_set(["values", "K~[-++]", 0], lambda t: "0"), "values of K~[-++]"),
-    "a check's holds": (_first_claim_holds_flipped, "status"),
+    "a check's holds": (_first_claim_holds_flipped, "record reversibility Phi_f"),
     "a conservation check's holds": (_conservation_flipped, "H~ conserved"),
     "status": (_set(["status"], lambda s: "INVALID"), "status"),
     "valid": (_set(["valid"], lambda s: False), "status"),
@@ -214,10 +214,10 @@ LP_MUTATIONS = {
     # cut short: the claims only (no control left, so it cannot be VALID), or with one control
     # (still VALID, but the verdict's counts are those of the whole certificate)
     "checks cut to the claims": (lambda d: d.update(checks=[c for c in d["checks"] if c["expected"]][:3]),
-                                 "status"),
+                                 "records cover the claims"),
     "checks cut to 3 claims and a control": (
         lambda d: d.update(checks=[c for c in d["checks"] if c["expected"]][:3]
-                           + [c for c in d["checks"] if not c["expected"]][:1]), "verdict"),
+                           + [c for c in d["checks"] if not c["expected"]][:1]), "records cover the claims"),
 }
 
 
