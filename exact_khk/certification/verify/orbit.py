@@ -6,7 +6,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 from exact_khk.certification.verify.fields import (Undefined, _Evaluate, _Rationals, _dot, _eliminate,
-                                                   _matmul, _matvec, _show)
+                                                   _matmul, _matvec, _show, to_fraction)
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field,
                                                  _lp_hessian, _lp_J)
 
@@ -136,7 +136,8 @@ class _Recheck:
         from exact_khk.errors import PoleError
 
         try:
-            return self.system.integrals()[name](get_arith("fraction"), x, self.cert.eps), " (reduced form)"
+            return self.F.of(self.system.integrals()[name](get_arith("fraction"), [to_fraction(t) for t in x],
+                                                          self.cert.eps)), " (reduced form)"
         except PoleError:
             raise _Undefined("pole") from None
 

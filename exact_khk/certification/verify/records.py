@@ -19,7 +19,8 @@ from dataclasses import dataclass
 from fractions import Fraction
 from math import gcd
 
-from exact_khk.certification.verify.fields import Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul, _matvec
+from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul,
+                                                   _matvec, to_fraction)
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field, _lp_hessian,
                                                  _lp_J, determinant, dphi, dual_step, gradient, h_definition,
                                                  jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q, lp_shift, orbit,
@@ -348,8 +349,8 @@ class LPDegeneracy:
         self.lp, c = lp, lp.ctx
         s = c.system
         self.a, self.b, self.c = list(s.a), list(s.b), list(s.c)
-        self.n, self.x0, self.eps = lp.n, c.x0q, c.eps
         Q = _Rationals()
+        self.n, self.x0, self.eps = lp.n, [Q.of(t) for t in c.x0q], Q.of(c.eps)
         self.Hq = [[Q.of(t) for t in row] for row in lp.Hq]
 
     def common(self):
@@ -504,7 +505,7 @@ class Expressions:
 
             fn = table[name] if eps is None else table[name].at_eps_zero()
             try:
-                return fn(get_arith("fraction"), x, c.eps if eps is None else 0)
+                return c.F.of(fn(get_arith("fraction"), [to_fraction(t) for t in x], c.eps if eps is None else 0))
             except PoleError:
                 raise Undefined("pole") from None
         return value
@@ -601,7 +602,8 @@ def _library_gradient(ex, name):
     if not isinstance(c.F, _Rationals):
         return []
     try:
-        return ex.lib_integrals[name].gradient(get_arith("fraction"), c.pts[0], c.eps)
+        return [c.F.of(t) for t in ex.lib_integrals[name].gradient(get_arith("fraction"),
+                                                                   [to_fraction(t) for t in c.pts[0]], c.eps)]
     except (PoleError, ArithmeticError):
         return []
 
@@ -673,7 +675,7 @@ def ex_cmoq(ex):
         if z is None:
             raise Undefined("I - eps f'(x) is singular")
         g = gradient(H, x)
-        return H(x) + Fraction(2, 3) * c.e * sum((a * r[0] for a, r in zip(g, z)), 0 * x[0])
+        return H(x) + c.F.of(Fraction(2, 3)) * c.e * sum((a * r[0] for a, r in zip(g, z)), 0 * x[0])
 
     def det_sides(k):
         D = determinant(dphi(f, c.e, pts[k], pts[k + 1]))
