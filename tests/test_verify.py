@@ -115,7 +115,7 @@ def test_generic_certificate_with_a_linear_integral_is_verified(generic_cert):
     assert generic_cert["values"]["S"] == ["6"] * 5  # x + y + z = 6, exactly conserved
     report = verify(generic_cert)
     assert report.ok, report.summary()
-    assert ("S conserved", True, "values equal along the orbit, as the recorded check says") in report.results
+    assert ("S conserved", True, "values equal along the orbit (the record of the claim is re-derived below)") in report.results
 
 
 def test_non_homogeneous_field_invalid_claim_and_pole_are_verified():
@@ -203,7 +203,7 @@ LP_MUTATIONS = {
     "value of H~": (_set(["values", "H~", 2], _plus_tiny), "values of H~"),
     "value of K~": (_set(["values", "K~[-++]", 0], lambda t: "0"), "values of K~[-++]"),
     "a check's holds": (_first_claim_holds_flipped, "record reversibility Phi_f"),
-    "a conservation check's holds": (_conservation_flipped, "H~ conserved"),
+    "a conservation check's holds": (_conservation_flipped, "record integral H~ conserved by Phi_f"),
     "status": (_set(["status"], lambda s: "INVALID"), "status"),
     "valid": (_set(["valid"], lambda s: False), "status"),
     "verdict": (_set(["verdict"], lambda s: "INVALID: " + s), "verdict"),

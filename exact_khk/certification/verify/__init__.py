@@ -149,8 +149,10 @@ def verify(data) -> VerifyReport:
             raise InputError(f"{key}: missing key {key!r}")
         if not isinstance(data[key], types):
             raise InputError(f"{key}: expected {'a string' if types is str else 'true or false'}")
-    info = [key for key in data if key in INFORMATIONAL]
-    notes = ((f"{', '.join(info)}: informational, not re-checked and not counted",) if info else ()) \
+    info = [key for key in data if key in INFORMATIONAL and key != "invocation"]
+    notes = (("invocation (the command line and options): informational, not re-checked and not counted",)
+             if "invocation" in data else ()) \
+        + ((f"{', '.join(info)}: informational, not re-checked and not counted",) if info else ()) \
         + tuple(f"{key[:40]}: a key this verifier does not know, ignored" for key in data if key not in _KNOWN)
     total = len(data["checks"])
     try:

@@ -50,24 +50,38 @@ def to_fraction(t) -> Fraction:
 
 
 class _Rationals:
-    """Q: elements are python-flint ``fmpq`` (exact rationals in GMP: Fractions are ten to a
-    hundred times slower on the numbers of long orbits)."""
+    """Q: elements are Fractions."""
 
     name = "Q"
     evidence = "exact in Q"
-    one, zero = flint.fmpq(1), flint.fmpq(0)
+    one, zero = Fraction(1), Fraction(0)
 
     def of(self, q):
-        q = Fraction(q) if not isinstance(q, flint.fmpq) else q
-        return q if isinstance(q, flint.fmpq) else flint.fmpq(q.numerator, q.denominator)
+        return to_fraction(q)
 
     def parse(self, text: str, where: str):
-        return self.of(parse_rational(text, where))
+        return parse_rational(text, where)
 
     def root_of_unity(self, n: int):
         if n <= 2:
             return self.of(-1 if n == 2 else 1)
         raise _Undefined(f"Q has no primitive {n}-th root of unity")
+
+
+class _FlintRationals(_Rationals):
+    """Q with python-flint ``fmpq`` elements (exact rationals in GMP: Fractions are ten times
+    slower on the numbers of long orbits); the field of the rational certificates."""
+
+    one, zero = flint.fmpq(1), flint.fmpq(0)
+
+    def of(self, q):
+        if isinstance(q, flint.fmpq):
+            return q
+        q = Fraction(q)
+        return flint.fmpq(q.numerator, q.denominator)
+
+    def parse(self, text: str, where: str):
+        return self.of(parse_rational(text, where))
 
 
 def _trim(c) -> tuple:
@@ -372,7 +386,7 @@ def exact_field(arith: str):
     for an inexact arithmetic (floating point, balls); InputError for a name that is
     no arithmetic of the library."""
     if arith in RATIONAL_ARITHS:
-        return _Rationals()
+        return _FlintRationals()
     if arith == "float":
         return None
     prefix, _, param = arith.partition(":")

@@ -20,7 +20,7 @@ from fractions import Fraction
 from math import gcd
 
 from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul,
-                                                   _matvec, to_fraction)
+                                                   _matvec, _FlintRationals, to_fraction)
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field, _lp_hessian,
                                                  _lp_J, determinant, dphi, dual_step, gradient, h_definition,
                                                  jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q, lp_shift, orbit,
@@ -349,7 +349,7 @@ class LPDegeneracy:
         self.lp, c = lp, lp.ctx
         s = c.system
         self.a, self.b, self.c = list(s.a), list(s.b), list(s.c)
-        Q = _Rationals()
+        Q = _FlintRationals()
         self.n, self.x0, self.eps = lp.n, [Q.of(t) for t in c.x0q], Q.of(c.eps)
         self.Hq = [[Q.of(t) for t in row] for row in lp.Hq]
 
