@@ -224,6 +224,7 @@ def _records(cert, data, F, orbit_ok):
         skipped.append("the claims the certificate leaves out")
     derived = []
     by_name = {r.name: r for r in expected}
+    cache_key = data_key(data)
     for c in checks:
         rec = by_name.pop(c["name"], None)
         if rec is None:
@@ -233,7 +234,7 @@ def _records(cert, data, F, orbit_ok):
                 out.append((f"record {c['name']}", True, f"not re-checked: {why}"))
             derived.append(dict(c))
             continue
-        d, problem = _one_record(rec, c, cert, F, orbit_ok)
+        d, problem = _one_record(rec, c, cert, F, orbit_ok, cache_key)
         derived.append(d)
         if problem is None:
             out.append((f"record {c['name']}", True, _describe(d)))
@@ -259,7 +260,30 @@ def _first_difference(want, got) -> str | None:
     return None
 
 
-def _one_record(rec, c, cert, F, orbit_ok):
+#: re-derived (holds, residual, applicable) by (the certificate's data without its records, name, statement,
+#: claim or control): a pure function of these, kept for the last few certificates of at most
+#: CACHE_CHARS characters (re-checking many variants of one certificate, as the tests do)
+_DERIVED: dict = {}
+CACHE_CHARS, CACHE_RECORDS = 1_000_000, 5_000
+
+
+def data_key(data):
+    """The certificate's data that the records are derived from, as one string (None if large)."""
+    import json
+
+    kept = {k: v for k, v in data.items() if k not in _RECORD_KEYS}
+    text = json.dumps(kept, sort_keys=True)
+    if len(text) > CACHE_CHARS:
+        return None
+    if len(_DERIVED) > CACHE_RECORDS:
+        _DERIVED.clear()
+    return text
+
+
+_RECORD_KEYS = {"checks", "status", "valid", "verdict", "seconds", "versions", "invocation", "height_bits", "path"}
+
+
+def _one_record(rec, c, cert, F, orbit_ok, cache_key=None):
     """(the record with re-derived holds/residual/applicable, the first difference or None)."""
     d = dict(c)
     for key, want, have in (("claim", rec.claim, c["claim"]), ("expected", rec.expected, c["expected"]),
@@ -270,10 +294,13 @@ def _one_record(rec, c, cert, F, orbit_ok):
                        f"the certificate's data is {_short(want)}")
     if not orbit_ok:
         return d, "not re-derived: the recorded orbit or values are wrong (see above)"
+    key = (cache_key, rec.name, rec.claim, rec.expected)
     try:
-        holds, residual, applicable = rederive(rec)
+        holds, residual, applicable = _DERIVED[key] if key in _DERIVED else rederive(rec)
     except Undefined as exc:
         return d, f"cannot be re-derived: {exc}"
+    if cache_key is not None:
+        _DERIVED[key] = (holds, residual, applicable)
     d.update(holds=holds, applicable=applicable, _rederived=True)
     if c["holds"] != holds:
         return d, f"recorded holds = {_tf(c['holds'])}, re-derived holds = {_tf(holds)}"

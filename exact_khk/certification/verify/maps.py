@@ -222,9 +222,13 @@ def jacobiator(matrix, x):
 
 def gradient(fn, x):
     """∇fn(x) by dual numbers (fn of a point, any field element or dual out)."""
-    v = fn(Dual.variables(x))
+    return gradients(lambda y: [fn(y)], x)[0]
+
+
+def gradients(fn, x):
+    """[∇fn_i(x)] of a vector function fn, by one pass of dual numbers."""
     zero = 0 * x[0]
-    return list(v.d) if isinstance(v, Dual) else [zero] * len(x)
+    return [list(v.d) if isinstance(v, Dual) else [zero] * len(x) for v in fn(Dual.variables(x))]
 
 
 def lp_shift(n):

@@ -22,7 +22,7 @@ from math import gcd
 from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul,
                                                    _matvec, _FlintRationals, to_fraction)
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field, _lp_hessian,
-                                                 _lp_J, determinant, dphi, dual_step, gradient, h_definition,
+                                                 _lp_J, determinant, dphi, dual_step, gradient, gradients, h_definition,
                                                  jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q, lp_shift, orbit,
                                                  shift_index, step, transpose)
 
@@ -260,7 +260,7 @@ def lp_involution(lp):
     c, n = lp.ctx, lp.n
 
     def q_sides(k):
-        g = [gradient(lambda x, l=l: lp_q(lp.Hs, x, n)[l], c.pts[k]) for l in range(n)]
+        g = gradients(lambda x: lp_q(lp.Hs, x, n), c.pts[k])
         return g[1:], [[g[0][i] for i in shift_index(n, l)] for l in range(1, n)]
     out = [claim("gradients of q_l: grad q_l = A^l grad q_0",
                  f"the exact gradients ({'closed form' if lp.flint else 'dual numbers'}) of "
