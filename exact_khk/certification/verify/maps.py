@@ -272,6 +272,30 @@ def lp_pi_from_q(Hs, x, e, n):
     return out
 
 
+def htilde_gradient(M, x, e, n):
+    """∇H~_M(x) in closed form: with S = I − ε²(M J(x))², z = S⁻¹ M x, w = S⁻ᵀ x, u = Mᵀ w,
+    ∂_m H~ = z_m + u_m + ε² (uᵀ J(e_m) M J z + (Mᵀ J(x)ᵀ u)ᵀ J(e_m) z)  (J is linear in x;
+    J(e_m) = 0 for m >= n).  Undefined at a pole."""
+    N = 2 * n
+    J = _lp_J(x, n)
+    MJ = _matmul(M, J)
+    MJ2 = _matmul(MJ, MJ)
+    S = [[(1 if i == j else 0) - e * e * MJ2[i][j] for j in range(N)] for i in range(N)]
+    _, z = _eliminate(S, [[t] for t in _matvec(M, x)])
+    _, w = _eliminate([list(r) for r in zip(*S)], [[t] for t in x])
+    if z is None or w is None:
+        raise Undefined("I - eps^2 (M J(x))^2 is singular")
+    z, w = [r[0] for r in z], [r[0] for r in w]
+    Mt = [list(r) for r in zip(*M)]
+    u = _matvec(Mt, w)
+    a = _matvec(MJ, z)
+    r = _matvec(Mt, _matvec([list(c) for c in zip(*J)], u))
+
+    def form(p, q, k):  # pᵀ J(e_k) q
+        return sum((p[i] * q[n + (k - i) % n] - p[n + i] * q[(k - i) % n] for i in range(n)), 0 * x[0])
+    return [z[m] + u[m] + (e * e * (form(u, a, m) + form(r, z, m)) if m < n else 0) for m in range(N)]
+
+
 def h_definition(x, y, e, n):
     """h(x, y) = (2ε)⁻¹ xᵀ J((x + y)/2)⁻¹ y (Undefined where J(m) is singular)."""
     m = [(a + b) / 2 for a, b in zip(x, y)]
