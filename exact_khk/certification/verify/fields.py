@@ -91,17 +91,6 @@ def _trim(c) -> tuple:
     return tuple(c)
 
 
-def _pmul(a, b) -> list:
-    if not a or not b:
-        return []
-    out = [Fraction(0)] * (len(a) + len(b) - 1)
-    for i, s in enumerate(a):
-        if s:
-            for j, t in enumerate(b):
-                out[i + j] += s * t
-    return out
-
-
 def _pdivmod(a, b):
     """(q, r) with a = q b + r, deg r < deg b (coefficient lists, constant term first)."""
     a, q = list(a), [Fraction(0)] * max(len(a) - len(b) + 1, 0)
@@ -140,6 +129,7 @@ class _Cyclotomic:
         self.name = f"Q(zeta_{N})"
         self.evidence = f"exact in Q(zeta_{N})"
         self.modulus = tuple(Fraction(t) for t in cyclotomic_polynomial(N))
+        self.poly = flint.fmpq_poly(list(cyclotomic_polynomial(N)))
         self.one, self.zero = _Cyc(self, (Fraction(1),)), _Cyc(self, ())
 
     def reduce(self, c) -> tuple:
@@ -150,19 +140,6 @@ class _Cyclotomic:
                 for j in range(d + 1):
                     c[i - d + j] -= t * m[j]
         return _trim(c[:d])
-
-    def inverse(self, c) -> tuple:
-        """c⁻¹ mod Φ_N by the extended Euclidean algorithm (Φ_N is irreducible)."""
-        if not c:
-            raise ZeroDivisionError(f"division by zero in {self.name}")
-        r0, r1, s0, s1 = _trim(self.modulus), _trim(c), (), (Fraction(1),)
-        while r1:
-            q, r = _pdivmod(r0, r1)
-            qs = _pmul(q, s1)
-            n = max(len(s0), len(qs))
-            s0, s1 = s1, _trim([(s0[i] if i < len(s0) else 0) - (qs[i] if i < len(qs) else 0) for i in range(n)])
-            r0, r1 = r1, r
-        return self.reduce([t / r0[0] for t in s0])  # r0 is a nonzero constant
 
     def of(self, q: Fraction):
         return _Cyc(self, (Fraction(q),))
@@ -194,63 +171,79 @@ class _Cyclotomic:
 
 
 class _Cyc:
-    """An element of Q(ζ_N) (coefficients, constant term first)."""
+    """An element of Q(ζ_N): a python-flint ``fmpq_poly`` in z of degree < φ(N), reduced modulo Φ_N
+    (``c``: its coefficients as Fractions, constant term first)."""
 
-    __slots__ = ("K", "c")
+    __slots__ = ("K", "p")
 
     def __init__(self, K, c):
-        self.K, self.c = K, _trim(c)
+        self.K = K
+        self.p = c if isinstance(c, flint.fmpq_poly) else \
+            flint.fmpq_poly([flint.fmpq(t.numerator, t.denominator) for t in map(Fraction, c)]) % K.poly
+
+    @property
+    def c(self) -> tuple:
+        return tuple(Fraction(int(t.p), int(t.q)) for t in self.p.coeffs())
 
     def _co(self, o):
         if isinstance(o, _Cyc):
-            return o.c
-        if isinstance(o, (int, Fraction)):
-            return _trim([Fraction(o)])
+            return o.p
+        if isinstance(o, int):
+            return flint.fmpq_poly([o])
+        if isinstance(o, Fraction):
+            return flint.fmpq_poly([flint.fmpq(o.numerator, o.denominator)])
         return None
 
-    def _add(self, a, b, sign=1):
-        n = max(len(a), len(b))
-        return _Cyc(self.K, [(a[i] if i < len(a) else 0) + sign * (b[i] if i < len(b) else 0) for i in range(n)])
+    def _new(self, p):
+        out = _Cyc.__new__(_Cyc)
+        out.K, out.p = self.K, p
+        return out
 
     def __add__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else self._add(self.c, b)
+        return NotImplemented if b is None else self._new(self.p + b)
 
     __radd__ = __add__
 
     def __sub__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else self._add(self.c, b, -1)
+        return NotImplemented if b is None else self._new(self.p - b)
 
     def __rsub__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else self._add(b, self.c, -1)
+        return NotImplemented if b is None else self._new(b - self.p)
 
     def __neg__(self):
-        return _Cyc(self.K, [-t for t in self.c])
+        return self._new(-self.p)
 
     def __mul__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else _Cyc(self.K, self.K.reduce(_pmul(self.c, b)))
+        return NotImplemented if b is None else self._new((self.p * b) % self.K.poly)
 
     __rmul__ = __mul__
 
+    def _inverse(self, b):
+        if b.is_zero():
+            raise ZeroDivisionError(f"division by zero in {self.K.name}")
+        g, s, _ = b.xgcd(self.K.poly)  # Φ_N is irreducible: g is a nonzero constant
+        return s / g.coeffs()[0] if not g.is_one() else s
+
     def __truediv__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else _Cyc(self.K, self.K.reduce(_pmul(self.c, self.K.inverse(b))))
+        return NotImplemented if b is None else self._new((self.p * self._inverse(b)) % self.K.poly)
 
     def __rtruediv__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else _Cyc(self.K, self.K.reduce(_pmul(b, self.K.inverse(self.c))))
+        return NotImplemented if b is None else self._new((b * self._inverse(self.p)) % self.K.poly)
 
     def __eq__(self, o):
         b = self._co(o)
-        return NotImplemented if b is None else self.c == b
+        return NotImplemented if b is None else self.p == b
 
     __hash__ = None
 
     def __bool__(self):
-        return bool(self.c)
+        return not self.p.is_zero()
 
     def __str__(self):
         parts = [(("-" if t < 0 else "+"), (_show(abs(t)) if k == 0 else
