@@ -550,3 +550,18 @@ def test_cli_tampered_structure_exits_2(capsys, tmp_path, lp_cert):
     path.write_text(json.dumps(data))
     code, _, err = run(capsys, "verify", str(path))
     assert code == 2 and "checks[0].expected" in err and len(err.strip().splitlines()) == 1
+
+
+def test_verifier_gradient_closed_form_equals_dual_numbers():
+    """The verifier's closed form of grad H~_M (two solves) equals its dual-number derivative
+    through H~_M (one solve over dual numbers), with ==, in Q, Q(zeta_3) and F_P, for H~ and a K~."""
+    from exact_khk.certification.verify.fields import _Cyclotomic, _FlintRationals, _PrimeField
+    from exact_khk.certification.verify.maps import _htilde, _involution, _lp_hessian, _matmul, gradient, htilde_gradient
+
+    a, b, c = ([Fraction(t) for t in v] for v in ((1, 0, 2), (0, 1, 0), (3, 1, 1)))
+    for F in (_FlintRationals(), _Cyclotomic(3), _PrimeField(1000003)):
+        Hs = [[F.of(t) for t in row] for row in _lp_hessian(a, b, c)]
+        x = [F.of(Fraction(t)) for t in (1, 2, -1, Fraction(1, 2), 0, 1)]
+        e = F.of(Fraction(1, 10))
+        for M in (Hs, _matmul(_involution(3, "-++", F), Hs)):
+            assert htilde_gradient(M, x, e, 3) == gradient(lambda y, M=M: _htilde(M, y, e, 3), x)
