@@ -52,6 +52,9 @@ from exact_khk.certification.verify.records import (EXPRESSION_KINDS, LIE_POISSO
                                                     LiePoisson, declared_claims, rederive)
 from exact_khk.errors import InputError
 
+__all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotomic_polynomial", "RATIONAL_ARITHS",
+           "_Evaluate", "_Rationals"]
+
 #: the certificate schema versions this verifier reads
 SCHEMA_VERSIONS = (2,)
 #: top-level keys a certificate may carry that are informational: shown, not re-checked, not counted

@@ -39,7 +39,8 @@ class _Recheck:
     def orbit_length(self):
         K, got = self.cert.steps, len(self.pts)
         if got != K + 1:
-            return ("orbit length", False, f"{got} points recorded; {_show(Fraction(K))} steps need {_show(Fraction(K + 1))}")
+            return ("orbit length", False,
+                    f"{got} points recorded; {_show(Fraction(K))} steps need {_show(Fraction(K + 1))}")
         return ("orbit length", True, f"{K + 1} points")
 
     def starts_at_x0(self):

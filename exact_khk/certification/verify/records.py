@@ -22,9 +22,9 @@ from math import gcd
 from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul,
                                                    _matvec, _FlintRationals, to_fraction)
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field, _lp_hessian,
-                                                 _lp_J, determinant, dphi, dual_step, gradient, gradients, h_definition, htilde_gradient,
-                                                 jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q, lp_shift, orbit,
-                                                 shift_index, step, transpose)
+                                                 _lp_J, determinant, dphi, dual_step, gradient, gradients, h_definition,
+                                                 htilde_gradient, jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q,
+                                                 lp_shift, orbit, shift_index, step, transpose)
 
 #: relative perturbation of the "perturbed point" controls (exact arithmetics)
 PERTURBATION = Fraction(1, 2 ** 60)
@@ -630,7 +630,8 @@ def ex_poisson(ex):
     j = next((i for i in range(N) if pts[1][i] - pts[0][i] != 0), 0)
     scaled = lambda k: [[(1 + pts[k][j]) * t for t in row] for row in Pi(k)]  # noqa: E731
     return [
-        claim("Poisson tensor Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} orbit points",
+        claim("Poisson tensor Jacobi identity",
+              f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} orbit points",
               lambda: compare((k, lambda k=k: (jacobiator(ex.poisson, pts[k]), None)) for k in range(K + 1))),
         claim("Poisson map Phi_f", f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) at the {K} orbit points",
               lambda: compare(poisson_map(f, c.e, Pi, pts, range(K)))),
@@ -674,7 +675,7 @@ def ex_jacobian(ex):
 
 
 def ex_cmoq(ex):
-    c, K, pts, f, N = ex.ctx, ex.ctx.K, ex.ctx.pts, ex.fields["f"], ex.N
+    c, K, pts, f = ex.ctx, ex.ctx.K, ex.ctx.pts, ex.fields["f"]
     H = ex.fn(ex.spec["hamiltonian"]["H"], "system.hamiltonian.H")
     kahan = lambda x: [[(1 if i == j else 0) - c.e * t for j, t in enumerate(r)]  # noqa: E731
                        for i, r in enumerate(f.jacobian(x))]
@@ -689,7 +690,6 @@ def ex_cmoq(ex):
     def det_sides(k):
         D = determinant(dphi(f, c.e, pts[k], pts[k + 1]))
         return D * determinant(kahan(pts[k])), determinant(kahan(pts[k + 1]))
-    del N
     return [
         claim("CMOQ modified energy conserved", f"H~(x) = H(x) + (2 eps/3) grad H(x)^T (I - eps f'(x))^-1 f(x) "
               f"is conserved along the Phi_f orbit (k = 1..{K})", lambda: compare(conserved(modified, pts))),
@@ -704,7 +704,7 @@ def ex_cmoq(ex):
 
 
 def ex_declared_controls(ex):
-    c, pts = ex.ctx, ex.ctx.pts
+    pts = ex.ctx.pts
     return [control(f"control: {name} conserved by Phi_f",
                     f"[control, must fail] {name} = {text} is conserved along the Phi_f orbit",
                     lambda fn=ex.fn(text, f"system.controls.{name}", name=name, table=ex.lib_controls):
