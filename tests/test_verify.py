@@ -115,7 +115,7 @@ def test_generic_certificate_with_a_linear_integral_is_verified(generic_cert):
     assert generic_cert["values"]["S"] == ["6"] * 5  # x + y + z = 6, exactly conserved
     report = verify(generic_cert)
     assert report.ok, report.summary()
-    assert ("S conserved", True, "values equal along the orbit, as the recorded check says") in report.results
+    assert ("S conserved", True, "values equal along the orbit (the record of the claim is re-derived below)") in report.results
 
 
 def test_non_homogeneous_field_invalid_claim_and_pole_are_verified():
@@ -202,8 +202,8 @@ LP_MUTATIONS = {
     "x0": (_set(["x0", 1], lambda t: "3"), "orbit starts at x0"),
     "value of H~": (_set(["values", "H~", 2], _plus_tiny), "values of H~"),
     "value of K~": (_set(["values", "K~[-++]", 0], lambda t: "0"), "values of K~[-++]"),
-    "a check's holds": (_first_claim_holds_flipped, "status"),
-    "a conservation check's holds": (_conservation_flipped, "H~ conserved"),
+    "a check's holds": (_first_claim_holds_flipped, "record reversibility Phi_f"),
+    "a conservation check's holds": (_conservation_flipped, "record integral H~ conserved by Phi_f"),
     "status": (_set(["status"], lambda s: "INVALID"), "status"),
     "valid": (_set(["valid"], lambda s: False), "status"),
     "verdict": (_set(["verdict"], lambda s: "INVALID: " + s), "verdict"),
@@ -214,10 +214,10 @@ LP_MUTATIONS = {
     # cut short: the claims only (no control left, so it cannot be VALID), or with one control
     # (still VALID, but the verdict's counts are those of the whole certificate)
     "checks cut to the claims": (lambda d: d.update(checks=[c for c in d["checks"] if c["expected"]][:3]),
-                                 "status"),
+                                 "records cover the claims"),
     "checks cut to 3 claims and a control": (
         lambda d: d.update(checks=[c for c in d["checks"] if c["expected"]][:3]
-                           + [c for c in d["checks"] if not c["expected"]][:1]), "verdict"),
+                           + [c for c in d["checks"] if not c["expected"]][:1]), "records cover the claims"),
 }
 
 
@@ -550,3 +550,18 @@ def test_cli_tampered_structure_exits_2(capsys, tmp_path, lp_cert):
     path.write_text(json.dumps(data))
     code, _, err = run(capsys, "verify", str(path))
     assert code == 2 and "checks[0].expected" in err and len(err.strip().splitlines()) == 1
+
+
+def test_verifier_gradient_closed_form_equals_dual_numbers():
+    """The verifier's closed form of grad H~_M (two solves) equals its dual-number derivative
+    through H~_M (one solve over dual numbers), with ==, in Q, Q(zeta_3) and F_P, for H~ and a K~."""
+    from exact_khk.certification.verify.fields import _Cyclotomic, _FlintRationals, _PrimeField
+    from exact_khk.certification.verify.maps import _htilde, _involution, _lp_hessian, _matmul, gradient, htilde_gradient
+
+    a, b, c = ([Fraction(t) for t in v] for v in ((1, 0, 2), (0, 1, 0), (3, 1, 1)))
+    for F in (_FlintRationals(), _Cyclotomic(3), _PrimeField(1000003)):
+        Hs = [[F.of(t) for t in row] for row in _lp_hessian(a, b, c)]
+        x = [F.of(Fraction(t)) for t in (1, 2, -1, Fraction(1, 2), 0, 1)]
+        e = F.of(Fraction(1, 10))
+        for M in (Hs, _matmul(_involution(3, "-++", F), Hs)):
+            assert htilde_gradient(M, x, e, 3) == gradient(lambda y, M=M: _htilde(M, y, e, 3), x)

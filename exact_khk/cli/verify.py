@@ -1,10 +1,12 @@
 """``exact-khk verify CERT.json [--json]``: re-check a saved certificate (a thin view of
 :func:`exact_khk.certification.verify.verify`).
 
-Exit status: 0 VERIFIED (the recorded orbit, integral values and status are
-correct, whatever the status is); 1 NOT VERIFIED (a check fails, or the
-certificate was computed in an inexact arithmetic and cannot be re-checked
-exactly); 2 an unreadable or malformed file (one line on stderr).
+Exit status: 0 VERIFIED (every record, the orbit, the integral values and the
+status re-derived and as recorded, whatever the status is); 1 NOT VERIFIED (a
+record or result differs — a tampered certificate —, or the certificate was
+computed in an inexact arithmetic and cannot be re-checked exactly); 2 an
+unreadable or malformed file (one line on stderr); 4 PARTIALLY VERIFIED (all that
+was re-derived agrees, but some records were not re-checked).
 """
 
 from __future__ import annotations
@@ -24,12 +26,13 @@ MAX_CERTIFICATE = 200_000_000
 def register(sub):
     p = sub.add_parser("verify", help="re-check a saved certificate (orbit, integral values, status) "
                        "by a separate minimal exact code path",
-                       description="Re-check a certificate written by 'exact-khk certify --json PATH': every "
-                       "orbit point is the Kahan step of the previous one (the linear equation, checked by "
-                       "substitution, and a nonzero determinant), every recorded integral value is recomputed, "
-                       "conservation and the status agree with the recorded checks. Plain Fraction arithmetic, "
-                       "independent of the library's solvers (docs/verify.md). Exit status 0 VERIFIED, "
-                       "1 NOT VERIFIED, 2 unreadable or malformed file.")
+                       description="Re-derive a certificate written by 'exact-khk certify --json PATH' from its "
+                       "own data: every orbit point is the Kahan step of the previous one, every integral value "
+                       "is recomputed, the records are exactly those the system and options imply, and each "
+                       "record's statement, evidence, holds, residual and applicability are recomputed, then the "
+                       "status. Plain exact arithmetic, independent of the library's solvers and certification "
+                       "engines (docs/verify.md). Exit status 0 VERIFIED, 1 NOT VERIFIED, 2 unreadable or "
+                       "malformed file, 4 PARTIALLY VERIFIED (some records not re-checked).")
     p.add_argument("certificate", metavar="CERT.json", nargs="?", help="the certificate file")
     add_json_option(p, "the report")
     p.set_defaults(func=cmd_verify)
@@ -68,4 +71,4 @@ def cmd_verify(args):
         write_json(report.to_json(), args.json)
     if args.json != "-":
         print(report.summary())
-    return 0 if report.ok else 1
+    return report.exit_status

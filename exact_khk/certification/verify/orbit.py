@@ -1,0 +1,218 @@
+"""The recorded orbit and the integrals' recorded values, re-checked: the step equations by
+substitution, the steps' determinants, every value recomputed at its point."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+from exact_khk.certification.verify.fields import (Undefined, _Evaluate, _Rationals, _dot, _eliminate,
+                                                   _matmul, _matvec, _show, to_fraction)
+from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field,
+                                                 _lp_hessian, _lp_J)
+
+_Undefined = Undefined
+
+
+class _Recheck:
+    """The orbit and the integrals of one certificate, re-checked in the field F."""
+
+    def __init__(self, cert, data, F):
+        self.cert, self.data, self.F = cert, data, F
+        self.system = cert.system
+        self.lp = getattr(self.system, "kind", "") == "lie-poisson"
+        self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
+        self.e = F.of(cert.eps)
+        if self.lp:
+            n = self.system.n
+            self.n = n
+            self.Hs = [[F.of(t) for t in row] for row in _lp_hessian(self.system.a, self.system.b, self.system.c)]
+            self.f = _lp_field(n, self.Hs)
+        else:
+            self.f = _expression_field(self.system, F)
+
+    def run(self) -> list:
+        out = [self.orbit_length(), self.starts_at_x0()]
+        out += self.steps()
+        out += self.integrals()
+        return out
+
+    def orbit_length(self):
+        K, got = self.cert.steps, len(self.pts)
+        if got != K + 1:
+            return ("orbit length", False,
+                    f"{got} points recorded; {_show(Fraction(K))} steps need {_show(Fraction(K + 1))}")
+        return ("orbit length", True, f"{K + 1} points")
+
+    def starts_at_x0(self):
+        if not self.pts:
+            return ("orbit starts at x0", False, "no orbit recorded")
+        try:
+            x0 = [self.F.of(t) for t in self.cert.x0]
+        except _Undefined as exc:
+            return ("orbit starts at x0", False, str(exc))
+        bad = [i for i, (a, b) in enumerate(zip(self.pts[0], x0)) if a != b]
+        if bad:
+            i = bad[0]
+            return ("orbit starts at x0", False, f"x_0[{i}] = {_show(self.pts[0][i])} but x0[{i}] = {_show(x0[i])}")
+        return ("orbit starts at x0", True, "x_0 = x0")
+
+    def steps(self):
+        f, e, N, pts = self.f, self.e, self.f.dim, self.pts
+        homogeneous = f.homogeneous
+        eq_bad = det_bad = None
+        for k in range(len(pts) - 1):
+            x, y = pts[k], pts[k + 1]
+            D = f.jacobian(x)
+            A = [[(1 if i == j else 0) - e * D[i][j] for j in range(N)] for i in range(N)]
+            lhs = _matvec(A, y)
+            if homogeneous:
+                rhs = x
+            else:
+                rhs = [x[i] + e * _dot([l for _, l in f.linear[i]], [x[j] for j, _ in f.linear[i]])
+                       + 2 * e * f.const[i] for i in range(N)]
+            diff = [a - b for a, b in zip(lhs, rhs)]
+            i = next((i for i, d in enumerate(diff) if d != 0), None)
+            if i is not None and eq_bad is None:
+                eq_bad = (k, i, diff[i])
+            det, _ = _eliminate(A)
+            if det == 0 and det_bad is None:
+                det_bad = k
+        K = len(pts) - 1
+        form = ("(I - eps f'(x_k)) x_{k+1} = x_k" if homogeneous else
+                "(I - eps f'(x_k)) x_{k+1} = (I + eps L) x_k + 2 eps c")
+        if eq_bad is not None:
+            k, i, d = eq_bad
+            first = ("Kahan step equations", False, f"{form} fails at k = {k}, row {i}: residual {_show(d)}")
+        else:
+            first = ("Kahan step equations", True, f"{form} holds exactly for k = 0..{K - 1}")
+        if det_bad is not None:
+            second = ("Kahan steps nonsingular", False, f"det(I - eps f'(x_k)) = 0 at k = {det_bad}: the step "
+                      f"from x_{det_bad} is not unique")
+        else:
+            second = ("Kahan steps nonsingular", True, f"det(I - eps f'(x_k)) != 0 for k = 0..{K - 1}")
+        return [first, second]
+
+    # --- integrals -------------------------------------------------------------
+
+    def integral_functions(self) -> dict:
+        """name -> fn(x) (a field element; ZeroDivisionError or _Undefined at a pole)."""
+        F, e = self.F, self.e
+        if self.lp:
+            n = self.n
+            fns = {"H~": lambda x: _htilde(self.Hs, x, e, n)}
+            for s in self.cert.signs:
+                try:
+                    M = _matmul(_involution(n, s, F), self.Hs)
+                except _Undefined as exc:
+                    fns[f"K~[{s}]"] = exc
+                    continue
+                fns[f"K~[{s}]"] = lambda x, M=M: _htilde(M, x, e, n)
+            return fns
+        spec = self.data["system"]
+        params = {p: _Evaluate(t, {}, F, f"system.parameters.{p}").value
+                  for p, t in (spec.get("parameters") or {}).items()}
+        variables = list(spec["variables"])
+        fns = {}
+        for name, text in (spec.get("integrals") or {}).items():
+            def fn(x, text=text, name=name):
+                names = dict(params, eps=e, **dict(zip(variables, x)))
+                return _Evaluate(text, names, F, f"system.integrals.{name}").value
+            fns[name] = fn
+        return fns
+
+    def _value(self, name, fn, k):
+        """(value, how) of integral ``name`` at x_k; raises _Undefined at a pole."""
+        x = self.pts[k]
+        try:
+            return fn(x), ""
+        except ZeroDivisionError:
+            pass
+        except _Undefined:
+            raise
+        if self.lp or not isinstance(self.F, _Rationals):
+            raise _Undefined("division by zero")
+        # the expression as written divides by zero at x_k; its value there is that of the
+        # reduced rational function, if it is finite (the library reduces it to lowest terms)
+        from exact_khk.arith import get_arith
+        from exact_khk.errors import PoleError
+
+        try:
+            return self.F.of(self.system.integrals()[name](get_arith("fraction"), [to_fraction(t) for t in x],
+                                                          self.cert.eps)), " (reduced form)"
+        except PoleError:
+            raise _Undefined("pole") from None
+
+    def integrals(self) -> list:
+        fns = self.integral_functions()
+        recorded = self.cert.values
+        out = []
+        missing = [n for n in fns if n not in recorded]
+        extra = [n for n in recorded if n not in fns]
+        if missing or extra:
+            out.append(("integrals recorded", False, "; ".join(
+                ([f"no values recorded for {', '.join(missing)}"] if missing else []) +
+                ([f"values recorded for {', '.join(extra)}, which the system does not declare"] if extra else []))))
+        else:
+            out.append(("integrals recorded", True, f"{', '.join(fns) or 'none declared'}"))
+        checks = {c.name: c for c in self.cert.checks}
+        for name, fn in fns.items():
+            if name not in recorded:
+                continue
+            out += self._one_integral(name, fn, recorded[name], checks.get(f"integral {name} conserved by Phi_f"))
+        if self.lp and "H~" in recorded and isinstance(recorded["H~"], list):
+            out.append(self._definition(recorded["H~"]))
+        return out
+
+    def _one_integral(self, name, fn, recorded, check):
+        label = f"values of {name}"
+        if isinstance(fn, _Undefined):
+            return [(label, False, f"cannot be recomputed: {fn}")]
+        if recorded is None:  # recorded as undefined: there must be a pole on the orbit
+            for k in range(len(self.pts)):
+                try:
+                    self._value(name, fn, k)
+                except _Undefined:
+                    return [(label, True, f"recorded as undefined; {name} has a pole at x_{k}")]
+            return [(label, False, f"recorded as undefined, but {name} is finite at every orbit point")]
+        if len(recorded) != len(self.pts):
+            return [(label, False, f"{len(recorded)} values recorded for {len(self.pts)} orbit points")]
+        values, notes = [], set()
+        for k, text in enumerate(recorded):
+            r = self.F.parse(text, f"values.{name}[{k}]")
+            try:
+                v, how = self._value(name, fn, k)
+            except _Undefined as exc:
+                return [(label, False, f"recorded {_show(r)} at x_{k}, where {name} is undefined ({exc})")]
+            if v != r:
+                return [(label, False, f"at x_{k}: recorded {_show(r)}, recomputed {_show(v)}")]
+            values.append(v)
+            notes.add(how)
+        result = [(label, True, f"all {len(values)} recorded values recomputed exactly{''.join(sorted(notes))}")]
+        conserved = all(v == values[0] for v in values)
+        k = next((k for k, v in enumerate(values) if v != values[0]), None)
+        state = "equal along the orbit" if conserved else f"not equal along the orbit (x_{k} differs from x_0)"
+        result.append((f"{name} conserved", True, f"values {state} (the record of the claim is re-derived below)"))
+        return result
+
+    def _definition(self, recorded):
+        """H~(x_k) = (2 eps)^-1 x_k^T J(m)^-1 x_{k+1}, m = (x_k + x_{k+1})/2 (skipped where J(m) is singular)."""
+        label = "H~ closed form = definition"
+        n, e, pts, F = self.n, self.e, self.pts, self.F
+        if len(recorded) != len(pts):
+            return (label, False, "the values of H~ do not match the orbit")
+        done, skipped = 0, []
+        for k in range(len(pts) - 1):
+            x, y = pts[k], pts[k + 1]
+            m = [(a + b) / 2 for a, b in zip(x, y)]
+            _, z = _eliminate(_lp_J(m, n), [[t] for t in y])
+            if z is None:
+                skipped.append(k)
+                continue
+            h = _dot(x, [r[0] for r in z]) / (2 * e)
+            r = F.parse(recorded[k], f"values.H~[{k}]")
+            if h != r:
+                return (label, False, f"at x_{k}: recorded H~ = {_show(r)}, definition gives {_show(h)}")
+            done += 1
+        note = f"; skipped k = {skipped[:5]}{'...' if len(skipped) > 5 else ''} (J(m) singular)" if skipped else ""
+        return (label, True, f"h(x_k, x_(k+1)) = H~(x_k) at {done} orbit points{note}")
+
