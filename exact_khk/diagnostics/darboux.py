@@ -296,7 +296,7 @@ def lifted_kernel(make_rows, m, seed, max_primes=12, progress=None):
 
 
 def rows_of_points(N, count, mod_map, row_at, rng):
-    """``count`` rows ``row_at(point data)`` at random points (each a list of rows)."""
+    """At least ``count`` rows, ``row_at(point data)`` (a list of rows) at random points."""
     rows, tries = [], 0
     while len(rows) < count:
         tries += 1

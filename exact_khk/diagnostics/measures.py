@@ -82,6 +82,7 @@ class Darboux:
     polynomial: str
     cofactor: str
     factors: tuple   # ((factor text, its cofactor text), ...)
+    polys: tuple = ()  # P and its irreducible factors as ((exponents, Fraction), ...) tuples
 
     def to_json(self):
         return {"polynomial": self.polynomial, "cofactor": self.cofactor,
@@ -329,19 +330,22 @@ def _same_ratio(num, den, d):
 def _darboux(sym, P, text, variables, N) -> Darboux:
     """P with its cofactor ``text``, and its factors over Q with their exact cofactors."""
     if sym is None:
-        return Darboux(expr(P, variables), text, ())
+        return Darboux(expr(P, variables), text, (), (tuple(sorted(P.items())),))
     from exact_khk.diagnostics.darboux import _q
 
     poly = sym.ctx.from_dict({e: _q(c) for e, c in P.items()})
-    facs = []
+    facs, polys = [], [tuple(sorted(P.items()))]
     if not poly.is_constant():
         for h, _ in poly.factor()[1]:
+            hp = primitive(mpoly_dict(h))
+            if tuple(sorted(hp.items())) not in polys:
+                polys.append(tuple(sorted(hp.items())))
             cn, cd = cofactor(sym, h)
             ex = sym.express(cn, cd)
             ctext = _over_factors(Fraction(int(ex[0].p), int(ex[0].q)), ex[1]) if ex is not None else \
                 f"({expr(mpoly_dict(cn), variables)})/({expr(mpoly_dict(cd), variables)})"
             facs.append((expr(primitive(mpoly_dict(h)), variables), ctext))
-    return Darboux(expr(P, variables), text, tuple(facs))
+    return Darboux(expr(P, variables), text, tuple(facs), tuple(polys))
 
 
 def _verify(fld, eps, num, den, variables, seed, steps, used, shown=None) -> Density:
