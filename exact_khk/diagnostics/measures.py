@@ -235,7 +235,8 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
                          f"(integrals), so the density is determined up to such a factor")
     if not densities:
         notes.append("nothing found: no Darboux polynomial of degree <= "
-                     f"{degree} with the cofactors tried gives a density (try a higher --degree)")
+                     f"{degree} with the cofactors tried gives a density (a kernel 0 modulo a prime proves that none "
+                     "exists over Q for that cofactor; try a higher --degree)")
     label = f"{sysobj.name if sysobj is not None else 'field'} {fld.label}"
     return MeasureSearch(label, eps, degree, tuple(variables), factor_texts, det_text, tuple(searches),
                          tuple(darboux), tuple(densities), tuple(sorted(primes)), tuple(notes),

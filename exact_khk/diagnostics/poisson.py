@@ -187,7 +187,7 @@ def find_poisson(system, degree=2, field="f", eps=None, seed=0, verify_steps=3, 
     label = f"{sysobj.name if sysobj is not None else 'field'} {fld.label}"
     if not basis:
         notes.append(f"nothing found: no nonzero bivector with entries of degree <= {degree} is preserved "
-                     "(try a higher --degree)")
+                     "(proven: the kernel is 0 modulo a prime, so it is 0 over Q; try a higher --degree)")
     return PoissonSearch(label, eps, degree, tuple(variables), len(basis), tuple(tensors), tuple(sorted(primes)),
                          tuple(notes), time.perf_counter() - t0)
 
