@@ -196,3 +196,14 @@ def test_fraction_recheck_of_lv_density():
         U, V = step(u, v)
         assert 1 / (U * V) * jac(u, v) == 1 / (u * v)
         u, v = U, V
+
+
+def test_cli_x0_at_a_pole_and_inapplicable_control(capsys):
+    """At the fixed point (0, 0) on the poles of 1/(uv): the exact check cannot run, so the
+    density is not called verified; the tensor's control is inapplicable, never 'failed'."""
+    assert main(["find-measure", "lotka-volterra", "--x0", "0,0"]) == 0
+    out = capsys.readouterr().out
+    assert "exact orbit: inapplicable" in out and "NOT verified" in out
+    assert main(["find-poisson", "lotka-volterra", "--x0", "0,0"]) == 0
+    out = capsys.readouterr().out
+    assert "control: (1 + x_j) pi: inapplicable" in out and "[VERIFIED]" in out

@@ -8,6 +8,7 @@ from __future__ import annotations
 from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_output, field_name,
                                    system_from_args, write_json)
 from exact_khk.errors import InputError
+from exact_khk.parsing import parse_vector
 
 MEASURE_HELP = "discover invariant measures of a Kahan map (discrete Darboux polynomials and their cofactors)"
 POISSON_HELP = "discover Poisson tensors preserved by a Kahan map, with their Casimirs"
@@ -16,10 +17,9 @@ POISSON_HELP = "discover Poisson tensors preserved by a Kahan map, with their Ca
 def _common(p):
     p.add_argument("system_spec", nargs="?", metavar="SYSTEM",
                    help="a catalogue system or a system file (the same as --system)")
-    add_system_options(p, steps_default=None, arith=False)
+    add_system_options(p, steps_default=4, arith=False)  # --x0, --steps: the exact orbit check
     add_field_options(p)
     p.add_argument("--line-seed", type=int, default=0, help="seed of the random points and primes (default 0)")
-    p.add_argument("--verify-steps", type=int, default=4, help="steps of the fresh exact orbit of the check (default 4)")
     p.add_argument("--json", nargs="?", const="-", metavar="PATH",
                    help="write one JSON object to PATH (stdout without a path)")
     p.add_argument("--toml", action="store_true", help="print a ready system-file block ([measure] or [poisson])")
@@ -53,14 +53,15 @@ def _system(args):
     system, _, eps = system_from_args(args)
     if args.json not in (None, "-"):
         check_output(args.json)
-    return system, eps
+    x0 = None if args.x0 is None else parse_vector(args.x0, "--x0", system.dim)
+    return system, eps, x0
 
 
 def _rename(exc):
     msg = str(exc)
-    for name in ("degree", "casimir_degree", "verify_steps"):
+    for name, option in (("degree", "--degree"), ("casimir_degree", "--casimir-degree"), ("verify_steps", "--steps")):
         if msg.startswith(name + ":"):
-            return InputError("--" + name.replace("_", "-") + msg[len(name):])
+            return InputError(option + msg[len(name):])
     return exc
 
 
@@ -80,11 +81,11 @@ def _show(args, system, eps, res):
 def cmd_find_measure(args):
     from exact_khk.diagnostics.measures import find_measure
 
-    system, eps = _system(args)
+    system, eps, x0 = _system(args)
     try:
         with Progress(args, None, "find-measure", unit="stage") as progress:
             res = find_measure(system, degree=args.degree, field=field_name(system, args), eps=eps,
-                               seed=args.line_seed, verify_steps=args.verify_steps, progress=progress)
+                               seed=args.line_seed, verify_steps=args.steps, x0=x0, progress=progress)
     except InputError as exc:
         raise _rename(exc) from None
     return _show(args, system, eps, res)
@@ -93,11 +94,11 @@ def cmd_find_measure(args):
 def cmd_find_poisson(args):
     from exact_khk.diagnostics.poisson import find_poisson
 
-    system, eps = _system(args)
+    system, eps, x0 = _system(args)
     try:
         with Progress(args, None, "find-poisson", unit="stage") as progress:
             res = find_poisson(system, degree=args.degree, field=field_name(system, args), eps=eps,
-                               seed=args.line_seed, verify_steps=args.verify_steps,
+                               seed=args.line_seed, verify_steps=args.steps, x0=x0,
                                casimir_degree=args.casimir_degree, measure_degree=args.casimir_degree,
                                progress=progress)
     except InputError as exc:
