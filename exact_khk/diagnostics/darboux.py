@@ -35,7 +35,7 @@ import flint
 
 from exact_khk.diagnostics.degrees import bareiss, random_primes
 from exact_khk.diagnostics.kernels import _Evaluator, lift, poly_text
-from exact_khk.errors import InputError
+from exact_khk.errors import InputError, UndecidedError
 
 #: the largest dimension whose det dΦ is expanded and factored over Q (degree ≤ N(N+1)
 #: in N variables: N = 4 takes about a second)
@@ -291,8 +291,8 @@ def lifted_kernel(make_rows, m, seed, max_primes=12, progress=None):
         out = lift(per)
         if out is not None:
             return out, tuple(used)
-    raise InputError(f"the rational reconstruction of the kernel was not confirmed with {len(used)} primes "
-                     "(coefficients too large: try a smaller degree)")
+    raise UndecidedError(f"the rational reconstruction of the kernel was not confirmed with {len(used)} primes "
+                         "(coefficients too large: try a smaller degree)")
 
 
 def rows_of_points(N, count, mod_map, row_at, rng):
