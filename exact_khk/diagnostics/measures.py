@@ -2,18 +2,23 @@
 
 A density m is preserved when m(x̃)·det dΦ(x) = m(x) (x̃ = Φ(x); the measure m dx).
 With P a *Darboux polynomial* of cofactor C, P(x̃) = C(x)·P(x) (Celledoni, Evripidou,
-McLaren, Owren, Quispel, Tapley, arXiv:1902.04685), a product of Darboux
-polynomials whose cofactors multiply to det dΦ gives the density 1/Π P.  At a fixed
-ε the search is linear in P's coefficients once the cofactor is fixed; the
-cofactors tried are built from the factorisation of det dΦ over Q
-(:mod:`.darboux`): det dΦ = κ·Π a_i^k_i, and for every g dividing all k_i with κ a
-g-th power in Q, C = ±κ^(1/g)·Π a_i^(k_i/g) (the product of any g Darboux
-polynomials of this cofactor is a density denominator); g = 1 gives the densities
-1/P directly, and C = 1/det dΦ the polynomial densities P.  All monomials of degree
-≤ D are the candidates; the kernel of P(x̃) − C(x)P(x) at random points of F_p^N is
-lifted to Q (:func:`~.darboux.lifted_kernel`).  Each Darboux polynomial is factored
-over Q and the cofactor of every factor is computed exactly as a rational function
-and written over the factors of A = det(I − εf′) and det dΦ.
+McLaren, Owren, Quispel, Tapley, arXiv:1902.04685), a product Π P_i^(n_i) whose
+cofactors multiply to det dΦ gives the density 1/Π P_i^(n_i).  Over Q (dimension ≤ 4,
+:mod:`.darboux`) det dΦ = κ·Π F_i^(k_i) is factored, the F_i being the irreducible
+factors of A = det(I − εf′) (the map's denominator) and of the numerator, and the
+cofactors tried are
+
+* det dΦ itself (densities 1/P) and 1/det dΦ (densities P) — in every dimension;
+* every c·Π F_i^(e_i) with e_i ∈ [−2, 0] for the factors of A and [0, 2] for the others
+  (a Darboux polynomial of degree d has P(x̃) = P^h(Ñ, A)/A^d): the constant c is found
+  over F_p as a generalized eigenvalue (:func:`cofactor_candidates`) and lifted to Q.
+
+For a fixed cofactor the condition is linear in P's coefficients over all monomials of
+degree ≤ D; its kernel at random points of F_p^N is lifted to Q
+(:func:`~.darboux.lifted_kernel`).  The irreducible Darboux polynomials are then
+combined: the small integer vectors n with Σ n_i e_i = k and Π c_i^(n_i) = κ give the
+densities 1/Π P_i^(n_i).  Every Darboux polynomial is factored over Q and the cofactor
+of each factor is computed exactly and written over the F_i.
 
 **Verification** of each density m = U/V (U, V polynomials of degrees u, v):
 
@@ -40,18 +45,20 @@ import random
 import time
 from dataclasses import dataclass
 from fractions import Fraction
-from math import comb
 
 from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, cofactor, eval_poly, exact_orbit, fresh_point,
                                            lifted_kernel, mpoly_dict, mpoly_text, primitive, rows_of_points,
                                            symbolic_map)
 from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.kernels import monomials, poly_text
+from exact_khk.diagnostics.kernels import monomials, poly_text, rational_reconstruction
 from exact_khk.errors import InputError
 from exact_khk.parsing import check_count
 
 #: random points of the identity check over F_p
 SZ_POINTS = 8
+#: the most candidate monomials for the search over all cofactors c·Π F_i^k_i (one m × m
+#: characteristic polynomial per exponent vector, 3^r vectors for r factors)
+GENERAL_MAX_UNKNOWNS = 200
 
 
 def expr(poly: dict, variables) -> str:
@@ -145,7 +152,7 @@ class MeasureSearch:
             out += [f"    F{i} = {t}" for i, t in enumerate(self.factors, 1)]
             out.append(f"  det dPhi = {self.det_text}")
         for c, k in self.searches:
-            out.append(f"  cofactor {c}: {k} Darboux polynomial(s)")
+            out.append(f"  cofactor {c}: {k} Darboux polynomial(s)" + ("" if c.endswith("det dPhi") else " (irreducible)"))
         for d in self.darboux:
             out.append(f"  Darboux polynomial {d.polynomial}")
             out.append(f"    cofactor {d.cofactor}")
@@ -182,24 +189,28 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
     notes, primes = [], set()
     stage("det dPhi over Q")
     sym = symbolic_map(fld, eps)
-    factor_texts, det_text, cands = (), "", []
+    factor_texts, det_text, kappa, ks = (), "", None, None
+    cands = [("det dPhi", None, 1)]
     if sym is None:
         notes.append(f"dimension {N} > 4: det dPhi is not factored over Q; only the cofactors det dPhi^(+-1) are tried")
-        cands = [("det dPhi", None, 1, 1), ("1/det dPhi", None, -1, 1)]
     else:
         factor_texts = tuple(mpoly_text(g, variables) for g in sym.factors)
         const, ks = sym.express(sym.det_num, sym.det_den)
-        det_text = _over_factors(Fraction(int(const.p), int(const.q)), ks)
-        cands = [("det dPhi", None, 1, 1)]
-        for g in _root_orders(const, ks):
-            for sign in ((1, -1) if g % 2 == 0 else (1,)):
-                root = sign * _rational_root(Fraction(int(const.p), int(const.q)), g)
-                cands.append((_over_factors(root, {k: e // g for k, e in ks.items()}),
-                              (root, {k: e // g for k, e in ks.items()}), 1, g))
-        cands.append(("1/det dPhi", None, -1, 1))
+        kappa = Fraction(int(const.p), int(const.q))
+        det_text = _over_factors(kappa, ks)
+        stage("cofactors (eigenvalues over F_p)")
+        found = cofactor_candidates(fld, eps, sym, exps, seed)
+        if found is None:
+            notes.append(f"{m} unknowns: beyond {GENERAL_MAX_UNKNOWNS} (GENERAL_MAX_UNKNOWNS) only the cofactors "
+                         "det dPhi^(+-1) are tried")
+        for c, kk in sorted(found or (), key=lambda t: (sum(map(abs, t[1].values())), sorted(t[1].items()))):
+            if (c, kk) != (kappa, ks):
+                cands.append((_over_factors(c, kk), (c, kk), 1))
+    cands.append(("1/det dPhi", None, -1))
     ev = _Evaluator(exps)
-    searches, darboux, densities = [], [], []
-    for text, root, power, g in cands:
+    one = {(0,) * N: Fraction(1)}
+    searches, darboux, densities, items = [], [], [], []
+    for text, root, power in cands:
         cof = _cofactor_mod(sym, root, power)
 
         def make_rows(p, rng, cof=cof):
@@ -209,34 +220,34 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
         stage(f"Darboux polynomials, cofactor {text}")
         basis, used = lifted_kernel(make_rows, m, seed, progress=progress)
         primes.update(used)
-        searches.append((text, len(basis)))
         polys = [primitive({e: c for e, c in zip(exps, v) if c}) for v in basis]
+        if root is not None:  # products and powers of irreducible ones are formed below, not listed
+            polys = [P for P in polys if _irreducible(sym, P)]
+            if not polys:
+                continue
         if not polys:
+            searches.append((text, 0))
             continue
+        searches.append((text, len(polys)))
         for P in polys:
             darboux.append(_darboux(sym, P, text, variables, N))
-        if power == -1:
-            dens = [(P, {(0,) * N: Fraction(1)}) for P in polys[:1]]
-        elif g == 1:
-            dens = [({(0,) * N: Fraction(1)}, P) for P in polys[:1]]
-        else:
-            prod = {(0,) * N: Fraction(1)}
-            chosen = (polys * g)[:g] if len(polys) < g else polys[:g]
-            for P in chosen:
-                prod = _mul(prod, P)
-            dens = [({(0,) * N: Fraction(1)}, prod)]
-        for num, den in dens:
-            if any(_same_ratio(num, den, d) for d in densities):
-                continue
-            stage("verify the density")
-            shown = None if power == -1 or g == 1 else \
-                "1/(" + "*".join(_paren(expr(P, variables), " +-/") for P in chosen) + ")"
-            densities.append(_verify(fld, eps, num, den, variables, seed, verify_steps, primes, shown, x0))
         if len(polys) > 1:
             notes.append(f"cofactor {text}: {len(polys)} independent Darboux polynomials; their ratios are conserved "
-                         f"(integrals), so the density is determined up to such a factor")
+                         f"(integrals), so a density built from them is determined up to such a factor")
+        if root is not None:
+            items.append((polys, root))
+            continue
+        num, den = (polys[0], one) if power == -1 else (one, polys[0])
+        if not any(_same_ratio(num, den, d) for d in densities):
+            stage("verify the density")
+            densities.append(_verify(fld, eps, num, den, variables, seed, verify_steps, primes, None, x0))
+    for num, den, shown in _products(items, kappa, ks, N):
+        if not any(_same_ratio(num, den, d) for d in densities):
+            stage("verify the density")
+            densities.append(_verify(fld, eps, num, den, variables, seed, verify_steps, primes,
+                                     shown(variables), x0))
     if not densities:
-        notes.append("nothing found: no Darboux polynomial of degree <= "
+        notes.append("nothing found: no product of Darboux polynomials of degree <= "
                      f"{degree} with the cofactors tried gives a density (a kernel 0 modulo a prime proves that none "
                      "exists over Q for that cofactor; try a higher --degree)")
     label = f"{sysobj.name if sysobj is not None else 'field'} {fld.label}"
@@ -261,32 +272,124 @@ def _row(ev, at, cof, p):
     return [[(a - c * b) % p for a, b in zip(ev(xt, 1, p), ev(x, 1, p))]]
 
 
-def _root_orders(const, ks):
-    """The g > 1 dividing every exponent with the constant a g-th power in Q."""
-    from math import gcd
+def cofactor_candidates(fld, eps, sym, exps, seed, max_exp=2):
+    """The cofactors c·Π F_i^k_i of Darboux polynomials in the span of ``exps``, as (c, {i: k_i})
+    over Q, or None beyond :data:`GENERAL_MAX_UNKNOWNS`.  Exponents: −max_exp..0 for the factors
+    of A (the map's denominator), 0..max_exp for the others.  For each exponent vector the
+    constant c is a generalized eigenvalue of the pencil (U, V), U = [φ_j(x̃_k)],
+    V = [C₀(x_k)φ_j(x_k)], at random points over F_p: the roots in F_p of the characteristic
+    polynomial of (RV)⁻¹RU (R a random projection), kept when U − cV has a kernel, and lifted by
+    rational reconstruction (the exact search that follows confirms or drops it)."""
+    import itertools
 
-    G = 0
-    for e in ks.values():
-        G = gcd(G, e)
-    c = Fraction(int(const.p), int(const.q))
-    return [g for g in range(2, G + 1) if G % g == 0 and _rational_root(c, g) is not None]
+    import flint
 
-
-def _rational_root(c: Fraction, g: int):
-    """The positive g-th root of |c| in Q when it exists and c > 0 or g odd, else None."""
-    if c < 0 and g % 2 == 0:
+    m, N = len(exps), fld.dim
+    if m > GENERAL_MAX_UNKNOWNS:
         return None
+    p = random_primes(1, seed + 104729)[0]
+    in_A = [divmod(sym.A, F)[1].is_zero() for F in sym.factors]
+    ranges = [range(-max_exp, 1) if a else range(0, max_exp + 1) for a in in_A]
+    rng = random.Random(f"cofactors-{seed}")
+    mm = ModMap(fld, eps, p)
+    fpolys = [{e: c.numerator * pow(c.denominator, -1, p) % p for e, c in mpoly_dict(F).items()} for F in sym.factors]
+    ev = _Evaluator(exps)
+    pts, tries = [], 0
+    while len(pts) < m + MARGIN and tries < 20 * (m + MARGIN):
+        tries += 1
+        at = mm.at([rng.randrange(p) for _ in range(N)])
+        if at is None:
+            continue
+        fv = [eval_poly(fp, at[0]) % p for fp in fpolys]
+        if 0 not in fv:
+            pts.append((ev(at[1], 1, p), ev(at[0], 1, p), fv))
+    s = len(pts)
+    if s < m + MARGIN:
+        return []
+    U = flint.nmod_mat(s, m, [v for t, _, _ in pts for v in t], p)
+    R = flint.nmod_mat(m, s, [rng.randrange(p) for _ in range(m * s)], p)
+    RU = R * U
+    out = []
+    for kk in itertools.product(*ranges):
+        c0 = [_prod_pow(fv, kk, p) for _, _, fv in pts]
+        V = flint.nmod_mat(s, m, [c * v for (_, b, _), c in zip(pts, c0) for v in b], p)
+        try:
+            Ti = (R * V).inv()
+        except ZeroDivisionError:
+            continue
+        for root, _ in (Ti * RU).charpoly().roots():
+            c = int(root)
+            if c and (U - V * c).rank() < m:
+                cq = rational_reconstruction(c, p)
+                if cq is not None:
+                    out.append((cq, {i: k for i, k in enumerate(kk) if k}))
+    return out
 
-    def iroot(n):
-        r = round(abs(n) ** (1.0 / g))
-        for s in (r - 1, r, r + 1):
-            if s >= 0 and s ** g == abs(n):
-                return s
-        return None
-    a, b = iroot(c.numerator), iroot(c.denominator)
-    if a is None or b is None:
-        return None
-    return Fraction(a, b) * (-1 if c < 0 else 1)
+
+def _irreducible(sym, P) -> bool:
+    """Whether P is a non-constant polynomial irreducible over Q."""
+    from exact_khk.diagnostics.darboux import _q
+
+    poly = sym.ctx.from_dict({e: _q(c) for e, c in P.items()})
+    if poly.is_constant():
+        return False
+    facs = poly.factor()[1]
+    return len(facs) == 1 and facs[0][1] == 1
+
+
+def _prod_pow(values, exps, p):
+    out = 1
+    for v, k in zip(values, exps):
+        if k:
+            out = out * pow(v, k, p) % p
+    return out
+
+
+def _products(items, kappa, ks, N, bound=2, limit=3):
+    """Densities 1/Π P_i^n_i from Darboux polynomials with cofactors (c_i, k_i): the small integer
+    vectors n (|n_i| ≤ bound) with Σ n_i k_i = the exponents of det dΦ and Π c_i^n_i = κ, fewest
+    factors first; ``limit`` of them, as (num, den, text maker).  A repeated exponent uses the
+    item's further Darboux polynomials when it has several (1/(P_1 P_2) rather than 1/P_1²)."""
+    import itertools
+
+    if kappa is None or not items:
+        return []
+    items = items[:6]
+    sols = []
+    for n in itertools.product(range(-bound, bound + 1), repeat=len(items)):
+        if not any(n):
+            continue
+        total, const = {}, Fraction(1)
+        for ni, (_, (c, kk)) in zip(n, items):
+            for k, e in kk.items():
+                total[k] = total.get(k, 0) + ni * e
+            const *= Fraction(c) ** ni
+        if {k: e for k, e in total.items() if e} == ks and const == kappa:
+            sols.append(n)
+    sols.sort(key=lambda n: (sum(map(abs, n)), [-t for t in n]))
+    out = []
+    for n in sols[:limit]:
+        num, den = {(0,) * N: Fraction(1)}, {(0,) * N: Fraction(1)}
+        nums, dens = [], []
+        for ni, (polys, _) in zip(n, items):
+            chosen = [polys[j % len(polys)] for j in range(abs(ni))]
+            for P in chosen:
+                if ni > 0:
+                    den = _mul(den, P)
+                    dens.append(P)
+                else:
+                    num = _mul(num, P)
+                    nums.append(P)
+
+        def shown(variables, nums=nums, dens=dens):
+            top = "*".join(_paren(expr(P, variables), " +-/") for P in nums) or "1"
+            bottom = "*".join(_paren(expr(P, variables), " +-/") for P in dens)
+            if not bottom:
+                return top
+            return f"{_paren(top, ' +-/')}/({bottom})" if len(dens) > 1 or any(c in bottom for c in " +-*") \
+                else f"{_paren(top, ' +-/')}/{bottom}"
+        out.append((num, den, shown))
+    return out
 
 
 def _over_factors(const, ks) -> str:
@@ -327,7 +430,9 @@ def _mul(a, b):
 
 
 def _same_ratio(num, den, d):
-    return dict(d.num) == num and dict(d.den) == den
+    """Whether num/den is a constant multiple of the density ``d``."""
+    a, b = _mul(num, dict(d.den)), _mul(dict(d.num), den)
+    return primitive(a) == primitive(b)
 
 
 def _darboux(sym, P, text, variables, N) -> Darboux:
