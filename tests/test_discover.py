@@ -207,3 +207,20 @@ def test_cli_x0_at_a_pole_and_inapplicable_control(capsys):
     assert main(["find-poisson", "lotka-volterra", "--x0", "0,0"]) == 0
     out = capsys.readouterr().out
     assert "control: (1 + x_j) pi: inapplicable" in out and "[VERIFIED]" in out
+
+
+def test_darboux_cofactors_against_sympy():
+    """Each reported Darboux polynomial P of Kahan's Lotka-Volterra map has P(x~)/P(x) equal to its
+    reported cofactor, written over the reported factors F_i (SymPy substitution)."""
+    sysobj = ExpressionSystem.from_expressions(LV[0], field=LV[1])
+    res = find_measure(sysobj, degree=1, eps="1/10")
+    xs, xt, _ = kahan_sympy(*LV, "1/10")
+    F = {f"F{i}": read(t, xs) for i, t in enumerate(res.factors, 1)}
+    found = {d.polynomial: d.cofactor for d in res.darboux}
+    assert set(found) == {"x", "y"}             # degree 1: the two coordinate lines
+    for P, cof in found.items():
+        p = read(P, xs)
+        ratio = sp.cancel(p.subs(dict(zip(xs, xt)), simultaneous=True) / p)
+        assert sp.cancel(ratio - sp.sympify(cof, locals=F)) == 0
+    # at degree 1 the density 1/(xy) comes from multiplying them
+    assert [d.text for d in res.densities] == ["1/(x*y)"] and res.densities[0].verified
