@@ -90,6 +90,13 @@ def test_euler_top_measure():
         assert m.subs(at_t) * D.subs(at).det() == m.subs(at)
         assert ratio.subs(at_t) == ratio.subs(at)
     assert all(c.holds is False for d in res.densities for c in d.checks if c.name.startswith("control"))
+    # Darboux polynomials of one cofactor: their ratios, the Hirota-Kimura integrals, conserved by the SymPy map
+    assert len(res.integrals) == 2 and all(ok for _, ok in res.integrals)
+    for text, _ in res.integrals:
+        I = read(text, xs)
+        for pt in points(3, 2, seed=9):
+            at = dict(zip(xs, pt))
+            assert I.subs({s: v.subs(at) for s, v in sub.items()}) == I.subs(at)
 
 
 def test_euler_top_poisson_with_casimir():

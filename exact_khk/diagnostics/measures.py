@@ -129,13 +129,16 @@ class MeasureSearch:
     primes: tuple
     notes: tuple
     seconds: float
+    integrals: tuple = ()  # ((text, conserved on a fresh exact orbit: True/False/None), ...)
 
     def to_json(self):
         return {"field": self.label, "eps": str(self.eps), "degree": self.degree, "factors": list(self.factors),
                 "det_dPhi": self.det_text,
                 "searches": [{"cofactor": c, "kernel_dim": k} for c, k in self.searches],
                 "darboux": [d.to_json() for d in self.darboux],
-                "densities": [d.to_json() for d in self.densities], "primes": list(self.primes),
+                "densities": [d.to_json() for d in self.densities],
+                "integrals": [{"integral": t, "conserved_on_fresh_orbit": ok} for t, ok in self.integrals],
+                "primes": list(self.primes),
                 "notes": list(self.notes), "seconds": self.seconds}
 
     def toml(self) -> str:
@@ -158,6 +161,9 @@ class MeasureSearch:
             out.append(f"    cofactor {d.cofactor}")
             if len(d.factors) > 1 or (d.factors and d.factors[0][0] != d.polynomial):
                 out += [f"    factor {a}: cofactor {b}" for a, b in d.factors]
+        for t, ok in self.integrals:
+            out.append(f"  integral {t} (Darboux polynomials of one cofactor; conserved on a fresh exact orbit: "
+                       f"{ {True: 'yes', False: 'NO', None: 'not checked (poles)'}[ok]})")
         if not self.densities:
             out.append(f"  no preserved density 1/P or P with P of degree <= {self.degree} (nothing found)")
         for d in self.densities:
@@ -209,7 +215,7 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
     cands.append(("1/det dPhi", None, -1))
     ev = _Evaluator(exps)
     one = {(0,) * N: Fraction(1)}
-    searches, darboux, densities, items = [], [], [], []
+    searches, darboux, densities, items, integrals = [], [], [], [], []
     for text, root, power in cands:
         cof = _cofactor_mod(sym, root, power)
 
@@ -236,6 +242,9 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
                          f"(integrals), so a density built from them is determined up to such a factor")
         if root is not None:
             items.append((polys, root))
+            for P in polys[1:]:
+                integrals.append((f"{_paren(expr(P, variables))}/{_paren(expr(polys[0], variables))}",
+                                  _conserved_ratio(fld, eps, P, polys[0], seed, verify_steps, x0)))
             continue
         num, den = (polys[0], one) if power == -1 else (one, polys[0])
         if not any(_same_ratio(num, den, d) for d in densities):
@@ -253,7 +262,7 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
     label = f"{sysobj.name if sysobj is not None else 'field'} {fld.label}"
     return MeasureSearch(label, eps, degree, tuple(variables), factor_texts, det_text, tuple(searches),
                          tuple(darboux), tuple(densities), tuple(sorted(primes)), tuple(notes),
-                         time.perf_counter() - t0)
+                         time.perf_counter() - t0, tuple(integrals))
 
 
 def _variables(sysobj, N):
@@ -504,6 +513,16 @@ def _verify(fld, eps, num, den, variables, seed, steps, used, shown=None, x0=Non
                         f"deg G <= {D}, false pass <= ({D}/(p - {N}))^{SZ_POINTS} < 2^-"
                         f"{int(SZ_POINTS * (p.bit_length() - 1 - D.bit_length()))}"))
     return Density(text, tuple(sorted(num.items())), tuple(sorted(den.items())), tuple(checks))
+
+
+def _conserved_ratio(fld, eps, num, den, seed, steps, x0):
+    """Whether num/den takes one value along a fresh exact orbit (None: no orbit avoids its poles)."""
+    orbit = _fresh_orbit(fld, eps, seed, steps, num, den, x0)
+    if orbit is None:
+        return None
+    _, data = orbit
+    pts = [x for x, *_ in data] + [data[-1][1]]
+    return len({Fraction(eval_poly(num, x)) / eval_poly(den, x) for x in pts}) == 1
 
 
 def _fresh_orbit(fld, eps, seed, steps, num, den, start=None):
