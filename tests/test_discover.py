@@ -231,3 +231,15 @@ def test_darboux_cofactors_against_sympy():
         assert sp.cancel(ratio - sp.sympify(cof, locals=F)) == 0
     # at degree 1 the density 1/(xy) comes from multiplying them
     assert [d.text for d in res.densities] == ["1/(x*y)"] and res.densities[0].verified
+
+
+def test_euler_top_poisson_block_certifies(tmp_path, capsys):
+    """The --toml block of find-poisson replaces the catalogue's [poisson] section: certify is VALID."""
+    assert main(["find-poisson", "euler-top", "--degree", "3", "--toml"]) == 0
+    block = capsys.readouterr().out
+    src = open("exact_khk/systems/catalogue/euler-top.toml").read()
+    head, rest = src.split("[poisson]")
+    path = tmp_path / "euler.toml"
+    path.write_text(head + block + "\n[controls]" + rest.split("[controls]")[1])
+    assert main(["certify", "--system", str(path), "--steps", "3", "--quiet"]) == 0
+    assert "VALID" in capsys.readouterr().out
