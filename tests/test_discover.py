@@ -8,7 +8,6 @@ import json
 import random
 from fractions import Fraction
 
-import pytest
 import sympy as sp
 
 from exact_khk.cli.main import main

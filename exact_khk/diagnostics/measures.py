@@ -82,6 +82,13 @@ class Check:
         return {"name": self.name, "holds": self.holds, "detail": self.detail}
 
 
+def verified(checks) -> bool:
+    """The exact orbit check held, no other check failed, and every applicable control failed."""
+    return any(c.name == "exact orbit" and c.holds is True for c in checks) \
+        and all(c.holds is not False for c in checks if not c.name.startswith("control")) \
+        and all(c.holds is not True for c in checks if c.name.startswith("control"))
+
+
 @dataclass(frozen=True)
 class Darboux:
     """A Darboux polynomial P(x̃) = C(x)·P(x)."""
@@ -108,8 +115,7 @@ class Density:
     @property
     def verified(self) -> bool:
         """The exact orbit check held, no other check failed, and every applicable control failed."""
-        return any(c.name == "exact orbit" and c.holds is True for c in self.checks) and all(c.holds is not False for c in self.checks if not c.name.startswith("control")) and \
-            all(c.holds is not True for c in self.checks if c.name.startswith("control"))
+        return verified(self.checks)
 
     def to_json(self):
         return {"density": self.text, "verified": self.verified, "checks": [c.to_json() for c in self.checks]}
@@ -155,7 +161,8 @@ class MeasureSearch:
             out += [f"    F{i} = {t}" for i, t in enumerate(self.factors, 1)]
             out.append(f"  det dPhi = {self.det_text}")
         for c, k in self.searches:
-            out.append(f"  cofactor {c}: {k} Darboux polynomial(s)" + ("" if c.endswith("det dPhi") else " (irreducible)"))
+            kind = "" if c.endswith("det dPhi") else " (irreducible)"
+            out.append(f"  cofactor {c}: {k} Darboux polynomial(s){kind}")
         for d in self.darboux:
             out.append(f"  Darboux polynomial {d.polynomial}")
             out.append(f"    cofactor {d.cofactor}")

@@ -41,11 +41,12 @@ from fractions import Fraction
 
 import flint
 
-from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, _q, eval_poly, fresh_point, lifted_kernel,
+from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, _q, eval_poly, lifted_kernel,
                                            mpoly_ctx, primitive, rows_of_points)
 from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import independent_count, monomials
-from exact_khk.diagnostics.measures import SZ_POINTS, Check, _fresh_orbit, _variables, expr, find_measure
+from exact_khk.diagnostics.measures import (SZ_POINTS, Check, _fresh_orbit, _variables, expr, find_measure,
+                                            verified)
 from exact_khk.parsing import check_count
 
 #: the largest dimension of the preserved-tensor space on which the Jacobi identity is solved
@@ -74,8 +75,7 @@ class Tensor:
     @property
     def verified(self) -> bool:
         """The exact orbit check held, no other check failed, and every applicable control failed."""
-        return any(c.name == "exact orbit" and c.holds is True for c in self.checks) and all(c.holds is not False for c in self.checks if not c.name.startswith("control")) and \
-            all(c.holds is not True for c in self.checks if c.name.startswith("control"))
+        return verified(self.checks)
 
     def to_json(self):
         return {"matrix": [list(r) for r in self.entries], "rank": self.rank, "verified": self.verified,
