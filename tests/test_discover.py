@@ -8,11 +8,13 @@ import json
 import random
 from fractions import Fraction
 
+import pytest
 import sympy as sp
 
 from exact_khk.cli.main import main
 from exact_khk.diagnostics.measures import find_measure
 from exact_khk.diagnostics.poisson import find_poisson
+from exact_khk.errors import InputError
 from exact_khk.systems.expressions import ExpressionSystem
 
 LV = (["x", "y"], ["x - x*y", "x*y - y"])
@@ -242,3 +244,18 @@ def test_euler_top_poisson_block_certifies(tmp_path, capsys):
     path.write_text(head + block + "\n[controls]" + rest.split("[controls]")[1])
     assert main(["certify", "--system", str(path), "--steps", "3", "--quiet"]) == 0
     assert "VALID" in capsys.readouterr().out
+
+
+def test_bad_input_one_line_no_traceback(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = 'x'\nvariables = ['x']\n[field]\nx = 'x**3'\n")
+    for argv in (["find-measure", str(bad)], ["find-poisson", "euler-top", "--x0", "a,b,c"],
+                 ["find-poisson", "euler-top", "--casimir-degree", "0"], ["find-measure", "no-such-system"],
+                 ["find-measure", "euler-top", "--degree", "13"]):
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "Traceback" not in err, (argv, err)
+    for call in (lambda: find_measure("euler-top", degree=0), lambda: find_poisson("euler-top", degree=-1),
+                 lambda: find_measure("euler-top", eps=0)):
+        with pytest.raises(InputError):
+            call()
