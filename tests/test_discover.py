@@ -259,3 +259,40 @@ def test_bad_input_one_line_no_traceback(tmp_path, capsys):
                  lambda: find_measure("euler-top", eps=0)):
         with pytest.raises(InputError):
             call()
+
+
+def kahan_at(names, field, eps, pt):
+    """(x~, dPhi) at a rational point by SymPy from the formulas: x~ = x + 2 eps (I - eps f'(x))^-1 f(x),
+    dPhi = (I - eps f'(x))^-1 (I + eps f'(x~))."""
+    xs = sp.symbols(names)
+    f = sp.Matrix([sp.sympify(c, locals=dict(zip(names, xs))) for c in field])
+    J, e = f.jacobian(xs), sp.Rational(eps)
+    at = dict(zip(xs, pt))
+    M = sp.eye(len(xs)) - e * J.subs(at)
+    xt = sp.Matrix(pt) + 2 * e * M.LUsolve(f.subs(at))
+    return list(xt), M.LUsolve(sp.eye(len(xs)) + e * J.subs(dict(zip(xs, xt))))
+
+
+def test_volterra_chain_measure_and_poisson():
+    """The 3-species Volterra chain x' = x(y - z) (cyclic): the density 1/(xyz) and a preserved Poisson
+    tensor with the Casimir x + y + z, checked with the SymPy map at rational points."""
+    names, field = ["x", "y", "z"], ["x*(y - z)", "y*(z - x)", "z*(x - y)"]
+    sysobj = ExpressionSystem.from_expressions(names, field=field)
+    res = find_measure(sysobj, degree=2, eps="1/10")
+    xs = sp.symbols(names)
+    texts = [d.text for d in res.densities if d.verified]
+    assert "1/(x*y*z)" in texts
+    pts = points(3, 2, seed=4)
+    for text in texts:
+        m = read(text, xs)
+        for pt in pts:
+            xt, D = kahan_at(names, field, "1/10", pt)
+            assert m.subs(dict(zip(xs, xt))) * D.det() == m.subs(dict(zip(xs, pt)))
+    pres = find_poisson(sysobj, degree=2, eps="1/10")
+    t = pres.tensors[0]
+    P = sp.Matrix(3, 3, lambda i, j: read(t.entries[i][j], xs))
+    for pt in pts:
+        xt, D = kahan_at(names, field, "1/10", pt)
+        assert D * P.subs(dict(zip(xs, pt))) * D.T == P.subs(dict(zip(xs, xt)))
+    assert [c.text for c in t.casimirs] == ["x + y + z"]
+    assert (P * sp.Matrix([1, 1, 1])).applyfunc(sp.expand) == sp.zeros(3, 1)

@@ -402,8 +402,7 @@ def _products(items, kappa, ks, N, bound=2, limit=3):
             bottom = "*".join(_paren(expr(P, variables), " +-/") for P in dens)
             if not bottom:
                 return top
-            return f"{_paren(top, ' +-/')}/({bottom})" if len(dens) > 1 or any(c in bottom for c in " +-*") \
-                else f"{_paren(top, ' +-/')}/{bottom}"
+            return f"{top}/({bottom})" if len(dens) > 1 or any(c in bottom for c in " +-*") else f"{top}/{bottom}"
         out.append((num, den, shown))
     return out
 
