@@ -169,3 +169,15 @@ def test_systems_command_lists_every_entry_with_its_claim(capsys):
     for family in families.FAMILIES:
         assert f"{family}: " in out
     assert "integrable: yes" in out and "integrable: unknown" in out
+
+
+def test_docs_catalogue_table_lists_exactly_the_entries_with_their_claims():
+    import pathlib
+    import re
+
+    text = (pathlib.Path(__file__).parents[1] / "docs" / "catalogue.md").read_text()
+    rows = re.findall(r"^\| `([^`]+)` \| (\d+) \| [^|]* \| (\w+) / (\w+) \|", text, re.M)
+    assert sorted(r[0] for r in rows) == names()
+    for name, dim, integrable, integrals in rows:
+        lit = load(name).literature
+        assert (int(dim), integrable, integrals) == (load(name).dim, lit["integrable"], str(lit["integrals"]))
