@@ -152,6 +152,11 @@ def _planar_cubic(g1, g2, g3):
 
 def _zhukovsky_volterra(beta1, beta2, beta3):
     n = sum(b != 0 for b in (beta1, beta2, beta3))
+    found = {}
+    if beta2 == beta3 == 0:
+        # derived here (not from a paper): the Euler-top integral H31 with x1 shifted by b1/a3; found by
+        # solving for the numerator with the Euler-top denominator fixed, checked by SymPy in the tests
+        found["I31"] = "(a3*(x1 - b1/a3)**2 - a1*x3**2)/(1 - eps**2*a1*a3*x2**2)"
     return {
         "title": f"Zhukovsky-Volterra gyrostat, beta = ({beta1}, {beta2}, {beta3})",
         "source": "x1' = a1 x2 x3 + b3 x2 - b2 x3 (cyclic), i.e. x' = x cross (A x + beta) with A = diag(0, 1, 3), "
@@ -162,6 +167,7 @@ def _zhukovsky_volterra(beta1, beta2, beta3):
         "parameters": {"a1": "2", "a2": "-3", "a3": "1", "b1": str(beta1), "b2": str(beta2), "b3": str(beta3)},
         "field": {"x1": "a1*x2*x3 + b3*x2 - b2*x3", "x2": "a2*x3*x1 + b1*x3 - b3*x1",
                   "x3": "a3*x1*x2 + b2*x1 - b1*x2"},
+        "integrals": found,
         "controls": {"C": "x1**2 + x2**2 + x3**2", "H": "x2**2 + 3*x3**2 + 2*(b1*x1 + b2*x2 + b3*x3)"},
         "defaults": {"x0": ["1", "1/2", "-1/3"], "eps": "1/10"},
         "literature": {
@@ -169,7 +175,11 @@ def _zhukovsky_volterra(beta1, beta2, beta3):
             "integrable": "unknown", "integrals": "unknown",
             "notes": f"{n} nonzero component(s) of beta. The overview 1008.1040 treats this system; its "
                      "statements and integrals for each case were not in the text we could read (its "
-                     "opening only), so nothing is claimed and no integral is declared."}}
+                     "opening only), so nothing is claimed. " + (
+                         "I31 is our own: with beta = (b1, 0, 0), (a3 (x1 - b1/a3)^2 - a1 x3^2)/(1 - eps^2 a1 a3 "
+                         "x2^2) is an integral (found by a linear solve with the Euler-top denominator, checked "
+                         "with SymPy for b1 = 1, 3, -5/2 and two eps); a second one was not found in the time "
+                         "available." if found else "No integral is declared.")}}
 
 
 def _kirchhoff(b1, b3):
