@@ -87,6 +87,8 @@ class System:
     default_eps = Fraction(1, 10)
     #: steps certified by default (a system file may lower it where heights grow fast)
     default_steps = 20
+    #: what the literature claims about the Kahan map (a system file's [literature] table)
+    literature: dict = {}
 
     @staticmethod
     def from_expressions(variables, **parts) -> "System":

@@ -54,7 +54,7 @@ MAX_VARIABLES = 10_000
 EPS = "eps"
 CLAIMS = ("reversibility", "integrals", "poisson", "commutation", "jacobian", "cmoq")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
-_SYSTEM_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]*\Z")
+_SYSTEM_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._:=,-]*\Z")  # ':', '=', ',' name a family member
 
 
 def _quadratic_field(polys, label: str) -> QuadraticField:
@@ -150,10 +150,30 @@ def _components(value, variables, where: str) -> dict:
     return {v: _spec_value(value[v], f"{where} {v}") for v in variables}
 
 
+def _read_literature(table, where: str) -> dict:
+    """The [literature] table: strings under :data:`LITERATURE_KEYS`; ``integrable`` is
+    "yes", "no" or "unknown", ``integrals`` a count (an integer >= 0) or "unknown"."""
+    table = _table(table, where)
+    extra = [k for k in table if k not in LITERATURE_KEYS]
+    if extra:
+        raise InputError(f"{where}: unknown key(s) {', '.join(map(repr, extra))} (known: {', '.join(LITERATURE_KEYS)})")
+    for k, v in table.items():
+        ok = (v in ("yes", "no", "unknown") if k == "integrable" else
+              (v == "unknown" or isinstance(v, int) and not isinstance(v, bool) and v >= 0) if k == "integrals" else
+              isinstance(v, str))
+        if not ok:
+            want = {"integrable": "'yes', 'no' or 'unknown'",
+                    "integrals": "a count (an integer >= 0) or 'unknown'"}.get(k, "a string")
+            raise InputError(f"{where} {k}: expected {want}, got {v!r}"[:300])
+    return dict(table)
+
+
 # --- the system ----------------------------------------------------------------------
 
 _KEYS = ("format", "kind", "name", "title", "source", "variables", "parameters", "field", "fields",
-         "integrals", "poisson", "hamiltonian", "controls", "defaults", "claims")
+         "integrals", "poisson", "hamiltonian", "controls", "defaults", "claims", "literature")
+#: [literature]: what the literature claims about the Kahan map (not the ODE); text, never checked
+LITERATURE_KEYS = ("reference", "integrable", "integrals", "measure", "poisson", "notes")
 _NEEDS = {"integrals": "integrals", "poisson": "poisson", "commutation": "fields", "cmoq": "hamiltonian"}
 
 
@@ -184,7 +204,7 @@ class ExpressionSystem(System):
             if not isinstance(t.get(key, ""), str):
                 raise InputError(at(f"{key}: expected a string, got {t[key]!r}"))
         if not _SYSTEM_NAME.match(t["name"]):
-            raise InputError(at(f"name: {t['name']!r} must be letters, digits, '.', '_' or '-'"))
+            raise InputError(at(f"name: {t['name']!r} must be letters, digits, '.', '_', '-', ':', '=' or ','"))
         self.name, self.title, self.source = t["name"], t.get("title", ""), t.get("source", "")
         variables = t["variables"]
         if not isinstance(variables, (list, tuple)) or not variables:
@@ -246,6 +266,9 @@ class ExpressionSystem(System):
         self._poisson = self._read_poisson(t.get("poisson"))
         self._read_defaults(_table(t.get("defaults"), at("defaults")))
         self._read_claims(t.get("claims"))
+        self.literature = _read_literature(t.get("literature"), at("literature"))
+        if self.literature:
+            spec["literature"] = dict(self.literature)
 
     # --- readers (each records the original strings in self._spec) ----------
 

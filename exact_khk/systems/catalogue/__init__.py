@@ -2,14 +2,23 @@
 
 Every ``*.toml`` file in this folder is a system file (``docs/system-files.md``);
 its file name without ``.toml`` is its catalogue name and must equal its ``name``
-key.  :func:`resolve` accepts a catalogue name or the path of any system file.
+key.  A system with a size or a parameter is a member of a family of
+:mod:`.families`, named ``NAME:K=V[,K=V]`` (``volterra-periodic:N=5``); its
+generator returns the table of a system file, read by the same reader.
+:func:`resolve` accepts a catalogue name, a family member or the path of any system file.
 
 >>> all(name == load(name).name for name in names())
 True
+>>> load("volterra-periodic:N=7").dim
+7
 >>> load("no-such-system")  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
 exact_khk.errors.InputError: unknown catalogue system 'no-such-system'; available: ...
+>>> load("volterra-periodic:N=1")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+exact_khk.errors.InputError: 'volterra-periodic:N=1': N=1 is outside 3..40; volterra-periodic takes N = 3..40 ...
 """
 
 from __future__ import annotations
@@ -21,6 +30,7 @@ from importlib import resources
 from ...errors import InputError
 from ..base import System
 from ..expressions import ExpressionSystem, load_system
+from . import families
 
 
 def _files() -> dict:
@@ -29,16 +39,27 @@ def _files() -> dict:
 
 
 def names() -> list:
-    """The catalogue names, sorted."""
-    return sorted(_files())
+    """The catalogue names, sorted: every file, and the listed members of every family."""
+    return sorted([*_files(), *families.listed()])
 
 
 def load(name: str) -> ExpressionSystem:
-    """The catalogue system ``name`` (parsed once per file content)."""
+    """The catalogue system ``name`` (parsed once per file content), or the family member
+    ``NAME:K=V[,K=V]`` (built once per parameters)."""
     files = _files()
-    if name not in files:
-        raise InputError(f"unknown catalogue system {name!r}; available: {', '.join(sorted(files)) or 'none'}")
-    return _parse(name, files[name].read_text(encoding="utf-8"))
+    if name in files:
+        return _parse(name, files[name].read_text(encoding="utf-8"))
+    if name.partition(":")[0] in families.FAMILIES:
+        family, params = families.parse(name)
+        return _member(family, tuple(params.items()))
+    raise InputError(f"unknown catalogue system {name!r}; available: {', '.join(names()) or 'none'}"
+                     f" (families take NAME:K=V, see 'exact-khk systems')")
+
+
+@lru_cache(maxsize=64)
+def _member(family: str, params: tuple) -> ExpressionSystem:
+    name = families.member_name(family, dict(params))
+    return ExpressionSystem(families.table(family, dict(params)), origin=f"catalogue {name}")
 
 
 @lru_cache(maxsize=None)
@@ -54,6 +75,18 @@ def summary() -> list:
     return [(s.name, s.title, s.dim, s.known()) for s in map(load, names())]
 
 
+def literature_summary() -> list:
+    """[(name, dimension, reference, integrable, integrals)] for every catalogue system:
+    what its ``[literature]`` table says about the Kahan map."""
+    return [(s.name, s.dim, s.literature.get("reference", ""), s.literature.get("integrable", "unknown"),
+             s.literature.get("integrals", "unknown")) for s in map(load, names())]
+
+
+def family_summary() -> list:
+    """[(family, its parameters and their ranges, description)]."""
+    return [(f, families.describe_parameters(f), spec[3]) for f, spec in families.FAMILIES.items()]
+
+
 def resolve(spec) -> System:
     """A system from a catalogue name or the path of a system file (a System is returned as is)."""
     if isinstance(spec, System):
@@ -61,7 +94,7 @@ def resolve(spec) -> System:
     if not isinstance(spec, (str, os.PathLike)):
         raise InputError(f"system: expected a catalogue name or a .toml path, got {spec!r}")
     text = os.fspath(spec)
-    if text in _files():
+    if text in _files() or text.partition(":")[0] in families.FAMILIES:
         return load(text)
     if text.endswith(".toml") or os.sep in text or os.path.exists(text):
         return load_system(text)
