@@ -41,6 +41,8 @@ COMMANDS = {
     "degrees": ("exact_khk.cli.diagnostics", "degree growth of the iterates of a Kahan map, its recurrence and "
                 "dynamical degree"),
     "find-integrals": ("exact_khk.cli.diagnostics", "discover conserved rational functions from orbits (HK bases)"),
+    "classify": ("exact_khk.cli.classify", "integrable, non-integrable or undetermined: a verdict on a Kahan map "
+                 "with its evidence"),
     "sweep": ("exact_khk.cli.sweep", "run one task over many systems, points and step sizes (locally or on Dask)"),
     "scale": ("exact_khk.cli.study", "compare floating and ball orbits with the exact orbit, step by step"),
     "enclose": ("exact_khk.cli.study", "certified enclosure of an orbit (naive balls and Lohner), real inputs"),
