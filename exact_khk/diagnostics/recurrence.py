@@ -10,8 +10,13 @@ coefficients and C(0) = 1 (Fatou's lemma), so a fit with a non-integer c_i is
 not the sequence's recurrence: it is refused.  The recurrence is determined by
 the first F = max(2L, j + 1) terms (j: the last term at which Berlekamp–Massey
 changed it; a recurrence of order L is unique once 2L terms are known); the
-remaining terms were *predicted*, not fitted.  With fewer than ``confirm``
-such terms the sequence is too short and no growth class is given.
+remaining terms were *predicted*, not fitted.  A growth class needs at least
+max(``confirm``, L) such terms: a recurrence of order L must predict as many terms as
+its order before it is believed.  The rule is measured on the degrees of Sage's
+doctest map [Z², XY, Y²] (not linearly recurrent: d_k = 2^k − Σ_j min_i (A^k)_ij
+for its exponent matrix A, λ = √2): Berlekamp–Massey finds an order-14 recurrence
+on its first 28 terms that predicts the next 7 and gives λ ≈ 1.41457 — wrong, and
+unconfirmed under this rule (tests/test_classify.py).
 
 **Growth.**  χ(x) = x^L C(1/x) is monic in Z[x]; since the recurrence is minimal,
 every nonzero root of χ occurs in s_k.  Factor χ over Z: an irreducible factor
@@ -241,11 +246,12 @@ def fit_recurrence(sequence, confirm: int = 3) -> RecurrenceFit:
                              reason=f"sequence too short: the shortest recurrence of its {len(seq)} terms has "
                                     f"order {L}, which only {fitted} terms determine (need {fitted + confirm} "
                                     f"terms to fit and confirm it)")
-    if confirmed_on < confirm:
+    need = max(confirm, L)
+    if confirmed_on < need:
         return RecurrenceFit(**base, **undetermined,
                              reason=f"sequence too short: the order-{L} recurrence is determined by the first "
                                     f"{fitted} terms and only {max(confirmed_on, 0)} later term(s) confirm it "
-                                    f"(need {confirm})")
+                                    f"(need {need}: max(confirm = {confirm}, the order))")
     if any(c.denominator != 1 for c in chi):
         return RecurrenceFit(**base, **undetermined,
                              reason="the shortest recurrence has non-integer coefficients, so it is not the "
