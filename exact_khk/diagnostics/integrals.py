@@ -57,14 +57,19 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, lift, monomial_text,
-                                           monomials, orbit_kernel_mod, parse_monomials, poly_text,
+from exact_khk.diagnostics.fitting import EntryFitter, entry_jacobian, rank_mod
+from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
+                                           monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim)
-from exact_khk.diagnostics.pencils import pencil_integrals, ratio_integrals
+from exact_khk.diagnostics.pencils import canonical_pair, pencil_integrals, ratio_integrals
 from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.parsing import check_count, parse_vector
 
 MAX_MONOMIALS = 3000
+#: the highest degree of a fitted numerator or denominator (:mod:`.fitting`; --fit-degree)
+MAX_FIT_DEGREE = 12
+#: orbits drawn beyond ``orbits`` to replace those on smaller invariant sets
+MORE_ORBITS = 12
 
 
 # --- exact evaluation and verification -------------------------------------------------
@@ -169,6 +174,8 @@ class IntegralSearch:
     warnings: tuple
     seconds: float
     notes: tuple = dc_field(default=())
+    certificate: tuple = None  # (rational point, rank of the integrals' Jacobian there, exact)
+    visible: int = None        # independent integrals the kernel shows (rank of its entries' Jacobian mod p)
 
     @property
     def new_dim(self) -> int:
@@ -181,7 +188,17 @@ class IntegralSearch:
                 "kernel_dim_by_degree": [list(t) for t in self.by_degree], "span_dim": self.span_dim,
                 "integrals": [i.to_json() for i in self.integrals], "independent": self.independent,
                 "primes": list(self.primes), "warnings": list(self.warnings), "notes": list(self.notes),
+                "kernel_shows": self.visible,
+                "independence_certificate": None if self.certificate is None else
+                {"point": [str(t) for t in self.certificate[0]], "jacobian_rank": self.certificate[1]},
                 "seconds": self.seconds}
+
+    def headline(self) -> str:
+        """'kernel k, extracted j, independent r' (and what the kernel shows, when computed)."""
+        shows = "" if self.visible is None else f" (the kernel shows {self.visible} independent integral" \
+            f"{'' if self.visible == 1 else 's'})"
+        return (f"kernel {self.kernel_dim}, extracted {len(self.integrals)}, independent {self.independent}"
+                + shows)
 
     def summary(self) -> str:
         out = [f"integral search for {self.label}: {len(self.candidates)} candidate monomials",
@@ -194,16 +211,21 @@ class IntegralSearch:
             out.append(f"  I{i} = ({_short(f.numerator)}) / ({_short(f.denominator)})"
                        + ("" if f.verified else "  [NOT verified]"))
         if self.integrals:
-            out.append(f"  {sum(f.verified for f in self.integrals)} verified exactly on a fresh orbit; "
-                       f"{self.independent} functionally independent")
+            out.append(f"  {sum(f.verified for f in self.integrals)} verified exactly on a fresh orbit (evidence, "
+                       f"not a proof: `certify` a system file with them); {self.independent} functionally "
+                       f"independent" + ("" if self.certificate is None else
+                                         f" (proven: Jacobian rank {self.certificate[1]} at {_fmt(self.certificate[0])})"))
+        elif self.kernel_dim == 0:
+            out.append("  no integral with numerator and denominator in the span of the candidates")
         out += [f"  warning: {w}" for w in self.warnings] + [f"  note: {n}" for n in self.notes]
+        out.append(f"  {self.headline()}")
         out.append(f"  time {self.seconds:.2f} s")
         return "\n".join(out)
 
 
 def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None, homogeneous=False,
                    orbits=3, steps=None, margin=None, primes=None, seed=0, x0=None, verify_steps=6,
-                   max_primes=16, progress=None):
+                   max_primes=16, progress=None, fit_degree=None):
     """Search conserved rational functions of the Kahan map whose numerator and
     denominator lie in the span of the candidates (module docstring).
 
@@ -213,7 +235,9 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     (default: candidates + 2·margin); ``primes`` a list, or a count of random
     primes to start with (default 2; more are drawn, up to ``max_primes``, until
     the rational lift is confirmed by a prime it was not computed from); ``progress(stage)``
-    is called with the name of each stage as it starts."""
+    is called with the name of each stage as it starts; ``fit_degree`` bounds the degree of the
+    numerators and denominators of integrals fitted from the kernel's entries
+    (:mod:`.fitting`; default twice the largest candidate degree, 0: no fit)."""
     t0 = time.perf_counter()
     stage = progress or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
@@ -241,6 +265,8 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     steps = check_count(steps if steps is not None else m + 2 * margin, "steps", 1, 1_000_000)
     check_count(verify_steps, "verify_steps", 1, 1000)
     check_count(max_primes, "max_primes", 1, 1000)
+    top_degree = max(sum(e) for e in exps)
+    fit_degree = check_count(2 * top_degree if fit_degree is None else fit_degree, "fit_degree", 0, MAX_FIT_DEGREE)
     seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
     plist = list(check_primes(primes, seed=seed))
     rng = random.Random(f"integrals-{seed}")
@@ -261,8 +287,10 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         k = kernel(x)
         if k is not None:
             ks.append(k)
-    while len([k for k in ks if k.stable and not k.periodic]) < 4 and len(starts) < orbits + 6:
-        starts.append(_point(rng, N))  # more orbits (4 are needed for pencils)
+    while _generic_count(ks) < 4 and len(starts) < orbits + MORE_ORBITS:
+        # more orbits until 4 share the generic (smallest) kernel: 4 are needed for pencils, and an
+        # orbit on a smaller invariant set (a larger kernel) is replaced rather than used
+        starts.append(_point(rng, N))
         k = kernel(starts[-1])
         if k is not None:
             ks.append(k)
@@ -293,7 +321,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         job.notes.append("no polynomial in the span vanishes on the orbits: no integral of this shape")
     elif table and low < degree:
         sub = find_integrals(system, degree=low, field=field, eps=eps, orbits=orbits, primes=plist, seed=seed,
-                             verify_steps=verify_steps, max_primes=max_primes, progress=progress)
+                             verify_steps=verify_steps, max_primes=max_primes, progress=progress, fit_degree=0)
         integrals, independent, used = sub.integrals, sub.independent, sub.primes
         job.notes += [f"integrals extracted at degree {low}, where the kernel first appears"] + list(sub.notes)
         job.warnings += list(sub.warnings)
@@ -302,7 +330,8 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
             # polynomial with a monomial of degree ≥ 1: the new integrals separate there
             top = ["1"] + [monomial_text(e, variables) for e in monomials(N, D, True)]
             more = find_integrals(system, monomials_list=top, field=field, eps=eps, orbits=orbits, primes=plist,
-                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes, progress=progress)
+                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes, progress=progress,
+                                  fit_degree=0)
             found = [f for f in more.integrals if f.verified]
             integrals += tuple(found)
             job.notes.append(f"{new} new kernel direction(s) at degree {D}: {len(found)} integral(s) extracted from "
@@ -315,7 +344,31 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         stage("lift to Q, extract and check the integrals")
         integrals, used = job.extract(generic, d, w, plist, seed, max_primes, verify_steps)
         independent = independent_count([f.polynomials() for f in integrals if f.verified], rng)
+    if d and fit_degree:
+        stage("independent integrals: the kernel's entries, fitted")
+        integrals, independent, certificate, visible = job.complete(generic[0], integrals, fit_degree, plist,
+                                                                    seed, max_primes, verify_steps)
+        return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0, certificate, visible)
     return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
+
+
+def _generic_count(ks) -> int:
+    """How many stable, non-periodic orbits have the smallest kernel dimension among them."""
+    dims = [k.dim for k in ks if k.stable and not k.periodic]
+    return dims.count(min(dims)) if dims else 0
+
+
+def _rank(rows, N) -> int:
+    return flint.fmpq_mat(len(rows), N, [v for r in rows for v in r]).rank() if rows else 0
+
+
+def _grad_mod(f, x, p) -> list:
+    """[the gradient of the integral f at the rational point x, mod p], or [] at a pole / p | a denominator."""
+    try:
+        g = f.gradient(x)
+        return [[t.numerator * pow(t.denominator, -1, p) % p for t in g]]
+    except (PoleError, ValueError):
+        return []
 
 
 def _short(text, limit=240):
@@ -382,8 +435,78 @@ class _Job:
             self.warnings.append("some lifted ratios failed the exact check on a fresh orbit (not integrals)")
         return out, used
 
-    def result(self, sysobj, ks, d, tdim, table, w, integrals, independent, used, t0):
+    def result(self, sysobj, ks, d, tdim, table, w, integrals, independent, used, t0, certificate=None,
+               visible=None):
         label = f"{sysobj.name if sysobj is not None else 'field'} {self.fld.label}"
         return IntegralSearch(label, tuple(monomial_text(e, self.variables) for e in self.exps),
                               tuple(k.dim for k in ks), d, tdim, table, w, tuple(integrals), independent,
-                              tuple(used), tuple(self.warnings), time.perf_counter() - t0, tuple(self.notes))
+                              tuple(used), tuple(self.warnings), time.perf_counter() - t0, tuple(self.notes),
+                              certificate, visible)
+
+    def integral(self, num, den, verify_point, verify_steps):
+        return Integral(poly_text(num, self.variables), poly_text(den, self.variables), tuple(sorted(num.items())),
+                        tuple(sorted(den.items())), verify_exact(num, den, self.fld, self.eps, verify_point,
+                                                                 verify_steps))
+
+    def complete(self, ref, integrals, fit_degree, plist, seed, max_primes, verify_steps):
+        """Every independent integral the kernel shows (:mod:`.fitting`): the verified ``integrals``
+        reduced to an independent set (exact Jacobian rank at a rational point, each kept only if it
+        raises it), then entries of the canonical kernel that are not functions of those, fitted as
+        N/D of degree ≤ ``fit_degree`` and checked exactly on a fresh orbit.
+        (integrals, rank, (point, rank) certificate or None, visible count or None)."""
+        N = self.fld.dim
+        point, kept, rows = self.rank_point(seed), [], []
+        for f in integrals:
+            if not f.verified:
+                continue
+            r = jacobian_rows([f.polynomials()], point)
+            if r is None or _rank(rows + r, N) == len(rows):
+                self.notes.append(f"({_short(f.numerator, 60)}) / ({_short(f.denominator, 60)}) is a function of the "
+                                  f"integrals kept (Jacobian rank at {_fmt(point)}): not listed")
+                continue
+            kept.append(f)
+            rows += r
+        p0 = plist[0]
+        data = entry_jacobian(self.fld, self.eps, ref.x0, self.exps, self.steps, p0, seed)
+        if data is None:
+            self.notes.append("the kernel's entries were not differentiated (orbit singular mod p, or beyond "
+                              "MAX_TANGENT_WORK): the number of integrals it shows is not stated")
+            return tuple(kept), len(rows), ((point, len(rows)) if rows else None), None
+        pivots, _, values, grads = data
+        visible = rank_mod(list(grads.values()), N, p0)
+        fitter = EntryFitter(self.fld, self.eps, self.exps, self.steps, pivots, seed, self.margin)
+        primes = list(plist) + [p for p in random_primes(max_primes + len(plist), seed + 1) if p not in plist]
+        vx = _point(random.Random(f"verify-{seed}"), N)
+        failed = set()
+        for delta in range(1, fit_degree + 1):
+            if len(kept) >= visible:
+                break
+            mod_rows = [g for f in kept for g in _grad_mod(f, ref.x0, p0)]
+            tries = 0
+            for key in sorted(grads):
+                if len(kept) >= visible or tries > 3 * (visible - len(kept)) + 3:
+                    break
+                if key in failed or rank_mod(mod_rows + [grads[key]], N, p0) == rank_mod(mod_rows, N, p0):
+                    continue  # a function of the integrals found (mod p)
+                tries += 1
+                pair = fitter.fit(key, delta, primes)
+                if pair is None:
+                    continue
+                f = self.integral(*canonical_pair(*pair), vx, verify_steps)
+                r = jacobian_rows([f.polynomials()], point)
+                if not f.verified or r is None or _rank(rows + r, N) == len(rows):
+                    failed.add(key)
+                    continue
+                kept.append(f)
+                rows += r
+                mod_rows += _grad_mod(f, ref.x0, p0)
+                self.notes.append(f"I{len(kept)} fitted from an entry of the canonical kernel (degree <= {delta})")
+        if len(kept) < visible:
+            self.warnings.append(f"the kernel shows {visible} independent integrals (rank of its entries' Jacobian "
+                                 f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "
+                                 f"degree <= {fit_degree} (--fit-degree) that the fit found")
+        return tuple(kept), len(rows), ((point, len(rows)) if rows else None), visible
+
+    def rank_point(self, seed):
+        rng = random.Random(f"rank-{seed}")
+        return [flint.fmpq(rng.randint(-30, 30), rng.randint(1, 7)) for _ in range(self.fld.dim)]

@@ -1,0 +1,266 @@
+"""Every integral an orbit kernel shows: the entries of its canonical basis, fitted.
+
+Let K(x_0) be the orbit kernel of the candidates (:mod:`.kernels`) and
+v_f = e_f + Σ_i c_{i,f} e_{π_i} its canonical basis (π the pivot columns of the
+reduced echelon form of the evaluation matrix, f the free ones).  K(x_0) depends
+only on the orbit, so each *entry* c_{i,f}(x_0) is a conserved function of x_0,
+and every conserved function the kernel can see is a function of the entries.
+
+* **How many.**  The rank of the Jacobian of the entries with respect to x_0 is the
+  number of independent integrals the kernel shows ("visible").  It is computed
+  over F_p along the orbit's tangent: T_{k+1} = dΦ(x_k) T_k, B_l = the derivative
+  of the evaluation matrix A in the direction e_l, and A_π c' = −B_l v_f (A_π the
+  pivot columns of A, of full column rank) gives the derivatives of the entries
+  (:func:`entry_jacobian`).  A rank over F_p equals the rank over Q unless p
+  divides a minor: a lower bound with high probability equal.
+* **Which formula.**  An entry e that is not a function of the integrals already
+  found (its gradient mod p is independent of theirs) is written as N/D with N, D of
+  degree ≤ δ, δ = 1, 2, … : N − e(x_s)·D vanishes on the orbit of x_s for every
+  orbit s of a pool, one linear system [φ(x) | −e(x_s)·φ(x)] over F_p whose
+  nullspace at the lowest δ is one vector, lifted to Q over several primes
+  (:func:`.kernels.lift`) — :meth:`EntryFitter.fit`.  The caller checks each fitted
+  N/D exactly on a fresh orbit and keeps it only if it raises the exact rank of the
+  Jacobian of the integrals found (so never a power or product of found ones).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+
+import flint
+
+from exact_khk.diagnostics.kernels import _Evaluator, _point, lift, monomials
+from exact_khk.errors import InputError, SingularStepError
+
+#: the fit of one entry at degree δ solves a system with 2·C(N + δ, N) unknowns: not beyond this
+MAX_FIT_UNKNOWNS = 4000
+#: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
+MAX_TANGENT_WORK = 4_000_000
+#: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
+STABLE_ORBITS = 3
+
+
+def _rref_pivots(R, rank, m):
+    pivots, row = [], 0
+    for c in range(m):
+        if row < rank and int(R[row, c]) != 0:
+            pivots.append(c)
+            row += 1
+    return pivots
+
+
+def canonical_nullspace(rows, m, p):
+    """(pivots, free, canonical basis vectors) of the nullspace of ``rows`` (ints mod p, m columns):
+    v_f = e_f − Σ_i R[i, f] e_{pivot_i} from the reduced echelon form R."""
+    R, rank = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p).rref()
+    pivots = _rref_pivots(R, rank, m)
+    piv = set(pivots)
+    free = [c for c in range(m) if c not in piv]
+    basis = []
+    for f in free:
+        v = [0] * m
+        v[f] = 1
+        for i, c in enumerate(pivots):
+            v[c] = (-int(R[i, f])) % p
+        basis.append(v)
+    return pivots, free, basis
+
+
+def _orbit_with_tangents(fld, eps, x0, steps, p):
+    from exact_khk.kahan.map import KahanMap
+    phi = KahanMap(fld, eps, f"gf:{p}")
+    pts = phi.orbit(x0, steps)
+    N = fld.dim
+    T = flint.nmod_mat(N, N, [int(i == j) for i in range(N) for j in range(N)], p)
+    tangents = [T]
+    for q in pts[:-1]:
+        J = phi.jacobian(q)
+        T = flint.nmod_mat(N, N, [int(t) for r in J for t in r], p) * T
+        tangents.append(T)
+    return [[int(t) for t in q] for q in pts], tangents
+
+
+def _gradients(exps, x, p):
+    """The m × N matrix of ∂φ_j/∂x_t at x mod p."""
+    N = len(x)
+    out = []
+    for e in exps:
+        row = []
+        for t in range(N):
+            if not e[t]:
+                row.append(0)
+                continue
+            v = e[t]
+            for i, k in enumerate(e):
+                kk = k - (i == t)
+                if kk:
+                    v = v * pow(x[i], kk, p) % p
+            row.append(v % p)
+        out += row
+    return flint.nmod_mat(len(exps), N, out, p)
+
+
+def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
+    """(pivots, free, {(pivot, free): value}, {(pivot, free): gradient row}) of the canonical
+    kernel of the orbit of ``x0`` over F_p (module docstring), or None where the orbit is
+    singular mod p or the work would exceed MAX_TANGENT_WORK."""
+    m, N = len(exps), fld.dim
+    if (steps + 1) * m * N > MAX_TANGENT_WORK:
+        return None
+    try:
+        pts, tangents = _orbit_with_tangents(fld, eps, x0, steps, p)
+    except (SingularStepError, ZeroDivisionError, InputError):
+        return None
+    ev = _Evaluator(exps)
+    rows = [ev(q, 1, p) for q in pts]
+    pivots, free, basis = canonical_nullspace(rows, m, p)
+    if not free or not pivots:
+        return pivots, free, {}, {}
+    A = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p)
+    AP = flint.nmod_mat(len(rows), len(pivots), [A[k, c] for k in range(len(rows)) for c in pivots], p)
+    V = flint.nmod_mat(m, len(free), [basis[j][c] for c in range(m) for j in range(len(free))], p)
+    rng = random.Random(f"tangent-{seed}-{p}")
+    for _ in range(4):  # a random left factor G makes the consistent system A_π c' = b square
+        G = flint.nmod_mat(len(pivots), len(rows), [rng.randrange(p) for _ in range(len(pivots) * len(rows))], p)
+        M = G * AP
+        if M.rank() == len(pivots):
+            break
+    else:
+        return None
+    D = [_gradients(exps, q, p) * T for q, T in zip(pts, tangents)]  # m × N each: d φ(x_k) / d x_0
+    values = {(c, f): basis[j][c] for j, f in enumerate(free) for c in pivots}
+    grads = {key: [0] * N for key in values}
+    for l in range(N):
+        B = flint.nmod_mat(len(rows), m, [Dk[j, l] for Dk in D for j in range(m)], p)
+        X = M.solve(G * (-(B * V)))
+        for i, c in enumerate(pivots):
+            for j, f in enumerate(free):
+                grads[(c, f)][l] = int(X[i, j])
+    return pivots, free, values, grads
+
+
+def rank_mod(rows, N, p) -> int:
+    return flint.nmod_mat(len(rows), N, [v % p for r in rows for v in r], p).rank() if rows else 0
+
+
+class EntryFitter:
+    """Fits entries of the canonical kernel as N/D (module docstring) from a pool of orbits."""
+
+    def __init__(self, fld, eps, exps, steps, pivots, seed, margin):
+        self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
+        self.margin = margin
+        self.rng = random.Random(f"fit-{seed}")
+        self.starts = []          # pool starting points (rational), chosen with the first prime
+        self.data = {}            # p -> list of (points mod p, entry values) per pool orbit
+        self.evals = {}           # (p, δ) -> list per pool orbit of rows of monomial values
+
+    def _orbit(self, x0, p):
+        from exact_khk.kahan.map import KahanMap
+        try:
+            pts = [[int(t) for t in q] for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
+        except (SingularStepError, ZeroDivisionError, InputError):
+            return None
+        ev = _Evaluator(self.exps)
+        pivots, free, basis = canonical_nullspace([ev(q, 1, p) for q in pts], len(self.exps), p)
+        if tuple(pivots) != self.pivots:
+            return None  # a smaller invariant set or an unlucky prime: another pivot pattern
+        return pts, {(c, f): basis[j][c] for j, f in enumerate(free) for c in pivots}
+
+    def pool(self, p, count):
+        """``count`` pool orbits mod p (None when a pool orbit is unusable mod this prime)."""
+        data = self.data.setdefault(p, [])
+        first = not self.data or p == next(iter(self.data))
+        while len(data) < count:
+            if len(data) < len(self.starts):
+                got = self._orbit(self.starts[len(data)], p)
+                if got is None:
+                    return None
+                data.append(got)
+                continue
+            if not first:
+                return None
+            for _ in range(20):
+                x = _point(self.rng, self.fld.dim)
+                got = self._orbit(x, p)
+                if got is not None:
+                    self.starts.append(x)
+                    data.append(got)
+                    break
+            else:
+                return None
+        return data[:count]
+
+    def _rows(self, p, delta, key, start, stop):
+        """The rows [φ(x) | −e(x_s)·φ(x)] of the pool orbits start..stop-1 mod p (None: pool unusable)."""
+        data = self.pool(p, stop)
+        if data is None:
+            return None
+        cache = self.evals.setdefault((p, delta), [])
+        ev = _Evaluator(monomials(self.fld.dim, delta))
+        while len(cache) < stop:
+            cache.append([ev(q, 1, p) for q in data[len(cache)][0]])
+        rows = []
+        for (_, values), block in zip(data[start:stop], cache[start:stop]):
+            e = values[key]
+            rows += [r + [(-e * v) % p for v in r] for r in block]
+        return rows
+
+    def _grown(self, p, delta, key, count, width):
+        """(nullspace basis as an nmod_mat, orbits used): the pool grows one orbit at a time until the
+        nullspace has kept its dimension for STABLE_ORBITS orbits (a relation between the entry and
+        the other integrals' values on few orbits loses a dimension per orbit), or is zero."""
+        rows = self._rows(p, delta, key, 0, count)
+        if rows is None:
+            return None, count
+        _, _, basis = canonical_nullspace(rows, width, p)
+        if not basis:
+            return None, count
+        B = flint.nmod_mat(width, len(basis), [v[i] for i in range(width) for v in basis], p)
+        stable = 0
+        while stable < STABLE_ORBITS and count < width + STABLE_ORBITS + 2:
+            block = self._rows(p, delta, key, count, count + 1)
+            if block is None:
+                return None, count
+            count += 1
+            X, nul = (flint.nmod_mat(len(block), width, [v for r in block for v in r], p) * B).nullspace()
+            if nul == 0:
+                return None, count
+            stable = stable + 1 if nul == B.ncols() else 0
+            if nul < B.ncols():
+                B = B * flint.nmod_mat(X.nrows(), nul, [X[i, j] for i in range(X.nrows()) for j in range(nul)], p)
+        return B, count
+
+    def fit(self, key, delta, primes):
+        """(N, D) dicts over Q with N/D equal to the entry ``key`` on the pool's orbits, of degree ≤ δ,
+        or None (no such pair, not unique, or the lift not confirmed)."""
+        mons = monomials(self.fld.dim, delta)
+        md = len(mons)
+        if 2 * md > MAX_FIT_UNKNOWNS:
+            return None
+        start = max(delta + 2, math.ceil((2 * md + 2 * self.margin) / (self.steps + 1)))
+        B, count = self._grown(primes[0], delta, key, start, 2 * md)
+        if B is None or B.ncols() != 1:
+            return None  # no pair of this degree, or not unique: the caller raises δ
+        per = [(primes[0], [_normalised([int(B[i, 0]) for i in range(2 * md)], primes[0])])]
+        for p in primes[1:]:
+            rows = self._rows(p, delta, key, 0, count)
+            if rows is None:
+                continue
+            _, _, basis = canonical_nullspace(rows, 2 * md, p)
+            if len(basis) != 1:
+                continue
+            per.append((p, [_normalised(basis[0], p)]))
+            out = lift(per)
+            if out is not None:
+                vec = out[0]
+                num = {e: c for e, c in zip(mons, vec[:md]) if c}
+                den = {e: c for e, c in zip(mons, vec[md:]) if c}
+                return (num, den) if num and den else None
+        return None
+
+
+def _normalised(v, p):
+    """v scaled so that its first nonzero entry is 1 (the canonical representative of its line)."""
+    inv = pow(next(t for t in v if t), -1, p)
+    return [t * inv % p for t in v]
