@@ -27,10 +27,11 @@ from __future__ import annotations
 
 import math
 import random
+from fractions import Fraction
 
 import flint
 
-from exact_khk.diagnostics.kernels import _Evaluator, _point, lift, monomials
+from exact_khk.diagnostics.kernels import _Evaluator, _point, lift, monomials, to_mpoly
 from exact_khk.errors import InputError, SingularStepError
 
 #: the fit of one entry at degree δ solves a system with 2·C(N + δ, N) unknowns: not beyond this
@@ -39,6 +40,8 @@ MAX_FIT_UNKNOWNS = 4000
 MAX_TANGENT_WORK = 4_000_000
 #: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
 STABLE_ORBITS = 3
+#: random column orders tried for sparse kernel vectors (:func:`circuits`)
+CIRCUIT_ORDERS = 200
 
 
 def _rref_pivots(R, rank, m):
@@ -140,23 +143,54 @@ def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
     return pivots, free, values, grads
 
 
+def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
+    """Supports of sparse kernel vectors (circuits: no kernel vector has a smaller support inside),
+    smallest first: the rows of the reduced echelon form of the kernel basis under random column
+    orders (each row is the only kernel vector, up to a factor, supported on its pivot and the
+    non-pivot columns).  Their entries are simpler integrals than those of the canonical basis
+    (Clebsch: {1, p1², p2², p3²} against 7 of 10 columns)."""
+    d = len(basis)
+    if not d:
+        return []
+    support = [c for c in range(m) if any(v[c] for v in basis)]
+    rng = random.Random(f"circuits-{seed}")
+    found = set()
+    for t in range(orders):
+        order = support[:] if t == 0 else rng.sample(support, len(support))
+        R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
+        for i in range(r):
+            found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
+    minimal = [S for S in found if not any(T < S for T in found)]
+    return [tuple(sorted(S)) for S in sorted(minimal, key=lambda S: (len(S), sorted(S)))]
+
+
 def rank_mod(rows, N, p) -> int:
     return flint.nmod_mat(len(rows), N, [v % p for r in rows for v in r], p).rank() if rows else 0
 
 
 class EntryFitter:
-    """Fits entries of the canonical kernel as N/D (module docstring) from a pool of orbits."""
+    """Fits entries of a kernel vector as N/D (module docstring) from a pool of orbits.
 
-    def __init__(self, fld, eps, exps, steps, pivots, seed, margin):
+    With ``known`` integrals I_i = A_i/B_i (dict polynomials), N and D may have coefficients
+    polynomial in the I_i (total degree ≤ J): the columns φ(x)·c^b with c the values of the I_i
+    on the orbit ("modulo functions of those already found").  Then every vector
+    μ·c^b·(A_i − c_i B_i) vanishes on every orbit; these *junk* vectors are spanned explicitly and
+    the fit is the nullspace modulo them; the reported integral is N(x, I(x))/D(x, I(x)) with the
+    denominators of the I_i cleared."""
+
+    def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=()):
         self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
-        self.margin = margin
+        self.margin, self.known = margin, list(known)
         self.rng = random.Random(f"fit-{seed}")
-        self.starts = []          # pool starting points (rational), chosen with the first prime
-        self.data = {}            # p -> list of (points mod p, entry values) per pool orbit
+        self.starts = []          # pool starting points (rational) and the known integrals' values there
+        self.data = {}            # p -> list of (points mod p, entry values, known values) per pool orbit
         self.evals = {}           # (p, δ) -> list per pool orbit of rows of monomial values
 
-    def _orbit(self, x0, p):
+    def _orbit(self, start, p):
         from exact_khk.kahan.map import KahanMap
+        x0, cvals = start
+        if any(c.denominator % p == 0 for c in cvals):
+            return None
         try:
             pts = [[int(t) for t in q] for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
         except (SingularStepError, ZeroDivisionError, InputError):
@@ -165,12 +199,23 @@ class EntryFitter:
         pivots, free, basis = canonical_nullspace([ev(q, 1, p) for q in pts], len(self.exps), p)
         if tuple(pivots) != self.pivots:
             return None  # a smaller invariant set or an unlucky prime: another pivot pattern
-        return pts, {(c, f): basis[j][c] for j, f in enumerate(free) for c in pivots}
+        return (pts, {(c, f): basis[j][c] for j, f in enumerate(free) for c in pivots},
+                [c.numerator * pow(c.denominator, -1, p) % p for c in cvals])
+
+    def _start(self):
+        x = _point(self.rng, self.fld.dim)
+        vals = []
+        for num, den in self.known:
+            d = _value(den, x)
+            if d == 0:
+                return None
+            vals.append(_value(num, x) / d)
+        return x, vals
 
     def pool(self, p, count):
         """``count`` pool orbits mod p (None when a pool orbit is unusable mod this prime)."""
-        data = self.data.setdefault(p, [])
         first = not self.data or p == next(iter(self.data))
+        data = self.data.setdefault(p, [])
         while len(data) < count:
             if len(data) < len(self.starts):
                 got = self._orbit(self.starts[len(data)], p)
@@ -181,18 +226,18 @@ class EntryFitter:
             if not first:
                 return None
             for _ in range(20):
-                x = _point(self.rng, self.fld.dim)
-                got = self._orbit(x, p)
+                start = self._start()
+                got = None if start is None else self._orbit(start, p)
                 if got is not None:
-                    self.starts.append(x)
+                    self.starts.append(start)
                     data.append(got)
                     break
             else:
                 return None
         return data[:count]
 
-    def _rows(self, p, delta, key, start, stop):
-        """The rows [φ(x) | −e(x_s)·φ(x)] of the pool orbits start..stop-1 mod p (None: pool unusable)."""
+    def _rows(self, p, delta, J, key, start, stop):
+        """The rows [φ(x)·c^b | −e(x_s)·φ(x)·c^b] of the pool orbits start..stop-1 mod p (None: pool unusable)."""
         data = self.pool(p, stop)
         if data is None:
             return None
@@ -200,17 +245,66 @@ class EntryFitter:
         ev = _Evaluator(monomials(self.fld.dim, delta))
         while len(cache) < stop:
             cache.append([ev(q, 1, p) for q in data[len(cache)][0]])
+        cmons = monomials(len(self.known), J) if self.known else [()]
         rows = []
-        for (_, values), block in zip(data[start:stop], cache[start:stop]):
+        for (_, values, cv), block in zip(data[start:stop], cache[start:stop]):
             e = values[key]
-            rows += [r + [(-e * v) % p for v in r] for r in block]
+            ws = [math.prod(pow(c, k, p) for c, k in zip(cv, b)) % p for b in cmons]
+            for r in block:
+                left = [v * w % p for w in ws for v in r]
+                rows.append(left + [(-e * v) % p for v in left])
         return rows
 
-    def _grown(self, p, delta, key, count, width):
+    def _junk(self, delta, J, p):
+        """Reduced echelon rows (mod p) of the span of the vectors μ·c^b·(A_i − c_i·B_i) in both halves."""
+        if not self.known or J == 0:
+            return []
+        mons = monomials(self.fld.dim, delta)
+        md, pos = len(mons), {e: i for i, e in enumerate(monomials(self.fld.dim, delta))}
+        cmons = monomials(len(self.known), J)
+        cpos = {b: i for i, b in enumerate(cmons)}
+        width = 2 * md * len(cmons)
+        vecs = []
+        for i, (num, den) in enumerate(self.known):
+            deg = max(sum(e) for e in list(num) + list(den))
+            for mu in monomials(self.fld.dim, delta - deg) if deg <= delta else []:
+                for b in cmons:
+                    b1 = tuple(k + (j == i) for j, k in enumerate(b))
+                    if b1 not in cpos:
+                        continue
+                    for half in (0, width // 2):
+                        v = [0] * width
+                        for poly, bb, sign in ((num, b, 1), (den, b1, -1)):
+                            for e, c in poly.items():
+                                col = half + cpos[bb] * md + pos[tuple(x + y for x, y in zip(e, mu))]
+                                v[col] = (v[col] + sign * c.numerator * pow(c.denominator, -1, p)) % p
+                        vecs.append(v)
+        if not vecs:
+            return []
+        R, rank = flint.nmod_mat(len(vecs), width, [t for v in vecs for t in v], p).rref()
+        return [[int(R[i, j]) for j in range(width)] for i in range(rank)]
+
+    def _representative(self, vectors, junk, p):
+        """The one vector of the nullspace modulo the junk span, reduced by the junk's echelon rows
+        and scaled to a leading 1 (canonical, so its images mod several primes lift together); or None."""
+        if len(vectors) != len(junk) + 1:
+            return None
+        piv = [(next(j for j, t in enumerate(r) if t), r) for r in junk]
+        for v in vectors:
+            v = list(v)
+            for c, r in piv:
+                if v[c]:
+                    k = v[c]
+                    v = [(a - k * b) % p for a, b in zip(v, r)]
+            if any(v):
+                return _normalised(v, p)
+        return None
+
+    def _grown(self, p, delta, J, key, count, width):
         """(nullspace basis as an nmod_mat, orbits used): the pool grows one orbit at a time until the
         nullspace has kept its dimension for STABLE_ORBITS orbits (a relation between the entry and
         the other integrals' values on few orbits loses a dimension per orbit), or is zero."""
-        rows = self._rows(p, delta, key, 0, count)
+        rows = self._rows(p, delta, J, key, 0, count)
         if rows is None:
             return None, count
         _, _, basis = canonical_nullspace(rows, width, p)
@@ -219,7 +313,7 @@ class EntryFitter:
         B = flint.nmod_mat(width, len(basis), [v[i] for i in range(width) for v in basis], p)
         stable = 0
         while stable < STABLE_ORBITS and count < width + STABLE_ORBITS + 2:
-            block = self._rows(p, delta, key, count, count + 1)
+            block = self._rows(p, delta, J, key, count, count + 1)
             if block is None:
                 return None, count
             count += 1
@@ -231,33 +325,74 @@ class EntryFitter:
                 B = B * flint.nmod_mat(X.nrows(), nul, [X[i, j] for i in range(X.nrows()) for j in range(nul)], p)
         return B, count
 
-    def fit(self, key, delta, primes):
-        """(N, D) dicts over Q with N/D equal to the entry ``key`` on the pool's orbits, of degree ≤ δ,
-        or None (no such pair, not unique, or the lift not confirmed)."""
+    def fit(self, key, delta, primes, J=0):
+        """(N, D) dicts over Q with N/D equal to the entry ``key`` on the pool's orbits, of degree ≤ δ
+        (coefficients of degree ≤ J in the known integrals), or None (no such pair, not unique, or
+        the lift not confirmed)."""
         mons = monomials(self.fld.dim, delta)
+        cmons = monomials(len(self.known), J) if self.known else [()]
         md = len(mons)
-        if 2 * md > MAX_FIT_UNKNOWNS:
+        width = 2 * md * len(cmons)
+        if width > MAX_FIT_UNKNOWNS:
             return None
-        start = max(delta + 2, math.ceil((2 * md + 2 * self.margin) / (self.steps + 1)))
-        B, count = self._grown(primes[0], delta, key, start, 2 * md)
-        if B is None or B.ncols() != 1:
+        start = max(delta + J + 2, math.ceil((width + 2 * self.margin) / (self.steps + 1)))
+        B, count = self._grown(primes[0], delta, J, key, start, width)
+        if B is None:
+            return None
+        vec = self._representative([[int(B[i, j]) for i in range(width)] for j in range(B.ncols())],
+                                   self._junk(delta, J, primes[0]), primes[0])
+        if vec is None:
             return None  # no pair of this degree, or not unique: the caller raises δ
-        per = [(primes[0], [_normalised([int(B[i, 0]) for i in range(2 * md)], primes[0])])]
+        per = [(primes[0], [vec])]
         for p in primes[1:]:
-            rows = self._rows(p, delta, key, 0, count)
+            rows = self._rows(p, delta, J, key, 0, count)
             if rows is None:
                 continue
-            _, _, basis = canonical_nullspace(rows, 2 * md, p)
-            if len(basis) != 1:
+            _, _, basis = canonical_nullspace(rows, width, p)
+            vec = self._representative(basis, self._junk(delta, J, p), p)
+            if vec is None:
                 continue
-            per.append((p, [_normalised(basis[0], p)]))
+            per.append((p, [vec]))
             out = lift(per)
             if out is not None:
-                vec = out[0]
-                num = {e: c for e, c in zip(mons, vec[:md]) if c}
-                den = {e: c for e, c in zip(mons, vec[md:]) if c}
-                return (num, den) if num and den else None
+                return self._compose(out[0], mons, cmons, J)
         return None
+
+    def _compose(self, vec, mons, cmons, J):
+        """N(x, I(x))/D(x, I(x)) with the known integrals' denominators cleared, as dicts over Q."""
+        N = self.fld.dim
+        md = len(mons)
+        half = len(vec) // 2
+        parts = []
+        for off in (0, half):
+            total = to_mpoly({}, N)
+            for k, b in enumerate(cmons):
+                coeffs = {e: c for e, c in zip(mons, vec[off + k * md: off + (k + 1) * md]) if c}
+                if not coeffs:
+                    continue
+                term = to_mpoly(coeffs, N)
+                for (num, den), bi in zip(self.known, b):
+                    term = term * to_mpoly(num, N) ** bi * to_mpoly(den, N) ** (J - bi)
+                total = total + term
+            parts.append(total)
+        num, den = parts
+        if num.is_zero() or den.is_zero():
+            return None
+        g = num.gcd(den)
+        num, den = num / g, den / g
+        return ({tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in num.to_dict().items()},
+                {tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in den.to_dict().items()})
+
+
+def _value(poly, x):
+    total = Fraction(0)
+    for e, c in poly.items():
+        term = c
+        for t, k in zip(x, e):
+            if k:
+                term *= t ** k
+        total += term
+    return total
 
 
 def _normalised(v, p):

@@ -57,7 +57,7 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.fitting import EntryFitter, entry_jacobian, rank_mod
+from exact_khk.diagnostics.fitting import EntryFitter, circuits, entry_jacobian, rank_mod
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim)
@@ -70,6 +70,11 @@ MAX_MONOMIALS = 3000
 MAX_FIT_DEGREE = 12
 #: orbits drawn beyond ``orbits`` to replace those on smaller invariant sets
 MORE_ORBITS = 12
+#: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
+MAX_CIRCUITS = 60
+MAX_FITS = 200
+#: the degree of a fit's coefficients in the integrals already found
+MAX_KNOWN_DEGREE = 2
 
 
 # --- exact evaluation and verification -------------------------------------------------
@@ -474,33 +479,43 @@ class _Job:
             return tuple(kept), len(rows), ((point, len(rows)) if rows else None), None
         pivots, _, values, grads = data
         visible = rank_mod(list(grads.values()), N, p0)
-        fitter = EntryFitter(self.fld, self.eps, self.exps, self.steps, pivots, seed, self.margin)
         primes = list(plist) + [p for p in random_primes(max_primes + len(plist), seed + 1) if p not in plist]
         vx = _point(random.Random(f"verify-{seed}"), N)
-        failed = set()
-        for delta in range(1, fit_degree + 1):
-            if len(kept) >= visible:
+        mod_rows = [g for f in kept for g in _grad_mod(f, ref.x0, p0)]
+        budget = MAX_FITS
+        for S in circuits(ref.basis, len(self.exps), p0, seed)[:MAX_CIRCUITS]:
+            if len(kept) >= visible or budget <= 0:
                 break
-            mod_rows = [g for f in kept for g in _grad_mod(f, ref.x0, p0)]
-            tries = 0
-            for key in sorted(grads):
-                if len(kept) >= visible or tries > 3 * (visible - len(kept)) + 3:
-                    break
-                if key in failed or rank_mod(mod_rows + [grads[key]], N, p0) == rank_mod(mod_rows, N, p0):
-                    continue  # a function of the integrals found (mod p)
-                tries += 1
-                pair = fitter.fit(key, delta, primes)
+            sub = [self.exps[c] for c in S]
+            data = entry_jacobian(self.fld, self.eps, ref.x0, sub, self.steps, p0, seed)
+            if data is None or len(data[1]) != 1:
+                continue
+            fitter = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
+                                 [f.polynomials() for f in kept])
+            # one entry per sparse vector: its entries are functions of the same conserved point
+            for key, grad in [kg for kg in sorted(data[3].items())
+                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
+                # (degree in x, degree in the integrals found), fewest unknowns first
+                shapes = sorted(((D, J) for D in range(1, fit_degree + 1) for J in range(MAX_KNOWN_DEGREE + 1)
+                                 if J == 0 or kept), key=lambda t: (comb(N + t[0], N) * comb(len(kept) + t[1], t[1]), t))
+                for delta, J in shapes:
+                    budget -= 1
+                    pair = fitter.fit(key, delta, primes, J)
+                    if pair is not None:
+                        break
                 if pair is None:
                     continue
                 f = self.integral(*canonical_pair(*pair), vx, verify_steps)
                 r = jacobian_rows([f.polynomials()], point)
                 if not f.verified or r is None or _rank(rows + r, N) == len(rows):
-                    failed.add(key)
                     continue
                 kept.append(f)
                 rows += r
                 mod_rows += _grad_mod(f, ref.x0, p0)
-                self.notes.append(f"I{len(kept)} fitted from an entry of the canonical kernel (degree <= {delta})")
+                self.notes.append(f"I{len(kept)} fitted (degree <= {delta}"
+                                  + (f", coefficients of degree <= {J} in I1..I{len(kept) - 1}" if J else "")
+                                  + ") from the kernel vector supported on "
+                                  f"{', '.join(monomial_text(e, self.variables) for e in sub)}")
         if len(kept) < visible:
             self.warnings.append(f"the kernel shows {visible} independent integrals (rank of its entries' Jacobian "
                                  f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "
