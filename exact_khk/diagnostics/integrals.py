@@ -525,3 +525,78 @@ class _Job:
     def rank_point(self, seed):
         rng = random.Random(f"rank-{seed}")
         return [flint.fmpq(rng.randint(-30, 30), rng.randint(1, 7)) for _ in range(self.fld.dim)]
+
+
+# --- output that goes straight back in: a system file with the found integrals ----------
+
+
+def system_file(system, result: IntegralSearch, eps, field="f", x0=None) -> str:
+    """A system file (TOML, docs/system-files.md) that ``exact-khk certify --system`` reads: the
+    system's own file (an expression system) or its field written out (any other, variables
+    x0..x(N-1)), with the verified integrals of ``result`` added to ``[integrals]`` as found_I1, …
+    and ``[defaults] eps`` set to the ε they were found at (their coefficients are numbers for that
+    ε only); ``claims`` include "integrals"."""
+    sysobj, fld = resolve_field(system, field)
+    found = {f"found_I{i}": f"({f.numerator})/({f.denominator})" for i, f in enumerate(result.integrals, 1)
+             if f.verified}
+    if getattr(sysobj, "kind", None) == "expressions" and field == "f":
+        spec = sysobj.to_json()
+    else:
+        names = [f"x{i}" for i in range(fld.dim)]
+        spec = {"format": 1, "kind": "expressions",
+                "name": f"{getattr(sysobj, 'name', 'field')}-{field}".replace(" ", "-").replace("=", ""),
+                "title": f"the field {fld.label} of {getattr(sysobj, 'name', 'a quadratic field')}",
+                "variables": names, "field": {v: _component(fld, k, names) for k, v in enumerate(names)}}
+    spec["integrals"] = {**spec.get("integrals", {}), **found}
+    claims = list(spec.get("claims", ["reversibility", "integrals"]))
+    spec["claims"] = claims + (["integrals"] if "integrals" not in claims else [])
+    defaults = dict(spec.get("defaults", {}))
+    defaults["eps"] = str(eps)
+    if x0 is not None:
+        defaults["x0"] = [str(t) for t in x0]
+    spec["defaults"] = defaults
+    return toml_text(spec)
+
+
+def _component(fld, k, names) -> str:
+    poly = {}
+    for (i, j), c in fld.terms()[k]:
+        e = [0] * fld.dim
+        e[i] += 1
+        e[j] += 1
+        poly[tuple(e)] = poly.get(tuple(e), 0) + Fraction(str(c))
+    for j, c in fld.linear[k]:
+        e = [0] * fld.dim
+        e[j] = 1
+        poly[tuple(e)] = poly.get(tuple(e), 0) + Fraction(str(c))
+    if fld.const[k]:
+        poly[(0,) * fld.dim] = Fraction(str(fld.const[k]))
+    return poly_text(poly, names)
+
+
+def toml_text(spec: dict) -> str:
+    """A dict of strings, numbers, lists and tables as TOML (strings JSON-quoted, which TOML reads)."""
+    import json
+
+    def value(v):
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(t) for t in v) + "]"
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, int):
+            return str(v)
+        return json.dumps(str(v), ensure_ascii=False)
+
+    def table(name, d, out):
+        plain = [(k, v) for k, v in d.items() if not isinstance(v, dict)]
+        if name is not None and (plain or not d):
+            out.append(f"\n[{name}]")
+        out += [f"{json.dumps(str(k)) if not k.replace('_', '').replace('-', '').isalnum() else k} = {value(v)}"
+                for k, v in plain]
+        for k, v in d.items():
+            if isinstance(v, dict):
+                table(k if name is None else f"{name}.{k}", v, out)
+
+    out = []
+    table(None, spec, out)
+    return "\n".join(out) + "\n"
