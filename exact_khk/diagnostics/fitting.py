@@ -34,8 +34,9 @@ import flint
 from exact_khk.diagnostics.kernels import _Evaluator, _point, lift, monomials, to_mpoly
 from exact_khk.errors import InputError, SingularStepError
 
-#: the fit of one entry at degree δ solves a system with 2·C(N + δ, N) unknowns: not beyond this
-MAX_FIT_UNKNOWNS = 4000
+#: the fit of one entry at degree δ solves a system with 2·C(N + δ, N)·C(k + J, J) unknowns (k integrals
+#: found, J the degree in them): not beyond this (1200: about a second per fit on the 2-core machine)
+MAX_FIT_UNKNOWNS = 1200
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
 #: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
@@ -160,6 +161,8 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
         R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
         for i in range(r):
             found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
+    for v in basis:  # the canonical basis vectors are circuits too (support: pivots and one free column)
+        found.add(frozenset(c for c in range(m) if v[c]))
     minimal = [S for S in found if not any(T < S for T in found)]
     return [tuple(sorted(S)) for S in sorted(minimal, key=lambda S: (len(S), sorted(S)))]
 

@@ -72,7 +72,7 @@ MAX_FIT_DEGREE = 12
 MORE_ORBITS = 12
 #: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
 MAX_CIRCUITS = 60
-MAX_FITS = 200
+MAX_FITS = 80
 #: the degree of a fit's coefficients in the integrals already found
 MAX_KNOWN_DEGREE = 2
 
@@ -492,9 +492,9 @@ class _Job:
                 continue
             fitter = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
                                  [f.polynomials() for f in kept])
-            # one entry per sparse vector: its entries are functions of the same conserved point
+            # two entries per sparse vector at most: its entries are functions of the same conserved point
             for key, grad in [kg for kg in sorted(data[3].items())
-                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
+                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:2]:
                 # (degree in x, degree in the integrals found), fewest unknowns first
                 shapes = sorted(((D, J) for D in range(1, fit_degree + 1) for J in range(MAX_KNOWN_DEGREE + 1)
                                  if J == 0 or kept), key=lambda t: (comb(N + t[0], N) * comb(len(kept) + t[1], t[1]), t))
