@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 
 from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_output, field_name,
-                                   system_from_args, write_json)
+                                   max_memory, system_from_args, write_json)
 from exact_khk.errors import InputError
 
 
@@ -105,7 +105,8 @@ def cmd_find_integrals(args):
         check_output(args.toml, "--toml")
     kw = dict(field=field_name(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
               steps=args.steps or None, primes=_primes(args.primes), seed=args.line_seed,
-              x0=x0 if args.x0 is not None else None, verify_steps=args.verify_steps, fit_degree=args.fit_degree)
+              x0=x0 if args.x0 is not None else None, verify_steps=args.verify_steps, fit_degree=args.fit_degree,
+              max_bytes=max_memory())
     if args.monomials is not None:
         if args.homogeneous:
             raise InputError("--homogeneous applies only to --degree")

@@ -66,13 +66,16 @@ from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.parsing import check_count, parse_vector
 
 MAX_MONOMIALS = 3000
+#: bytes per entry of an evaluation matrix (peak RSS growth of one orbit kernel: 93 at 495 candidates
+#: × 594 points, 313 at 210 × 253 where fixed costs dominate)
+KERNEL_BYTES_PER_ENTRY = 100
 #: the highest degree of a fitted numerator or denominator (:mod:`.fitting`; --fit-degree)
 MAX_FIT_DEGREE = 12
 #: orbits drawn beyond ``orbits`` to replace those on smaller invariant sets
 MORE_ORBITS = 12
 #: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
 MAX_CIRCUITS = 60
-MAX_FITS = 80
+MAX_FITS = 200
 #: the degree of a fit's coefficients in the integrals already found
 MAX_KNOWN_DEGREE = 2
 
@@ -230,7 +233,7 @@ class IntegralSearch:
 
 def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None, homogeneous=False,
                    orbits=3, steps=None, margin=None, primes=None, seed=0, x0=None, verify_steps=6,
-                   max_primes=16, progress=None, fit_degree=None):
+                   max_primes=16, progress=None, fit_degree=None, max_bytes=None):
     """Search conserved rational functions of the Kahan map whose numerator and
     denominator lie in the span of the candidates (module docstring).
 
@@ -242,7 +245,9 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     the rational lift is confirmed by a prime it was not computed from); ``progress(stage)``
     is called with the name of each stage as it starts; ``fit_degree`` bounds the degree of the
     numerators and denominators of integrals fitted from the kernel's entries
-    (:mod:`.fitting`; default twice the largest candidate degree, 0: no fit)."""
+    (:mod:`.fitting`; default twice the largest candidate degree, 0: no fit); with ``max_bytes``,
+    a search whose evaluation matrices would need more memory (:func:`planned_bytes`) is refused
+    before any work (InputError naming EXACT_KHK_MAX_MEMORY)."""
     t0 = time.perf_counter()
     stage = progress or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
@@ -268,6 +273,10 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     check_count(orbits, "orbits", 2, 50)
     margin = check_count(margin if margin is not None else max(8, m // 10), "margin", 1, 10_000)
     steps = check_count(steps if steps is not None else m + 2 * margin, "steps", 1, 1_000_000)
+    if max_bytes is not None and planned_bytes(m, steps) > max_bytes:
+        raise InputError(f"degree: {m} candidates over orbits of {steps + 1} points need about "
+                         f"{planned_bytes(m, steps) / 2 ** 30:.3g} GiB for the evaluation matrices, beyond the memory "
+                         f"limit of {max_bytes / 2 ** 30:.3g} GiB (EXACT_KHK_MAX_MEMORY)")
     check_count(verify_steps, "verify_steps", 1, 1000)
     check_count(max_primes, "max_primes", 1, 1000)
     top_degree = max(sum(e) for e in exps)
@@ -355,6 +364,12 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
                                                                     seed, max_primes, verify_steps)
         return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0, certificate, visible)
     return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
+
+
+def planned_bytes(m, steps) -> int:
+    """The memory of one orbit kernel: (steps + 1) × m values held as Python ints and as an
+    ``nmod_mat`` with its echelon copy, KERNEL_BYTES_PER_ENTRY each."""
+    return KERNEL_BYTES_PER_ENTRY * (steps + 1) * m
 
 
 def _generic_count(ks) -> int:
@@ -492,9 +507,9 @@ class _Job:
                 continue
             fitter = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
                                  [f.polynomials() for f in kept])
-            # two entries per sparse vector at most: its entries are functions of the same conserved point
+            # one entry per sparse vector: its entries are functions of the same conserved point
             for key, grad in [kg for kg in sorted(data[3].items())
-                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:2]:
+                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
                 # (degree in x, degree in the integrals found), fewest unknowns first
                 shapes = sorted(((D, J) for D in range(1, fit_degree + 1) for J in range(MAX_KNOWN_DEGREE + 1)
                                  if J == 0 or kept), key=lambda t: (comb(N + t[0], N) * comb(len(kept) + t[1], t[1]), t))
