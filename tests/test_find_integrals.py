@@ -218,3 +218,14 @@ def test_clebsch_four():
     res = find_integrals(s, degree=2, eps="1/10")
     assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4
     assert check_found(s, res, "1/10", points=2) == 4
+
+
+def test_memory_is_planned_and_refused_up_front(monkeypatch, capsys):
+    """The evaluation matrices' memory is estimated before any work; beyond EXACT_KHK_MAX_MEMORY the
+    command exits 2 with one line naming the limit (84 candidates × 101 points × 100 bytes > 100 kB)."""
+    monkeypatch.setenv("EXACT_KHK_MAX_MEMORY", "100K")
+    assert main(["find-integrals", "--system", "lagrange-top", "--degree", "3", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "EXACT_KHK_MAX_MEMORY" in err and "Traceback" not in err
+    monkeypatch.setenv("EXACT_KHK_MAX_MEMORY", "1G")
+    assert main(["find-integrals", "--system", "euler-top", "--quiet"]) == 0
