@@ -161,10 +161,15 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
         R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
         for i in range(r):
             found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
-    for v in basis:  # the canonical basis vectors are circuits too (support: pivots and one free column)
-        found.add(frozenset(c for c in range(m) if v[c]))
     minimal = [S for S in found if not any(T < S for T in found)]
-    return [tuple(sorted(S)) for S in sorted(minimal, key=lambda S: (len(S), sorted(S)))]
+    small = [tuple(sorted(S)) for S in sorted(minimal, key=lambda S: (len(S), sorted(S)))]
+    # the canonical basis vectors are circuits too (support: pivots and one free column); they are
+    # taken in turn with the smallest ones (the Lagrange top's modified energy is fitted from one)
+    canonical = [tuple(c for c in range(m) if v[c]) for v in basis]
+    out = []
+    for pair in zip(small, canonical):
+        out += [S for S in pair if S not in out]
+    return out + [S for S in small[len(canonical):] + canonical[len(small):] if S not in out]
 
 
 def rank_mod(rows, N, p) -> int:
