@@ -13,6 +13,10 @@ and every conserved function the kernel can see is a function of the entries.
   pivot columns of A, of full column rank) gives the derivatives of the entries
   (:func:`entry_jacobian`).  A rank over F_p equals the rank over Q unless p
   divides a minor: a lower bound with high probability equal.
+* **Which vectors.**  Any kernel vector of minimal support (a circuit) gives conserved
+  entries in the same way, and sparse ones give simpler functions: :func:`circuits` finds
+  them as echelon rows of the kernel basis under random column orders, taken in turn with
+  the canonical basis vectors; the kernel of the candidates of one circuit is that vector.
 * **Which formula.**  An entry e that is not a function of the integrals already
   found (its gradient mod p is independent of theirs) is written as N/D with N, D of
   degree ≤ δ, δ = 1, 2, … : N − e(x_s)·D vanishes on the orbit of x_s for every

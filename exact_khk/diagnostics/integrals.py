@@ -26,6 +26,13 @@ kernel, and new directions at a higher degree D from the candidates
 {1} ∪ {degree exactly D}, which hold no product of a lower-degree kernel
 polynomial with a non-constant monomial.
 
+**Every integral the kernel shows** (:mod:`.fitting`): the integrals above are reduced to an
+independent set (exact Jacobian rank at a rational point; a power or product of kept ones is
+named in a note), the number the kernel shows is the rank of its entries' Jacobian mod p, and
+entries of sparse kernel vectors that are not functions of those kept are fitted as N/D
+(coefficients may be polynomial in the kept integrals), checked exactly on a fresh orbit and
+kept only if they raise the exact rank (``Job.complete``).
+
 **Where it cannot conclude** (``warnings`` and ``notes``):
 
 * orbit too short — fewer points than candidates + margin, or the rank of the
