@@ -253,3 +253,13 @@ def test_memory_is_planned_and_refused_up_front(monkeypatch, capsys):
     assert "EXACT_KHK_MAX_MEMORY" in err and "Traceback" not in err
     monkeypatch.setenv("EXACT_KHK_MAX_MEMORY", "1G")
     assert main(["find-integrals", "--system", "euler-top", "--quiet"]) == 0
+
+
+def test_lie_poisson_with_degenerate_orbits_and_a_mixed_kernel():
+    """n = 2, seed 4: one default orbit lies on a smaller invariant set (kernel 10 > 8) and the span
+    is of no single shape (main extracted 0); all 3 integrals the kernel shows are extracted."""
+    s = LiePoissonSystem.random(2, 4)
+    res = find_integrals(s, degree=2)
+    assert any("smaller invariant set" in w for w in res.warnings)
+    assert res.visible == 3 and len(res.integrals) == 3 and res.independent == 3
+    assert check_found(s, res, "1/10", points=2) == 3
