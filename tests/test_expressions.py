@@ -101,7 +101,8 @@ def test_scientific_literals_are_the_decimals_they_spell():
     ("x1.__class__", r"character '\.' at position 2 is not allowed"),
     ("x1[0]", r"character '\[' at position 2"),
     ("'x1'", r"character \"'\" at position 0"),
-    ("x1^2", r"use \*\* for powers"),
+    ("x1!", r"character '!' at position 2 is not allowed; expressions use names, numbers, \+ - \* / \*\* \(or \^\)"),
+    ("x1^2^3", r"chained \*\* is not allowed"),
     ("x1**10**9", r"chained \*\* is not allowed"),
     ("9**9**9", r"chained \*\* is not allowed"),
     ("x1**999", r"exponent 999 at position 4 is too large"),
@@ -125,6 +126,15 @@ def test_scientific_literals_are_the_decimals_they_spell():
 ])
 def test_hostile_and_wrong_fields_are_refused(text, match):
     refused(match, field=[text, "0", "0"])
+
+
+def test_caret_reads_as_power_like_sympy():
+    """'^' is '**' on input (SymPy's parse_expr reads it so): the same field and integral."""
+    a = system(["x2^2 - x3", "-x1*x2", "x1 - x3^2"])
+    b = system(["x2**2 - x3", "-x1*x2", "x1 - x3**2"])
+    fa, fb = a.field("f"), b.field("f")
+    assert (fa.quad, fa.linear, fa.const) == (fb.quad, fb.linear, fb.const) and fa.quad[2] == (((2, 2), F(-1)),)
+    assert str(sympy.sympify("x2^2 - x3", convert_xor=True)) == str(sympy.sympify("x2**2 - x3"))
 
 
 def test_huge_integers_are_exact():

@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 
 from exact_khk.cli.options import (Progress, add_field_options, add_json_option, add_system_options, check_output,
-                                   field_name, system_from_args, write_json)
+                                   field_name, max_memory, system_from_args, write_json)
 from exact_khk.errors import InputError
 
 
@@ -46,6 +46,11 @@ def register(sub):
     q.add_argument("--primes", default="2", help="initial number of random primes, or a list (default 2)")
     q.add_argument("--line-seed", type=int, default=0, help="seed of the random orbits and primes (default 0)")
     q.add_argument("--verify-steps", type=int, default=6, help="steps of the fresh exact orbit of the check (default 6)")
+    q.add_argument("--fit-degree", type=int, default=None, metavar="D",
+                   help="degree bound of integrals fitted from sparse kernel vectors (default twice the candidates' "
+                   "degree; 0: no fit)")
+    q.add_argument("--toml", metavar="FILE.toml", help="also write a system file with the found integrals in "
+                   "[integrals] (and [defaults] eps), ready for `exact-khk certify --system FILE.toml`")
     add_json_option(q, "the integrals found")
     q.set_defaults(func=cmd_find_integrals)
 
@@ -99,9 +104,12 @@ def cmd_find_integrals(args):
 
     check_output(args.json)
     system, x0, eps = system_from_args(args)
+    if args.toml:
+        check_output(args.toml, "--toml")
     kw = dict(field=field_name(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
               steps=args.steps or None, primes=_primes(args.primes), seed=args.line_seed,
-              x0=x0 if args.x0 is not None else None, verify_steps=args.verify_steps)
+              x0=x0 if args.x0 is not None else None, verify_steps=args.verify_steps, fit_degree=args.fit_degree,
+              max_bytes=max_memory())
     if args.monomials is not None:
         if args.homogeneous:
             raise InputError("--homogeneous applies only to --degree")
@@ -113,14 +121,23 @@ def cmd_find_integrals(args):
             res = find_integrals(system, **kw, progress=progress)
     except InputError as exc:
         msg = str(exc)
-        for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0"):
+        for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0", "fit_degree"):
             if msg.startswith(name + ":"):
                 msg = "--" + name.replace("_", "-") + msg[len(name):]
                 break
         raise InputError(msg) from None
+    if args.toml:
+        from exact_khk.diagnostics.integrals import system_file
+        from exact_khk.studies.output import write_atomic
+
+        write_atomic(args.toml, system_file(system, res, eps, kw["field"], x0 if args.x0 is not None else None),
+                     "--toml")
     if args.json is not None:
         write_json({"system": system.to_json(), "eps": str(eps), **res.to_json()}, args.json)
     if args.json != "-":
         print(system.describe())
         print(res.summary())
+        if args.toml:
+            print(f"system file with the {len(res.integrals)} integral(s) written to {args.toml} "
+                  f"(exact-khk certify --system {args.toml})")
     return 0

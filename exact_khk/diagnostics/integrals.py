@@ -26,6 +26,13 @@ kernel, and new directions at a higher degree D from the candidates
 {1} ∪ {degree exactly D}, which hold no product of a lower-degree kernel
 polynomial with a non-constant monomial.
 
+**Every integral the kernel shows** (:mod:`.fitting`): the integrals above are reduced to an
+independent set (exact Jacobian rank at a rational point; a power or product of kept ones is
+named in a note), the number the kernel shows is the rank of its entries' Jacobian mod p, and
+entries of sparse kernel vectors that are not functions of those kept are fitted as N/D
+(coefficients may be polynomial in the kept integrals), checked exactly on a fresh orbit and
+kept only if they raise the exact rank (``Job.complete``).
+
 **Where it cannot conclude** (``warnings`` and ``notes``):
 
 * orbit too short — fewer points than candidates + margin, or the rank of the
@@ -57,14 +64,27 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, lift, monomial_text,
-                                           monomials, orbit_kernel_mod, parse_monomials, poly_text,
+from exact_khk.diagnostics.fitting import EntryFitter, circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
+                                           monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim)
-from exact_khk.diagnostics.pencils import pencil_integrals, ratio_integrals
+from exact_khk.diagnostics.pencils import canonical_pair, pencil_integrals, ratio_integrals
 from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.parsing import check_count, parse_vector
 
 MAX_MONOMIALS = 3000
+#: bytes per entry of an evaluation matrix (peak RSS growth of one orbit kernel: 93 at 495 candidates
+#: × 594 points, 313 at 210 × 253 where fixed costs dominate)
+KERNEL_BYTES_PER_ENTRY = 100
+#: the highest degree of a fitted numerator or denominator (:mod:`.fitting`; --fit-degree)
+MAX_FIT_DEGREE = 12
+#: orbits drawn beyond ``orbits`` to replace those on smaller invariant sets
+MORE_ORBITS = 12
+#: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
+MAX_CIRCUITS = 60
+MAX_FITS = 200
+#: the degree of a fit's coefficients in the integrals already found
+MAX_KNOWN_DEGREE = 2
 
 
 # --- exact evaluation and verification -------------------------------------------------
@@ -169,6 +189,8 @@ class IntegralSearch:
     warnings: tuple
     seconds: float
     notes: tuple = dc_field(default=())
+    certificate: tuple = None  # (rational point, rank of the integrals' Jacobian there, exact)
+    visible: int = None        # independent integrals the kernel shows (rank of its entries' Jacobian mod p)
 
     @property
     def new_dim(self) -> int:
@@ -181,7 +203,17 @@ class IntegralSearch:
                 "kernel_dim_by_degree": [list(t) for t in self.by_degree], "span_dim": self.span_dim,
                 "integrals": [i.to_json() for i in self.integrals], "independent": self.independent,
                 "primes": list(self.primes), "warnings": list(self.warnings), "notes": list(self.notes),
+                "kernel_shows": self.visible,
+                "independence_certificate": None if self.certificate is None else
+                {"point": [str(t) for t in self.certificate[0]], "jacobian_rank": self.certificate[1]},
                 "seconds": self.seconds}
+
+    def headline(self) -> str:
+        """'kernel k, extracted j, independent r' (and what the kernel shows, when computed)."""
+        shows = "" if self.visible is None else f" (the kernel shows {self.visible} independent integral" \
+            f"{'' if self.visible == 1 else 's'})"
+        return (f"kernel {self.kernel_dim}, extracted {len(self.integrals)}, independent {self.independent}"
+                + shows)
 
     def summary(self) -> str:
         out = [f"integral search for {self.label}: {len(self.candidates)} candidate monomials",
@@ -194,16 +226,21 @@ class IntegralSearch:
             out.append(f"  I{i} = ({_short(f.numerator)}) / ({_short(f.denominator)})"
                        + ("" if f.verified else "  [NOT verified]"))
         if self.integrals:
-            out.append(f"  {sum(f.verified for f in self.integrals)} verified exactly on a fresh orbit; "
-                       f"{self.independent} functionally independent")
+            out.append(f"  {sum(f.verified for f in self.integrals)} verified exactly on a fresh orbit (evidence, "
+                       f"not a proof: `certify` a system file with them); {self.independent} functionally "
+                       f"independent" + ("" if self.certificate is None else
+                                         f" (proven: Jacobian rank {self.certificate[1]} at {_fmt(self.certificate[0])})"))
+        elif self.kernel_dim == 0:
+            out.append("  no integral with numerator and denominator in the span of the candidates")
         out += [f"  warning: {w}" for w in self.warnings] + [f"  note: {n}" for n in self.notes]
+        out.append(f"  {self.headline()}")
         out.append(f"  time {self.seconds:.2f} s")
         return "\n".join(out)
 
 
 def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None, homogeneous=False,
                    orbits=3, steps=None, margin=None, primes=None, seed=0, x0=None, verify_steps=6,
-                   max_primes=16, progress=None):
+                   max_primes=16, progress=None, fit_degree=None, max_bytes=None):
     """Search conserved rational functions of the Kahan map whose numerator and
     denominator lie in the span of the candidates (module docstring).
 
@@ -213,7 +250,11 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     (default: candidates + 2·margin); ``primes`` a list, or a count of random
     primes to start with (default 2; more are drawn, up to ``max_primes``, until
     the rational lift is confirmed by a prime it was not computed from); ``progress(stage)``
-    is called with the name of each stage as it starts."""
+    is called with the name of each stage as it starts; ``fit_degree`` bounds the degree of the
+    numerators and denominators of integrals fitted from the kernel's entries
+    (:mod:`.fitting`; default twice the largest candidate degree, 0: no fit); with ``max_bytes``,
+    a search whose evaluation matrices would need more memory (:func:`planned_bytes`) is refused
+    before any work (InputError naming EXACT_KHK_MAX_MEMORY)."""
     t0 = time.perf_counter()
     stage = progress or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
@@ -239,8 +280,14 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     check_count(orbits, "orbits", 2, 50)
     margin = check_count(margin if margin is not None else max(8, m // 10), "margin", 1, 10_000)
     steps = check_count(steps if steps is not None else m + 2 * margin, "steps", 1, 1_000_000)
+    if max_bytes is not None and planned_bytes(m, steps) > max_bytes:
+        raise InputError(f"degree: {m} candidates over orbits of {steps + 1} points need about "
+                         f"{planned_bytes(m, steps) / 2 ** 30:.3g} GiB for the evaluation matrices, beyond the memory "
+                         f"limit of {max_bytes / 2 ** 30:.3g} GiB (EXACT_KHK_MAX_MEMORY)")
     check_count(verify_steps, "verify_steps", 1, 1000)
     check_count(max_primes, "max_primes", 1, 1000)
+    top_degree = max(sum(e) for e in exps)
+    fit_degree = check_count(2 * top_degree if fit_degree is None else fit_degree, "fit_degree", 0, MAX_FIT_DEGREE)
     seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
     plist = list(check_primes(primes, seed=seed))
     rng = random.Random(f"integrals-{seed}")
@@ -261,8 +308,10 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         k = kernel(x)
         if k is not None:
             ks.append(k)
-    while len([k for k in ks if k.stable and not k.periodic]) < 4 and len(starts) < orbits + 6:
-        starts.append(_point(rng, N))  # more orbits (4 are needed for pencils)
+    while _generic_count(ks) < 4 and len(starts) < orbits + MORE_ORBITS:
+        # more orbits until 4 share the generic (smallest) kernel: 4 are needed for pencils, and an
+        # orbit on a smaller invariant set (a larger kernel) is replaced rather than used
+        starts.append(_point(rng, N))
         k = kernel(starts[-1])
         if k is not None:
             ks.append(k)
@@ -293,7 +342,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         job.notes.append("no polynomial in the span vanishes on the orbits: no integral of this shape")
     elif table and low < degree:
         sub = find_integrals(system, degree=low, field=field, eps=eps, orbits=orbits, primes=plist, seed=seed,
-                             verify_steps=verify_steps, max_primes=max_primes, progress=progress)
+                             verify_steps=verify_steps, max_primes=max_primes, progress=progress, fit_degree=0)
         integrals, independent, used = sub.integrals, sub.independent, sub.primes
         job.notes += [f"integrals extracted at degree {low}, where the kernel first appears"] + list(sub.notes)
         job.warnings += list(sub.warnings)
@@ -302,7 +351,8 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
             # polynomial with a monomial of degree ≥ 1: the new integrals separate there
             top = ["1"] + [monomial_text(e, variables) for e in monomials(N, D, True)]
             more = find_integrals(system, monomials_list=top, field=field, eps=eps, orbits=orbits, primes=plist,
-                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes, progress=progress)
+                                  seed=seed, verify_steps=verify_steps, max_primes=max_primes, progress=progress,
+                                  fit_degree=0)
             found = [f for f in more.integrals if f.verified]
             integrals += tuple(found)
             job.notes.append(f"{new} new kernel direction(s) at degree {D}: {len(found)} integral(s) extracted from "
@@ -315,7 +365,37 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
         stage("lift to Q, extract and check the integrals")
         integrals, used = job.extract(generic, d, w, plist, seed, max_primes, verify_steps)
         independent = independent_count([f.polynomials() for f in integrals if f.verified], rng)
+    if d and fit_degree:
+        stage("independent integrals: the kernel's entries, fitted")
+        integrals, independent, certificate, visible = job.complete(generic[0], integrals, fit_degree, plist,
+                                                                    seed, max_primes, verify_steps)
+        return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0, certificate, visible)
     return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
+
+
+def planned_bytes(m, steps) -> int:
+    """The memory of one orbit kernel: (steps + 1) × m values held as Python ints and as an
+    ``nmod_mat`` with its echelon copy, KERNEL_BYTES_PER_ENTRY each."""
+    return KERNEL_BYTES_PER_ENTRY * (steps + 1) * m
+
+
+def _generic_count(ks) -> int:
+    """How many stable, non-periodic orbits have the smallest kernel dimension among them."""
+    dims = [k.dim for k in ks if k.stable and not k.periodic]
+    return dims.count(min(dims)) if dims else 0
+
+
+def _rank(rows, N) -> int:
+    return flint.fmpq_mat(len(rows), N, [v for r in rows for v in r]).rank() if rows else 0
+
+
+def _grad_mod(f, x, p) -> list:
+    """[the gradient of the integral f at the rational point x, mod p], or [] at a pole / p | a denominator."""
+    try:
+        g = f.gradient(x)
+        return [[t.numerator * pow(t.denominator, -1, p) % p for t in g]]
+    except (PoleError, ValueError):
+        return []
 
 
 def _short(text, limit=240):
@@ -382,8 +462,163 @@ class _Job:
             self.warnings.append("some lifted ratios failed the exact check on a fresh orbit (not integrals)")
         return out, used
 
-    def result(self, sysobj, ks, d, tdim, table, w, integrals, independent, used, t0):
+    def result(self, sysobj, ks, d, tdim, table, w, integrals, independent, used, t0, certificate=None,
+               visible=None):
         label = f"{sysobj.name if sysobj is not None else 'field'} {self.fld.label}"
         return IntegralSearch(label, tuple(monomial_text(e, self.variables) for e in self.exps),
                               tuple(k.dim for k in ks), d, tdim, table, w, tuple(integrals), independent,
-                              tuple(used), tuple(self.warnings), time.perf_counter() - t0, tuple(self.notes))
+                              tuple(used), tuple(self.warnings), time.perf_counter() - t0, tuple(self.notes),
+                              certificate, visible)
+
+    def integral(self, num, den, verify_point, verify_steps):
+        return Integral(poly_text(num, self.variables), poly_text(den, self.variables), tuple(sorted(num.items())),
+                        tuple(sorted(den.items())), verify_exact(num, den, self.fld, self.eps, verify_point,
+                                                                 verify_steps))
+
+    def complete(self, ref, integrals, fit_degree, plist, seed, max_primes, verify_steps):
+        """Every independent integral the kernel shows (:mod:`.fitting`): the verified ``integrals``
+        reduced to an independent set (exact Jacobian rank at a rational point, each kept only if it
+        raises it), then entries of the canonical kernel that are not functions of those, fitted as
+        N/D of degree ≤ ``fit_degree`` and checked exactly on a fresh orbit.
+        (integrals, rank, (point, rank) certificate or None, visible count or None)."""
+        N = self.fld.dim
+        point, kept, rows = self.rank_point(seed), [], []
+        for f in integrals:
+            if not f.verified:
+                continue
+            r = jacobian_rows([f.polynomials()], point)
+            if r is None or _rank(rows + r, N) == len(rows):
+                self.notes.append(f"({_short(f.numerator, 60)}) / ({_short(f.denominator, 60)}) is a function of the "
+                                  f"integrals kept (Jacobian rank at {_fmt(point)}): not listed")
+                continue
+            kept.append(f)
+            rows += r
+        p0 = plist[0]
+        data = entry_jacobian(self.fld, self.eps, ref.x0, self.exps, self.steps, p0, seed)
+        if data is None:
+            self.notes.append("the kernel's entries were not differentiated (orbit singular mod p, or beyond "
+                              "MAX_TANGENT_WORK): the number of integrals it shows is not stated")
+            return tuple(kept), len(rows), ((point, len(rows)) if rows else None), None
+        pivots, _, values, grads = data
+        visible = rank_mod(list(grads.values()), N, p0)
+        primes = list(plist) + [p for p in random_primes(max_primes + len(plist), seed + 1) if p not in plist]
+        vx = _point(random.Random(f"verify-{seed}"), N)
+        mod_rows = [g for f in kept for g in _grad_mod(f, ref.x0, p0)]
+        budget = MAX_FITS
+        for S in circuits(ref.basis, len(self.exps), p0, seed)[:MAX_CIRCUITS]:
+            if len(kept) >= visible or budget <= 0:
+                break
+            sub = [self.exps[c] for c in S]
+            data = entry_jacobian(self.fld, self.eps, ref.x0, sub, self.steps, p0, seed)
+            if data is None or len(data[1]) != 1:
+                continue
+            fitter = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
+                                 [f.polynomials() for f in kept])
+            # one entry per sparse vector: its entries are functions of the same conserved point
+            for key, grad in [kg for kg in sorted(data[3].items())
+                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
+                # (degree in x, degree in the integrals found), fewest unknowns first
+                shapes = sorted(((D, J) for D in range(1, fit_degree + 1) for J in range(MAX_KNOWN_DEGREE + 1)
+                                 if J == 0 or kept), key=lambda t: (comb(N + t[0], N) * comb(len(kept) + t[1], t[1]), t))
+                for delta, J in shapes:
+                    budget -= 1
+                    pair = fitter.fit(key, delta, primes, J)
+                    if pair is not None:
+                        break
+                if pair is None:
+                    continue
+                f = self.integral(*canonical_pair(*pair), vx, verify_steps)
+                r = jacobian_rows([f.polynomials()], point)
+                if not f.verified or r is None or _rank(rows + r, N) == len(rows):
+                    continue
+                kept.append(f)
+                rows += r
+                mod_rows += _grad_mod(f, ref.x0, p0)
+                self.notes.append(f"I{len(kept)} fitted (degree <= {delta}"
+                                  + (f", coefficients of degree <= {J} in I1..I{len(kept) - 1}" if J else "")
+                                  + ") from the kernel vector supported on "
+                                  f"{', '.join(monomial_text(e, self.variables) for e in sub)}")
+        if len(kept) < visible:
+            self.warnings.append(f"the kernel shows {visible} independent integrals (rank of its entries' Jacobian "
+                                 f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "
+                                 f"degree <= {fit_degree} (--fit-degree) that the fit found")
+        return tuple(kept), len(rows), ((point, len(rows)) if rows else None), visible
+
+    def rank_point(self, seed):
+        rng = random.Random(f"rank-{seed}")
+        return [flint.fmpq(rng.randint(-30, 30), rng.randint(1, 7)) for _ in range(self.fld.dim)]
+
+
+# --- output that goes straight back in: a system file with the found integrals ----------
+
+
+def system_file(system, result: IntegralSearch, eps, field="f", x0=None) -> str:
+    """A system file (TOML, docs/system-files.md) that ``exact-khk certify --system`` reads: the
+    system's own file (an expression system) or its field written out (any other, variables
+    x0..x(N-1)), with the verified integrals of ``result`` added to ``[integrals]`` as found_I1, …
+    and ``[defaults] eps`` set to the ε they were found at (their coefficients are numbers for that
+    ε only); ``claims`` include "integrals"."""
+    sysobj, fld = resolve_field(system, field)
+    found = {f"found_I{i}": f"({f.numerator})/({f.denominator})" for i, f in enumerate(result.integrals, 1)
+             if f.verified}
+    if getattr(sysobj, "kind", None) == "expressions" and field == "f":
+        spec = sysobj.to_json()
+    else:
+        names = [f"x{i}" for i in range(fld.dim)]
+        spec = {"format": 1, "kind": "expressions",
+                "name": f"{getattr(sysobj, 'name', 'field')}-{field}".replace(" ", "-").replace("=", ""),
+                "title": f"the field {fld.label} of {getattr(sysobj, 'name', 'a quadratic field')}",
+                "variables": names, "field": {v: _component(fld, k, names) for k, v in enumerate(names)}}
+    spec["integrals"] = {**spec.get("integrals", {}), **found}
+    claims = list(spec.get("claims", ["reversibility", "integrals"]))
+    spec["claims"] = claims + (["integrals"] if "integrals" not in claims else [])
+    defaults = dict(spec.get("defaults", {}))
+    defaults["eps"] = str(eps)
+    if x0 is not None:
+        defaults["x0"] = [str(t) for t in x0]
+    spec["defaults"] = defaults
+    return toml_text(spec)
+
+
+def _component(fld, k, names) -> str:
+    poly = {}
+    for (i, j), c in fld.terms()[k]:
+        e = [0] * fld.dim
+        e[i] += 1
+        e[j] += 1
+        poly[tuple(e)] = poly.get(tuple(e), 0) + Fraction(str(c))
+    for j, c in fld.linear[k]:
+        e = [0] * fld.dim
+        e[j] = 1
+        poly[tuple(e)] = poly.get(tuple(e), 0) + Fraction(str(c))
+    if fld.const[k]:
+        poly[(0,) * fld.dim] = Fraction(str(fld.const[k]))
+    return poly_text(poly, names)
+
+
+def toml_text(spec: dict) -> str:
+    """A dict of strings, numbers, lists and tables as TOML (strings JSON-quoted, which TOML reads)."""
+    import json
+
+    def value(v):
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(t) for t in v) + "]"
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, int):
+            return str(v)
+        return json.dumps(str(v), ensure_ascii=False)
+
+    def table(name, d, out):
+        plain = [(k, v) for k, v in d.items() if not isinstance(v, dict)]
+        if name is not None and (plain or not d):
+            out.append(f"\n[{name}]")
+        out += [f"{json.dumps(str(k)) if not k.replace('_', '').replace('-', '').isalnum() else k} = {value(v)}"
+                for k, v in plain]
+        for k, v in d.items():
+            if isinstance(v, dict):
+                table(k if name is None else f"{name}.{k}", v, out)
+
+    out = []
+    table(None, spec, out)
+    return "\n".join(out) + "\n"

@@ -88,7 +88,12 @@ def _exponents(item, index, variables) -> list:
 
 
 def monomial_text(e, variables) -> str:
-    parts = [v if k == 1 else f"{v}^{k}" for v, k in zip(variables, e) if k]
+    """A monomial in system-file syntax (``**``), which :func:`parse_monomials` reads back.
+
+    >>> monomial_text((2, 1), ["x", "y"])
+    'x**2*y'
+    """
+    parts = [v if k == 1 else f"{v}**{k}" for v, k in zip(variables, e) if k]
     return "*".join(parts) or "1"
 
 
@@ -97,7 +102,7 @@ def poly_text(poly: dict, variables) -> str:
 
     >>> from fractions import Fraction as F
     >>> poly_text({(0, 0): F(1), (2, 0): F(-1, 2), (1, 1): F(3)}, ["x", "y"])
-    '1 - 1/2*x^2 + 3*x*y'
+    '1 - 1/2*x**2 + 3*x*y'
     """
     parts = []
     for e in sorted(poly, key=lambda e: (sum(e), [-k for k in e])):
@@ -341,13 +346,21 @@ def independent_count(pairs, rng) -> int:
     N = len(next(iter(pairs[0][0] or pairs[0][1])))
     for _ in range(5):
         x = [flint.fmpq(rng.randint(-30, 30), rng.randint(1, 7)) for _ in range(N)]
-        rows = []
-        for num, den in pairs:
-            n, d = to_mpoly(num, N), to_mpoly(den, N)
-            n0, d0 = n(*x), d(*x)
-            if d0 == 0:
-                break
-            rows.append([d0 * n.derivative(j)(*x) - n0 * d.derivative(j)(*x) for j in range(N)])
-        else:
+        rows = jacobian_rows(pairs, x)
+        if rows is not None:
             return flint.fmpq_mat(len(rows), N, [v for r in rows for v in r]).rank()
     return 0
+
+
+def jacobian_rows(pairs, x):
+    """The gradients of the functions num/den at the rational point ``x`` (flint rationals; rows
+    scaled by den(x)², which leaves the rank alone), or None where a denominator vanishes."""
+    N = len(x)
+    rows = []
+    for num, den in pairs:
+        n, d = to_mpoly(num, N), to_mpoly(den, N)
+        n0, d0 = n(*x), d(*x)
+        if d0 == 0:
+            return None
+        rows.append([d0 * n.derivative(j)(*x) - n0 * d.derivative(j)(*x) for j in range(N)])
+    return rows

@@ -3,7 +3,7 @@
 SymPy's ``parse_expr`` calls Python's ``eval``; this parser never does.  An
 expression may contain only the names it is given (variables, parameters,
 ``eps``), integer and decimal literals (exact: 0.1 = 1/10, 1e-5 = 1/100000), ``+ - * / **`` and
-parentheses, with Python's precedence; an exponent is an integer literal with
+parentheses, with Python's precedence (``^`` is read as ``**``, as SymPy reads it); an exponent is an integer literal with
 |e| <= 64, and towers such as ``x**10**9`` are refused.  The value is computed
 exactly as a quotient num/den of two polynomials in python-flint's sparse
 polynomial ring Q[x_0, ..., x_{N-1}, eps] (``flint.fmpq_mpoly``, lex order; see
@@ -39,7 +39,7 @@ MAX_EXPONENT = 64         # |e| in x**e
 MAX_DEPTH = 100           # nested parentheses
 MAX_WORK = 3_000_000      # term products (weighted by number size) spent on one expression
 MAX_BITS = 2_000_000      # size of the numbers
-_TOKEN = re.compile(r"\s*(?:((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|[-+*/()]))")
+_TOKEN = re.compile(r"\s*(?:((?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)|([A-Za-z_][A-Za-z0-9_]*)|(\*\*|\^|[-+*/()]))")
 
 
 def ring(names):
@@ -176,13 +176,13 @@ class Parser:
             if name is not None and name not in names:
                 self.fail(refused[name] if name in refused else
                           f"unknown name {name!r} at position {at} ({allowed})")
+            op = "**" if op == "^" else op  # x^2 reads as x**2, as SymPy's parse_expr reads it
             self.tokens.append(("num" if num else "name" if name else "op", num or name or op, at))
             pos = m.end()
         if text[pos:].strip():
             pos += len(text[pos:]) - len(text[pos:].lstrip())
-            hint = " (use ** for powers)" if text[pos] == "^" else ""
-            self.fail(f"character {text[pos]!r} at position {pos} is not allowed{hint}; expressions "
-                      f"use names, numbers, + - * / ** and parentheses only")
+            self.fail(f"character {text[pos]!r} at position {pos} is not allowed; expressions "
+                      f"use names, numbers, + - * / ** (or ^) and parentheses only")
         self.i, self.summands = 0, []
         self.value = self.parse()
 
