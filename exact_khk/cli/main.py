@@ -35,8 +35,8 @@ COMMANDS = {
     "certify": ("exact_khk.cli.certify", "certify integrals, commutation, reversibility, Poisson structure, "
                 "involution and rank on an orbit, with negative controls"),
     "integrals": ("exact_khk.cli.certify", "print H~ and every K~ at a point"),
-    "verify": ("exact_khk.cli.verify", "re-check a saved certificate (orbit, integral values, status) by a "
-               "separate minimal exact code path"),
+    "verify": ("exact_khk.cli.verify", "re-derive every record of a saved certificate (orbit, claims, controls, "
+               "status) by a separate minimal exact code path"),
     "systems": ("exact_khk.cli.systems", "list the catalogue of classic KHK systems (use one with --system NAME)"),
     "degrees": ("exact_khk.cli.diagnostics", "degree growth of the iterates of a Kahan map, its recurrence and "
                 "dynamical degree"),

@@ -24,8 +24,8 @@ MAX_CERTIFICATE = 200_000_000
 
 
 def register(sub):
-    p = sub.add_parser("verify", help="re-check a saved certificate (orbit, integral values, status) "
-                       "by a separate minimal exact code path",
+    p = sub.add_parser("verify", help="re-derive every record of a saved certificate (orbit, claims, controls, "
+                       "status) by a separate minimal exact code path",
                        description="Re-derive a certificate written by 'exact-khk certify --json PATH' from its "
                        "own data: every orbit point is the Kahan step of the previous one, every integral value "
                        "is recomputed, the records are exactly those the system and options imply, and each "
