@@ -62,28 +62,21 @@ degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly`
 #: of the largest degree φ(d); for n ≥ 16 the structured step is as fast)
 SPLIT_N = tuple(range(1, 16))
 #: flint: split at every height (split / structured along orbits at 5 000–30 000 bits:
-#: 0.29–0.36, 0.60–0.69, 0.36–0.45 for n = 4, 5, 6; 0.49–1.04 for n = 12 at 560–20 000 bits
-#: since the structured step's division goes down the tower (stop 36), at most 4 % faster:
-#: no rule; scripts/bench_split_height.py)
+#: 0.29–0.36, 0.60–0.69, 0.36–0.45 for n = 4, 5, 6; 0.49–1.04 for n = 12 at 560–20 000 bits,
+#: where a height rule would buy at most 4 %; scripts/bench_split_height.py)
 AUTO_SPLIT_N = (1, 2, 3, 4, 5, 6, 12)
-#: flint: split below these heights, where the structured step overtakes it (4 orbit
-#: steps: split / structured = 1 near 1700 and 750 bits for n = 7, 15 and near 3500 bits
-#: for n = 9, whose factor of degree 6 makes the split step 1.17× the structured one at
-#: 6099 bits, and one step 1.23× and 1.52× at 10 000 and 20 000 bits; since the structured
-#: step splits over tᵏ ± 1 (stop 35, 7 orbit-step rounds): near 5000 bits for n = 10, then
-#: 1.26–1.41 at 10 000–30 000 bits, and near 1300 bits for n = 14, 1.34 at 1740 bits;
-#: since its division goes down the tower (stop 36): n = 8 near 2000 bits, then 1.17–1.33 at
-#: 2 575–30 000 bits (it had kept the split step at every height); the others unchanged.
-#: Since the tower ends in the Galois conjugates at odd factors (stop 37, bench.py's
-#: crossover table): split / structured 0.90 at n = 14's first point and 1.18–2.57 from 326
-#: bits, so n = 14 left the table (structured from the first step, and no split code to
-#: generate); n = 10 now crosses near 1 500 bits but the structured step is at most 1.2×
-#: faster up to 6 000 bits, so its entry stays; n = 7, 9, 15 unchanged)
+#: flint: split below these heights, where the structured step overtakes it (bench.py's
+#: crossover table, 4 orbit steps: split / structured = 1 near 1700 and 750 bits for n = 7,
+#: 15, near 3500 bits for n = 9 (1.17× at 6099 bits, one step 1.23× and 1.52× at 10 000 and
+#: 20 000 bits), near 2000 bits for n = 8 (1.17–1.33 at 2 575–30 000 bits); n = 10 crosses
+#: near 1 500 bits but the structured step is at most 1.2× faster up to 6 000 bits.  n = 14
+#: is structured from the first step: split / structured 0.90 at its first point and
+#: 1.18–2.57 from 326 bits, and no split code to generate)
 AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 15: 768}
 #: flint: dense below these heights, then structured, for the n = 11, 13 that the split step
 #: serves poorly (factors of degree 10, 12) (4 orbit steps: dense / structured = 1 near 550
 #: bits for n = 11 and 450 bits for n = 13; dense 0.77–0.82× at 2–268 bits for n = 11 and
-#: 0.80–0.95× at 2–306 bits for n = 13, stop 37); every other n without a rule above is
+#: 0.80–0.95× at 2–306 bits for n = 13); every other n without a rule above is
 #: structured from the first step (n = 14 and n ≥ 16: faster than a dense step even once
 #: that is built: dense / structured 1.5 over 4 orbit steps from n = 14's first point, one
 #: step 447 against 177 µs at n = 16's; a dense step's first call also builds the field's
@@ -127,13 +120,13 @@ UNSPLIT_MAX_WORK = 8192
 #: at every level) while Cramer's bound H (bits) is at most this ...
 DIVISION_BY_NORM_MAX_BITS = 2 ** 16
 #: ... and b·H is at most this, b the odd part of m (where the tower ends in the Galois
-#: conjugates, whose cost grows with b); scalar divisions, m = 1, always.  Since the norm
-#: keeps lowest terms (stop 37; along orbits gcd(N, content A) is most of N: 6 234 of 7 149
-#: bits over t¹⁶ + 1 at n = 32, 434 bits), norm / fixed-point along orbits crosses 1 near
+#: conjugates, whose cost grows with b); scalar divisions, m = 1, always.  With the norm
+#: in lowest terms (along orbits gcd(N, content A) is most of N: 6 234 of 7 149 bits over
+#: t¹⁶ + 1 at n = 32, 434 bits), norm / fixed-point along orbits crosses 1 near
 #: H = 70 000 at m = 8, 16, 100 000 at m = 32, 200 000 at m = 64, but near 13 000 at
 #: m = 11, 13, 22 000 at m = 9, 15, 45 000 at m = 5·2ᵏ (scripts/bench_division.py at n =
 #: 12..256 to 12 000 bits); over 299 divisions this rule's choices cost 1.024× the faster
-#: route's, the earlier H ≤ 8192 or m·H ≤ 2¹⁷ 1.064× (3.3× on single divisions at m = 16,
+#: route's (the simpler H ≤ 8192 or m·H ≤ 2¹⁷ 1.064×, 3.3× on single divisions at m = 16,
 #: 24, H ≈ 16 500); first steps off small points (Cramer-sized answers) 0.05–0.16 at every
 #: m measured
 DIVISION_BY_NORM_MAX_WORK = 2 ** 17
