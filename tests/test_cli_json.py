@@ -15,7 +15,7 @@ COMMANDS = [
     (["orbit", "--steps", "2"], "orbit"),
     (["certify", "--steps", "1", "--signs", "-++"], "checks"),
     (["integrals", "--steps", "1"], "Htilde"),
-    (["systems"], None),
+    (["systems"], "families"),
     (["degrees", "--system", "lotka-volterra", "--steps", "5", "--no-heights"], "degrees"),
     (["find-integrals", "--system", "euler-top", "--degree", "1"], "system"),
     (["liouville", "--n", "2", "--seed", "1", "--steps", "1"], "records"),

@@ -74,7 +74,8 @@ SLOW = {
 KNOWN = {}
 
 #: a word that stands for something the reader fills in
-PLACEHOLDER = re.compile(r"<[^>]+>|\.\.\.|\b(FILE|NAME|PATH|DIR|ADDRESS|URL|SEED|N|K|P)\b")
+#: a placeholder word, not a family parameter such as volterra-periodic:N=5 (a letter followed by '=')
+PLACEHOLDER = re.compile(r"<[^>]+>|\.\.\.|\b(FILE|NAME|PATH|DIR|ADDRESS|URL|SEED|N|K|P)\b(?!=)")
 
 EXIT_COMMENT = re.compile(r"exit(?:s)?(?:\s+with)?(?:\s+status)?\s*(?:=|:|->)?\s*(\d+)", re.I)
 

@@ -43,14 +43,17 @@ def test_degrees_refuses_too_few_confirmations(capsys, confirm):
 
 def test_the_refused_classification_was_wrong():
     """The reason for the refusal: the same 7 degrees with 1 confirmation fit a recurrence of
-    exponential growth, while 15 degrees confirmed 3 times give polynomial growth."""
+    exponential growth, while 21 degrees (the order-6 recurrence confirmed on as many terms as its
+    order) give polynomial growth."""
     from exact_khk.diagnostics import degree_sequence
     from exact_khk.diagnostics.degrees import MIN_CONFIRM
     from exact_khk.diagnostics.recurrence import fit_recurrence
 
-    long = degree_sequence("cmoq-cubic", steps=14, confirm=MIN_CONFIRM)
+    long = degree_sequence("cmoq-cubic", steps=20, confirm=MIN_CONFIRM)
     assert long.fit.growth == "polynomial"
-    assert fit_recurrence(long.degrees[:7], confirm=1).growth == "exponential"  # what --confirm 1 said
+    short = fit_recurrence(long.degrees[:7], confirm=1)  # what --confirm 1 would have believed ...
+    assert short.characteristic != long.fit.characteristic  # ... is not the recurrence of the sequence
+    assert short.growth == "undetermined"  # and the order rule (as many confirmations as the order) refuses it
     assert degree_sequence("cmoq-cubic", steps=6).fit.growth == "undetermined"  # the default: no guess
     with pytest.raises(InputError, match="confirm"):
         degree_sequence("cmoq-cubic", steps=6, confirm=1)

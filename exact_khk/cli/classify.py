@@ -21,8 +21,8 @@ def register(sub):
     add_system_options(p, steps_default=20, arith=False)
     add_field_options(p)
     p.add_argument("--degree", type=int, default=None,
-                   help="largest degree of the integral search (default: 4, lower where the candidates would "
-                        "exceed 1000 monomials)")
+                   help="largest degree of the integral search (when not given: 4, or lower where the candidates "
+                        "would exceed 1000 monomials)")
     p.add_argument("--exact", type=int, default=6, metavar="K",
                    help="compose the first K iterates exactly over Q where affordable: exact degrees and the "
                         "proven bound lambda <= d_k^(1/k) (default 6)")

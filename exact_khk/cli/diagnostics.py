@@ -25,7 +25,7 @@ def register(sub):
                    help="also compose the first K iterates exactly over Q (where affordable) to confirm")
     p.add_argument("--confirm", type=int, default=3,
                    help="terms beyond the fit that must confirm the recurrence before growth is classified "
-                        "(default and minimum 3)")
+                        "(default 3, also the minimum)")
     p.add_argument("--no-heights", action="store_true", help="skip the heights of the exact orbit of x0")
     p.add_argument("--max-bits", type=int, default=100_000, help="stop the height orbit past this height (default 100000)")
     p.add_argument("--plot", metavar="FILE.png", help="plot degree and log-height against the step (needs matplotlib)")
