@@ -16,11 +16,11 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
     :func:`exact_khk.certification.generic.certify_system` (option ``claims``)."""
     from exact_khk.certification import generic, lie_poisson
     from exact_khk.errors import InputError
-    from exact_khk.systems.base import System
+    from exact_khk.systems.catalogue import System, resolve
     from exact_khk.systems.lie_poisson.system import LiePoissonSystem
 
     if isinstance(system, (str, bytes)) or hasattr(system, "__fspath__"):
-        system = System.load(system)  # a catalogue name or a system file, as on the command line
+        system = resolve(system)  # a catalogue name or a system file, as on the command line
     if system is None or isinstance(system, LiePoissonSystem):
         return lie_poisson.certify(system, x0, eps, steps, arith, **options)
     if not isinstance(system, System):

@@ -19,6 +19,11 @@ a system; it never tests which family a system belongs to.
   measure), else None;
 * ``default_x0``, ``default_eps``, :meth:`random_point`.
 
+The constructors ``System.load(spec)`` (a catalogue name or a system file) and
+``System.from_expressions(variables, ...)`` live with their implementations
+(:mod:`exact_khk.systems.catalogue` attaches them; ``from exact_khk import System``
+has them): this file imports no implementation of the interface.
+
 :meth:`System.named_field` resolves the name of a field as the command line, the
 sweep tasks and the diagnostics take it (the Lie–Poisson family also takes ``'b0'``,
 a sign pattern and ``'g[SIGNS]'``).
@@ -87,21 +92,6 @@ class System:
     default_eps = Fraction(1, 10)
     #: steps certified by default (a system file may lower it where heights grow fast)
     default_steps = 20
-
-    @staticmethod
-    def from_expressions(variables, **parts) -> "System":
-        """A system from expressions (see :meth:`exact_khk.systems.expressions.ExpressionSystem.from_expressions`
-        and docs/system-files.md)."""
-        from exact_khk.systems.expressions import ExpressionSystem
-
-        return ExpressionSystem.from_expressions(variables, **parts)
-
-    @staticmethod
-    def load(spec) -> "System":
-        """A catalogue system by name (``'euler-top'``) or a system file by path."""
-        from exact_khk.systems.catalogue import resolve
-
-        return resolve(spec)
 
     def describe(self) -> str:
         return f"{self.name} (dimension {self.dim})"

@@ -67,3 +67,8 @@ def resolve(spec) -> System:
         return load_system(text)
     raise InputError(f"system: {text!r} is neither a catalogue system (available: "
                      f"{', '.join(names()) or 'none'}) nor a .toml file")
+
+
+# The interface's constructors, with their implementations (systems/base imports none of them).
+System.load = staticmethod(resolve)
+System.from_expressions = staticmethod(ExpressionSystem.from_expressions)
