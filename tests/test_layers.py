@@ -181,3 +181,18 @@ def test_the_check_finds_import_circles():
                ("exact_khk.studies.c", "from exact_khk.studies.a import f\n", False)]
     assert import_circles(import_graph(modules)) == [["exact_khk.studies.a", "exact_khk.studies.b"]]
     assert import_circles(import_graph(modules[:1] + modules[2:])) == []
+
+
+def test_no_family_is_named_outside_its_folder():
+    """A system declares what it knows and generic code asks: no test of a system's family
+    (``kind == "lie-poisson"``, ``isinstance(..., LiePoissonSystem)``) outside ``systems/``.
+    certification/verify.py is left out: the verifier is rewritten separately (issue 40, item 3)."""
+    import re
+
+    pattern = re.compile(r"""(kind\s*[!=]=\s*["']lie-poisson["'])|isinstance\([^)]*LiePoissonSystem""")
+    assert pattern.search('if system.kind == "lie-poisson":') and pattern.search("isinstance(s, (LiePoissonSystem,))")
+    found = [f"{module}:{source.count(chr(10), 0, m.start()) + 1}"
+             for module, path, _ in package_modules() if layer_of(module) != "systems"
+             and module != "exact_khk.certification.verify"
+             for source in [path.read_text(encoding="utf-8")] for m in pattern.finditer(source)]
+    assert found == []

@@ -17,11 +17,10 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
     from exact_khk.certification import generic, lie_poisson
     from exact_khk.errors import InputError
     from exact_khk.systems.catalogue import System, resolve
-    from exact_khk.systems.lie_poisson.system import LiePoissonSystem
 
     if isinstance(system, (str, bytes)) or hasattr(system, "__fspath__"):
         system = resolve(system)  # a catalogue name or a system file, as on the command line
-    if system is None or isinstance(system, LiePoissonSystem):
+    if system is None or getattr(system, "certificate_options", ()):  # a system with theorems of its own
         return lie_poisson.certify(system, x0, eps, steps, arith, **options)
     if not isinstance(system, System):
         raise InputError(f"system: expected a System (e.g. System.load('euler-top')) or a catalogue name, "

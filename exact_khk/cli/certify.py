@@ -87,7 +87,7 @@ def cmd_certify(args):
         args.steps = system.default_steps
     if args.steps < 1:
         raise InputError(f"--steps: certify needs at least 1 step, got {args.steps}")
-    if system.kind != "lie-poisson":
+    if not system.certificate_options:  # the certificate of what the system declares
         return _certify_system(args, system, x0, eps)
     if args.claims is not None:
         raise InputError("--claims applies to --system; the Lie–Poisson certificate checks every theorem")
@@ -137,7 +137,7 @@ def _certify_system(args, system, x0, eps):
 def cmd_integrals(args):
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
-    if system.kind != "lie-poisson":
+    if "signs" not in system.certificate_options:  # no involutions: the declared integrals
         return _system_integrals(args, system, x0, eps, ar)
     phi = KahanMap(system.field("f"), eps, ar)
     # H~ takes the structured solve for exact flint arithmetic and n >= 3, else the dense one

@@ -121,4 +121,4 @@ def _display(ar, t) -> str:
 
 
 def _names(system):
-    return [f"x{i}" for i in range(system.dim)] if system.kind == "lie-poisson" else list(system.variables)
+    return list(system.coordinate_names())

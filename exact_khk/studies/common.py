@@ -18,9 +18,6 @@ from exact_khk.arith import get_arith, point_height
 from exact_khk.arith.ball import BallArith, ball_mid, ball_rad
 from exact_khk.errors import InputError, SingularStepError
 from exact_khk.kahan.map import KahanMap
-from exact_khk.systems.base import Function
-from exact_khk.systems.lie_poisson.invariants import Htilde
-from exact_khk.systems.lie_poisson.system import b0_signs
 
 
 LOG10_2 = math.log10(2)
@@ -95,36 +92,20 @@ def vs_exact(xs, ex, ball=False) -> tuple:
 # --- what the diagnostics check ------------------------------------------------
 
 
-class LiePoissonIntegral(Function):
-    """H̃ of a Lie–Poisson field as an integral ``I(ar, x, eps)``
-    (:func:`~exact_khk.systems.lie_poisson.invariants.Htilde`; values only)."""
-
-    def __init__(self, name, fld, text):
-        self.name, self.fld, self.text = name, fld, text
-
-    def __call__(self, ar, x, eps):
-        return Htilde(self.fld, x, eps, ar)
-
-
 def declared(system) -> tuple[dict, dict]:
     """What the diagnostics check: ({name: integral ``I(ar, x, eps)``}, {name: field
     declared to commute with f}).
 
-    A system's :meth:`~exact_khk.systems.base.System.integrals` and the fields after
-    ``'f'`` in its :meth:`~exact_khk.systems.base.System.field_names`; the
-    Lie–Poisson family, whose theorems its own certificate checks, gives H̃ of f,
-    K̃ of the associated field g of B_0, and that g.
+    What the system says a study follows (:meth:`~exact_khk.systems.base.System.tracked`):
+    by default its integrals and the fields after ``'f'``; the Lie–Poisson family gives
+    H̃ of f, K̃ of the associated field g of B_0, and that g.
 
     >>> from exact_khk.systems.lie_poisson import default_system
     >>> ints, fields = declared(default_system())
     >>> list(ints), list(fields)
     (['H~', 'K~'], ['g[-++]'])
     """
-    if system.kind == "lie-poisson":
-        f, g = system.field("f"), system.field("g", signs=b0_signs(system.n))
-        return ({"H~": LiePoissonIntegral("H~", f, "x^T (I - eps^2 (M J(x))^2)^-1 M x, M = Hs"),
-                 "K~": LiePoissonIntegral("K~", g, f"as H~ with M = B_0 Hs, B_0 = {g.signs}")}, {g.label: g})
-    return system.integrals(), {name: system.field(name) for name in system.field_names()[1:]}
+    return system.tracked()
 
 
 # --- records -------------------------------------------------------------------

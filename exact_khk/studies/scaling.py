@@ -53,7 +53,7 @@ from exact_khk.arith.ball import BallArith, contains_exact
 from exact_khk.errors import InputError, NearSingularWarning, SingularStepError, UndecidedError
 from exact_khk.kahan.map import KahanMap
 from exact_khk.parsing import parse_rational, parse_vector
-from exact_khk.studies.common import (LOG10_2, MAX_EXACT_BITS, ArithRun, LiePoissonIntegral, ScalingStudy,  # noqa: F401
+from exact_khk.studies.common import (LOG10_2, MAX_EXACT_BITS, ArithRun, ScalingStudy,  # noqa: F401
                                      StepRow, _err_bound, _norm, _rel, _slope, declared, exact_orbit, exact_prefix,
                                      log10q, to_fmpq, vs_exact)
 

@@ -92,9 +92,23 @@ class System:
     default_eps = Fraction(1, 10)
     #: steps certified by default (a system file may lower it where heights grow fast)
     default_steps = 20
+    #: options of a certificate of the system's own theorems beyond the declared claims
+    #: (``certify(system, signs=...)``); empty: the certificate of what it declares
+    certificate_options: tuple = ()
+    #: the command-line option that sets the dimension (None: the system file's variables)
+    size_option = None
 
     def describe(self) -> str:
         return f"{self.name} (dimension {self.dim})"
+
+    @property
+    def short_name(self) -> str:
+        """The system in a one-line message."""
+        return self.name
+
+    def coordinate_names(self) -> tuple:
+        """Names of the coordinates in output (orbit columns, monomials)."""
+        return tuple(self.variables)
 
     def to_json(self) -> dict:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -124,6 +138,14 @@ class System:
 
     def hamiltonian_form(self):
         return None
+
+    def measure(self):
+        """A density m(x, ε) (a :class:`Function`) claimed invariant: m(Φ(x)) det dΦ(x) = m(x); or None."""
+        return None
+
+    def tracked(self) -> tuple:
+        """(integrals, commuting fields) that studies follow along an orbit (default: all of them)."""
+        return self.integrals(), {name: self.field(name) for name in self.field_names()[1:]}
 
     def random_point(self, seed: int, bound: int = 3) -> tuple:
         """A reproducible small-integer point (not all zero)."""

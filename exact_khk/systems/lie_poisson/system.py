@@ -288,10 +288,90 @@ class LiePoissonSystem(System):
 
     @classmethod
     def from_json(cls, d: dict) -> "LiePoissonSystem":
+        """From :meth:`to_json` (InputError naming the key if malformed)."""
+        unknown = sorted(set(d) - {"family", "n", "a", "b", "c"})
+        if unknown:
+            raise InputError(f"system: unknown key(s) {', '.join(map(repr, unknown))} for the Lie–Poisson family")
+        for key in ("a", "b", "c"):
+            if key in d and not isinstance(d[key], list):
+                raise InputError(f"system.{key}: expected a list of rationals (strings), got "
+                                 f"{'a string' if isinstance(d[key], str) else type(d[key]).__name__}")
         try:
-            return cls.from_vectors(d["a"], d["b"], d["c"])
+            system = cls.from_vectors(d["a"], d["b"], d["c"])
         except (KeyError, TypeError):
             raise InputError("system: a Lie–Poisson system needs the vectors 'a', 'b', 'c'") from None
+        if "n" in d and (type(d["n"]) is not int or d["n"] != system.n):
+            raise InputError(f"system.n: {d['n']!r} does not match the length {system.n} of the vectors a, b, c")
+        return system
+
+    @classmethod
+    def from_spec(cls, d: dict) -> "LiePoissonSystem":
+        """From a sweep's system spec: ``{"default": True}`` or ``{"n": n, "seed": s, "bound": b}``."""
+        if d.get("default"):
+            return default_system()
+        return cls.random(d["n"], d["seed"], d.get("bound", 3))
+
+    # what the family knows, as the System interface asks it ---------------------
+    #: the options of the family's own certificate (the paper's theorems), beyond System's
+    certificate_options = ("signs", "poisson_points", "identities", "prove")
+    #: the command-line option that sets the dimension 2n
+    size_option = "--n"
+
+    def coordinate_names(self) -> tuple:
+        return tuple(f"x{i}" for i in range(self.dim))
+
+    @property
+    def short_name(self) -> str:
+        return f"n = {self.n}"
+
+    def involutions(self, arith=None) -> list:
+        """The involutions certified by default: every rational one except ±I (for n = 2:
+        '+-' = A and '-+' = −A) or, when ``arith`` contains ω = e^{2πi/n} (``cyclo:N`` with
+        n | N, ``gf:P`` with P ≡ 1 mod n), every one except ±I."""
+        n = self.n
+        if arith is not None and n >= 3:
+            from exact_khk.arith import get_arith
+
+            if expresses_omega(get_arith(arith), n):
+                return nontrivial_sign_patterns(n)
+        return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
+
+    def field_names(self) -> tuple:
+        """f and the associated g[s] of every rational involution of :meth:`involutions`."""
+        return ("f",) + tuple(f"g[{s}]" for s in self.involutions())
+
+    def integrals(self) -> dict:
+        """H̃ (of f) and K̃[s] (H̃ of g[s]) for every field of :meth:`field_names`."""
+        from exact_khk.systems.lie_poisson.invariants import HtildeIntegral
+
+        out = {"H~": HtildeIntegral("H~", self.field("f"), "x^T (I - eps^2 (Hs J(x))^2)^-1 Hs x")}
+        for s in self.involutions():
+            out[f"K~[{s}]"] = HtildeIntegral(f"K~[{s}]", self.field("g", s), f"as H~ with B Hs, B = B[{s}]")
+        return out
+
+    def tracked(self) -> tuple:
+        """(integrals, commuting fields) a study follows along an orbit: H̃, and K̃ and g of
+        B_0 only (:meth:`integrals` has one K̃ per involution: 2^d - 2 of them for d divisors of n)."""
+        from exact_khk.systems.lie_poisson.invariants import HtildeIntegral
+
+        f, g = self.field("f"), self.field("g", signs=b0_signs(self.n))
+        return ({"H~": HtildeIntegral("H~", f, "x^T (I - eps^2 (M J(x))^2)^-1 M x, M = Hs"),
+                 "K~": HtildeIntegral("K~", g, f"as H~ with M = B_0 Hs, B_0 = {g.signs}")}, {g.label: g})
+
+    def poisson(self):
+        """Π = J − ε² J Hs J Hs J (the paper's invariant Poisson tensor)."""
+        from exact_khk.systems.lie_poisson.invariants import PiTensor
+
+        return PiTensor(self)
+
+    def controls(self) -> dict:
+        """Functions claimed not conserved: the Hamiltonian H = xᵀ Hs x / 2 of the field
+        (2H is the ε → 0 limit of H̃; the Kahan map conserves H̃, not H)."""
+        return {"H": _Hamiltonian(self)}
+
+    def random_point(self, seed: int, bound: int = 3, eps=None) -> tuple:
+        """A point off the degenerate sets of every map the certificate steps (:func:`random_point`)."""
+        return random_point(self.n, seed, bound, system=self, eps=eps)
 
     # matrices ------------------------------------------------------------
     @property
@@ -423,6 +503,8 @@ for the Lie–Poisson family, got 'g['
         A non-rational pattern raises :class:`NotRationalError` unless
         ``cyclotomic=True``: then the field's coefficients lie in Q(ω) and it is
         usable in ``cyclo:N`` (n | N) and ``gf:P`` (P ≡ 1 mod n) only."""
+        if signs is None and isinstance(kind, str) and kind.startswith("g[") and kind.endswith("]"):
+            kind, signs = "g", kind[2:-1]  # the name of field_names()
         if isinstance(power, bool) or not hasattr(power, "__index__"):
             raise InputError(f"power: expected an integer (the power of the shift A), got {power!r}")
         power = int(power)
@@ -588,6 +670,22 @@ def _degenerate_for(system, x, eps) -> bool:
     except (PoleError, SingularMatrix):
         return True
     return hankel_singular(y[:system.n]) or hankel_singular(z[:system.n])
+
+
+class _Hamiltonian:
+    """H(x) = xᵀ Hs x / 2 as a :class:`~exact_khk.systems.base.Function` (the continuous-time
+    energy; a control: Kahan's map conserves H̃, not H)."""
+
+    name, text, depends_on_eps = "H", "x^T Hs x / 2", False
+
+    def __init__(self, system):
+        self.system = system
+
+    def __call__(self, ar, x, eps):
+        return self.system.hamiltonian(ar, x)
+
+    def gradient(self, ar, x, eps):
+        return [sum((ar.convert(h) * t for h, t in zip(row, x)), ar.zero) for row in self.system.hessian]
 
 
 def b0_signs(n: int) -> str:
