@@ -9,7 +9,7 @@ from fractions import Fraction
 import sympy as sp
 
 from exact_khk.arith import get_arith
-from exact_khk.certification.generic import certify_system
+from exact_khk.certification.engine import certify_system
 from exact_khk.systems.lie_poisson import DEFAULT_X0, default_system
 from exact_khk.systems.lie_poisson.system import hankel
 

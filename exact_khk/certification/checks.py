@@ -127,8 +127,12 @@ def inapplicable_if(check: Check, degenerate) -> Check:
     if check.expected or check.holds is False or degenerate is None:
         return check
     why = degenerate()
-    if not why:
-        return check
+    return inapplicable(check, why) if why else check
+
+
+def inapplicable(check: Check, why: str) -> Check:
+    """``check`` recorded as an inapplicable control, ``why`` saying why it cannot fail here (also
+    when it did fail: at an equilibrium a failing control shows nothing about the map)."""
     return replace(check, applicable=False,
                    detail=f"inapplicable: {why}" + (f"; {check.detail}" if check.detail else ""))
 

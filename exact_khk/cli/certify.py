@@ -9,7 +9,8 @@ is false, but a check is undecided or a control did not fail); 2 bad input;
 from __future__ import annotations
 
 from exact_khk.arith import get_arith
-from exact_khk.certification.generic import CLAIMS, certify_system
+from exact_khk.certification.claims import CLAIMS
+from exact_khk.certification.engine import certify_system
 from exact_khk.certification.lie_poisson import certify, default_signs
 from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
                                    write_json)

@@ -55,7 +55,7 @@ LOCK = ".sweep.lock"
 #: verdict groups understood by ``--only``
 GROUPS = {"failed": FAILED}
 #: modules imported once by the fork server, before it forks the local workers
-PRELOAD = ["exact_khk.sweep.tasks", "exact_khk.certification.lie_poisson", "exact_khk.certification.generic",
+PRELOAD = ["exact_khk.sweep.tasks", "exact_khk.certification.lie_poisson", "exact_khk.certification.engine",
            "exact_khk.studies.scaling"]
 
 

@@ -179,7 +179,7 @@ def _signs(value, where, ctx=None):
 
 
 def _claims(value, where, ctx=None):
-    from exact_khk.certification.generic import CLAIMS
+    from exact_khk.certification.claims import CLAIMS
 
     if isinstance(value, str):
         value = [value]

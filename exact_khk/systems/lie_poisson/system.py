@@ -612,11 +612,12 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
     n ≤ :data:`RANDOM_POINT_SYSTEM_CHECK_MAX_N`, when
 
     * x is an equilibrium (Hs x = 0: every map of the family fixes it);
-    * H̃(x, ε) has a pole, or the first step of Φ_f or of Φ_g (the commuting
-      flow's map, which certificates step too) is singular;
-    * Φ_f(x) or Φ_g(x) has X(u) singular (x on the critical set of Φ_f or Φ_g,
+    * H̃(x, ε) has a pole, or the first step of a map a certificate steps from x
+      is singular: Φ_f, Φ_g[s] of every rational involution s of
+      :meth:`LiePoissonSystem.involutions` and the control map;
+    * the first step of one of these maps has X(u) singular (x on its critical set,
       which the map sends into the invariant singular set, where its inverse and
-      the other map's step are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
+      the other maps' steps are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
       steps Φ_f at Φ_g(x)).
 
     A draw that is not rejected is the same as before these rules, so points
@@ -665,11 +666,12 @@ def _degenerate_for(system, x, eps) -> bool:
 
     try:
         Htilde(system.field("f"), x, eps, ar)
-        y = first_step(system.field("f"))
-        z = first_step(system.field("g"))  # the commuting flow's map, which certificates step too
+        for name in system.field_names() + ("control",):  # every map a certificate steps from x
+            if hankel_singular(first_step(system.field(name))[:system.n]):
+                return True
     except (PoleError, SingularMatrix):
         return True
-    return hankel_singular(y[:system.n]) or hankel_singular(z[:system.n])
+    return False
 
 
 class _Hamiltonian:
