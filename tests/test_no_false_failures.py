@@ -120,7 +120,7 @@ def test_random_point_with_system_avoids_the_critical_set_of_phi_g():
 
 
 def test_random_point_system_check_matches_the_dense_solve():
-    """The rejection rules step Φ_f and Φ_g by the structured solve: the points are those of
+    """The rejection rules step Φ_f, every Φ_g and the control map by the structured solve: the points are those of
     the dense Fraction solve, checked here by redoing the rules with it for n = 2..7."""
     from exact_khk import KahanMap
     from exact_khk.errors import PoleError
@@ -131,10 +131,11 @@ def test_random_point_system_check_matches_the_dense_solve():
             return False
         try:
             Htilde(system.field("f"), x, "1/10", "fraction")
-            ys = [KahanMap(system.field(k), "1/10", "fraction", method="dense").step(x) for k in ("f", "g")]
+            ys = [KahanMap(system.field(k), "1/10", "fraction", method="dense").step(x)
+                  for k in system.field_names() + ("control",)]  # every map a certificate steps from x
         except (PoleError, SingularStepError):
             return False
-        return not hankel_singular(ys[0][:system.n]) and not hankel_singular(ys[1][:system.n])
+        return not any(hankel_singular(y[:system.n]) for y in ys)
 
     def draws(n, seed):  # random_point's draws off the Hankel-singular set (its docstring)
         rng = random.Random(f"x0-{seed}")

@@ -177,3 +177,24 @@ class ControlDegeneracy:
             if self._pole(f, y) or Htilde(f, y, self.eps, self._ar) != h0:
                 return None
         return "H~ does not depend on the perturbed (last) coordinate near x0"
+
+
+def degenerate_point(cert) -> str | None:
+    """For an INCONCLUSIVE certificate whose point is degenerate, a message saying why and how to
+    pick another; else None.  Degenerate: a check undefined at every orbit point (a singular
+    step or a pole of some map or function the certificate evaluates), or no applicable control."""
+    if cert.status != "INCONCLUSIVE":
+        return None
+    how = ("choose another x0 (--x0 with other coordinates, or --seed N for a point drawn off the "
+           "degenerate sets of every map the certificate steps)")
+    for c in cert.checks:
+        if c.applicable and c.holds is None and ("undefined at every point" in c.detail
+                                                 or c.detail.startswith("not evaluable")):
+            why = c.detail.split("; ")[0]
+            return f"x0 is degenerate for this system: '{c.name}' is {why[:240]}; {how}"
+    controls = [c for c in cert.checks if not c.expected]
+    if controls and not any(c.applicable for c in controls):
+        why = next((c.detail[len("inapplicable: "):].split("; ")[0] for c in controls
+                    if "fixed point" in c.detail or "equilibrium" in c.detail), controls[0].detail)
+        return f"x0 is degenerate for this system: no negative control can fail there ({why[:240]}); {how}"
+    return None

@@ -8,8 +8,11 @@ is false, but a check is undecided or a control did not fail); 2 bad input;
 
 from __future__ import annotations
 
+import sys
+
 from exact_khk.arith import get_arith
 from exact_khk.certification.claims import CLAIMS
+from exact_khk.certification.controls import degenerate_point
 from exact_khk.certification.engine import certify_system
 from exact_khk.certification.lie_poisson import certify, default_signs
 from exact_khk.cli.options import (Progress, add_system_options, check_output, check_resources, system_from_args,
@@ -111,9 +114,17 @@ def cmd_certify(args):
               f"arithmetic {cert.arith}, associated fields g[{'], g['.join(cert.signs)}]")
         print(cert.table())
         print(cert.verdict())
+    _advise(cert)
     if args.json is not None:
         write_json(cert.to_json(), args.json)
     return EXIT_STATUS[cert.status]
+
+
+def _advise(cert):
+    """On stderr: why the point is degenerate and how to pick another, when it is."""
+    advice = degenerate_point(cert)
+    if advice:
+        print(advice, file=sys.stderr)
 
 
 def _certify_system(args, system, x0, eps):
@@ -130,6 +141,7 @@ def _certify_system(args, system, x0, eps):
         print(cert.summary().rsplit("\n", 1)[0])
         print(cert.table())
         print(cert.verdict())
+    _advise(cert)
     if args.json is not None:
         write_json(cert.to_json(), args.json)
     return EXIT_STATUS[cert.status]

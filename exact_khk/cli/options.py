@@ -252,7 +252,7 @@ def _named_system(args, reals=None):
     # default point is searched for (N^3 work)
     check_dense(getattr(args, "command", None) or "this command", system)
     return _point_and_eps(args, system, reals, system.default_eps, lambda: system.default_x0,
-                          lambda eps: system.random_point(args.seed))
+                          lambda eps: system.seeded_point(args.seed, eps))
 
 
 # --- limits, estimated before the work ------------------------------------------

@@ -147,6 +147,11 @@ class System:
         """(integrals, commuting fields) that studies follow along an orbit (default: all of them)."""
         return self.integrals(), {name: self.field(name) for name in self.field_names()[1:]}
 
+    def seeded_point(self, seed: int, eps=None) -> tuple:
+        """The point a command draws for ``--seed``: off the degenerate sets the system knows of
+        (default: :meth:`random_point`)."""
+        return self.random_point(seed)
+
     def random_point(self, seed: int, bound: int = 3) -> tuple:
         """A reproducible small-integer point (not all zero)."""
         import random

@@ -391,21 +391,27 @@ class ExpressionSystem(System):
             self._default_x0 = self._regular_point(self.default_eps)
         return self._default_x0
 
-    def _regular_point(self, eps):
-        """The first small random point where every declared function is finite and
+    def seeded_point(self, seed: int, eps=None) -> tuple:
+        """The point drawn for ``--seed``: the first regular point (:meth:`_regular_point`) from ``seed`` on."""
+        return self._regular_point(self.default_eps if eps is None else eps, seed)
+
+    def _regular_point(self, eps, start=0):
+        """The first small random point (seeds ``start``, ``start`` + 1, …) where every declared
+        function is finite, f(x) ≠ 0 (no equilibrium: there no control can fail) and
         I − ε g'(x) is invertible for every field g (reproducible)."""
         fr = get_arith("fraction")
         fns = list(self._integrals.values()) + list(self._controls.values()) + (
             [e for row in self._poisson.entries for e in row] if self._poisson else []) + (
             [self._measure] if self._measure else [])
-        for seed in range(200):
+        for seed in range(start, start + 200):
             x = self.random_point(seed)
-            if all(not fn.den.evaluate(fr, x, eps) == 0 for fn in fns) and all(
+            if any(self._fields["f"].evaluate(fr, x)) and all(
+                    not fn.den.evaluate(fr, x, eps) == 0 for fn in fns) and all(
                     flint.fmpq_mat([[_fmpq(int(i == j) - eps * t) for j, t in enumerate(row)]
                                     for i, row in enumerate(g.jacobian(fr, x))]).det() != 0
                     for g in self._fields.values()):
                 return x
-        return self.random_point(0)
+        return self.random_point(start)
 
     # --- constructors -------------------------------------------------------------
 

@@ -373,6 +373,9 @@ class LiePoissonSystem(System):
         """A point off the degenerate sets of every map the certificate steps (:func:`random_point`)."""
         return random_point(self.n, seed, bound, system=self, eps=eps)
 
+    def seeded_point(self, seed: int, eps=None) -> tuple:
+        return self.random_point(seed, eps=eps)
+
     # matrices ------------------------------------------------------------
     @property
     def hessian(self):
