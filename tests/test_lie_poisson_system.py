@@ -46,3 +46,22 @@ def test_the_generic_certificate_of_the_family_is_valid():
     assert "integral K~[-++] conserved by Phi_g[+--]" in names and "commutation Phi_f o Phi_g[-++]" in names
     assert "Poisson map Phi_f" in names and "control: H conserved by Phi_f" in names
     assert all(c.holds is False for c in cert.checks if not c.expected)
+
+
+def test_the_fast_paths_agree_with_the_interface_exactly():
+    """The paper's certificate evaluates H~, K~ and Pi by flint closed forms; the System interface
+    by the plain formulas in Fractions: the same rationals (==) at every orbit point."""
+    from exact_khk.certification.lie_poisson import certify
+    from exact_khk.certification.lie_poisson_flint import FlintForms
+    from exact_khk.linalg.flintmat import rows
+
+    s, fr, fl = default_system(), get_arith("fraction"), get_arith("flint")
+    cert = certify(s, DEFAULT_X0, "1/10", 6, "flint")
+    pts = [[Fraction(t) for t in p] for p in cert.orbit]
+    for name, fn in s.integrals().items():
+        assert [Fraction(v) for v in cert.values[name]] == [fn(fr, x, Fraction(1, 10)) for x in pts]
+    fast, P = FlintForms(s, fl("1/10")), s.poisson()
+    for x in pts:
+        xf = [fl(t) for t in x]
+        assert [[Fraction(str(t)) for t in r] for r in rows(fast.Pi(xf))] == P.matrix(fr, x, Fraction(1, 10))
+        assert [Fraction(str(t)) for t in fast.jacobiator(xf)] == P.jacobiator(fr, x, Fraction(1, 10))
