@@ -54,7 +54,7 @@ from exact_khk.certification.checks import (bracket, commute_items, commute_poin
                                             conserved_items, lazy_orbit, poisson_map_items, rank,
                                             reversible_items, run_check)
 from exact_khk.certification.proofs import PROVE_MAX_N
-from exact_khk.certification.records import Certificate, Check, library_versions  # noqa: F401
+from exact_khk.certification.records import Certificate, library_versions
 from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, _eps, grad_Htilde,
                          q_coefficients, shift_index)
@@ -67,8 +67,8 @@ from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dense import SingularMatrix, matvec, solve
 from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
 from exact_khk.systems.lie_poisson.system import (DEFAULT_EPS, DEFAULT_X0, check_signs_arith, default_system,
-                      divisor_classes, expresses_omega, is_rational_pattern,
-                      nontrivial_sign_patterns, rational_sign_patterns)
+                                                  divisor_classes, expresses_omega, is_rational_pattern)
+from exact_khk.systems.lie_poisson.system import default_involutions as default_signs
 
 #: relative size of the perturbation of the last coordinate of x0 in the
 #: "perturbed point" control, for exact arithmetics (floating ones use one ulp)
@@ -106,15 +106,6 @@ def htilde_definition(field, x, eps, arith=None, x_next=None):
             raise PoleError("h(x, x~) is undefined: J((x+x~)/2) is singular at x = ("
                             + ", ".join(ar.format(t) for t in x) + ")") from None
     return sum((a * r[0] for a, r in zip(x, z)), ar.zero) / (e + e)
-
-
-def default_signs(n: int, arith=None) -> list[str]:
-    """The involutions certified by default: every rational one except ±I (for n = 2:
-    '+-' = A and '-+' = −A) or, when ``arith`` contains ω = e^{2πi/n} (``cyclo:N`` with
-    n | N, ``gf:P`` with P ≡ 1 mod n), every one except ±I."""
-    if arith is not None and n >= 3 and expresses_omega(get_arith(arith), n):
-        return nontrivial_sign_patterns(n)
-    return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
 
 
 def expressible_rank(n: int, signs) -> int:

@@ -201,6 +201,18 @@ def expresses_omega(ar, n: int) -> bool:
     return True
 
 
+def default_involutions(n: int, arith=None) -> list:
+    """The involutions certified by default: every rational one except ±I (for n = 2:
+    '+-' = A and '-+' = −A) or, when ``arith`` contains ω = e^{2πi/n} (``cyclo:N`` with
+    n | N, ``gf:P`` with P ≡ 1 mod n), every one except ±I."""
+    if arith is not None and n >= 3:
+        from exact_khk.arith import get_arith
+
+        if expresses_omega(get_arith(arith), n):
+            return nontrivial_sign_patterns(n)
+    return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
+
+
 def check_signs_arith(n: int, signs, ar, option: str = "signs"):
     """InputError unless ``ar`` holds the involution of every pattern of ``signs``: rational
     patterns anywhere, the others only where ω = e^(2πi/n) is (:func:`expresses_omega`)."""
@@ -325,16 +337,8 @@ class LiePoissonSystem(System):
         return f"n = {self.n}"
 
     def involutions(self, arith=None) -> list:
-        """The involutions certified by default: every rational one except ±I (for n = 2:
-        '+-' = A and '-+' = −A) or, when ``arith`` contains ω = e^{2πi/n} (``cyclo:N`` with
-        n | N, ``gf:P`` with P ≡ 1 mod n), every one except ±I."""
-        n = self.n
-        if arith is not None and n >= 3:
-            from exact_khk.arith import get_arith
-
-            if expresses_omega(get_arith(arith), n):
-                return nontrivial_sign_patterns(n)
-        return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
+        """The involutions certified by default (:func:`default_involutions`)."""
+        return default_involutions(self.n, arith)
 
     def field_names(self) -> tuple:
         """f and the associated g[s] of every rational involution of :meth:`involutions`."""
