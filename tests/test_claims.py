@@ -124,3 +124,13 @@ def test_a_degenerate_user_point_is_named_with_the_way_out(tmp_path, capsys):
     assert "x0 is degenerate for this system" in err and "undefined at every point" in err
     assert main(["certify", "--system", str(path), "--steps", "3", "--seed", "0"]) == 0
     assert "degenerate" not in capsys.readouterr().err
+
+
+def test_the_perturbed_point_control_of_the_family_is_moot_at_an_equilibrium():
+    """Hs x0 = 0 (a = b = 0, X(c) v0 = 0, X(u0) regular): H~ near x0 differs from H~(x0) = 0, a
+    failure that says nothing about the map; the non-admissible field still moves x0 and is judged."""
+    s = LiePoissonSystem.from_vectors("0,0", "0,0", "1,1")
+    cert = certify(s, ["1", "0", "1", "-1"], "1/10", 3)
+    moved = cert.check("control: integral H~ at a perturbed point")
+    assert moved.holds is False and not moved.applicable and "equilibrium" in moved.detail
+    assert cert.check("control: integral H~ conserved for a non-admissible Hessian").applicable

@@ -130,6 +130,13 @@ class ControlDegeneracy:
                     f"cannot tell the control field from f (they hold on every example of such systems)")
         return None
 
+    def equilibrium(self):
+        """x0 an equilibrium (Hs x0 = 0): the orbit of Φ_f is one point, where the perturbed-point
+        control compares H~ near x0 with H~(x0) itself and shows nothing about the map, even when it fails."""
+        if not any(matvec(self.system.hessian, list(self.x0))):
+            return "x0 is an equilibrium (Hs x0 = 0): the orbit is one point, where every function is conserved"
+        return None
+
     def commutation(self):
         return self.common() or self._planar() or self._self_paired()
 

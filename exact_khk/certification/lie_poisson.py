@@ -51,7 +51,7 @@ from fractions import Fraction
 from exact_khk.arith import as_point, get_arith, point_height
 from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, jacobiator,
-                                            conserved_items, lazy_orbit, poisson_map_items, rank,
+                                            conserved_items, inapplicable, lazy_orbit, poisson_map_items, rank,
                                             reversible_items, run_check)
 from exact_khk.certification.proofs import PROVE_MAX_N
 from exact_khk.certification.records import Certificate, library_versions
@@ -217,10 +217,13 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
     # every other arithmetic: lists of rows and dual numbers
     fast = FlintForms(system, _eps(ar, eps)) if uses_flint(ar) else None
 
-    def add(name, claim, fn, expected=True, degenerate=None):
+    def add(name, claim, fn, expected=True, degenerate=None, moot=None):
+        """``moot()``: why the control shows nothing here even if it fails (then inapplicable)."""
         if progress is not None:
             progress(name)
-        checks.append(run_check(name, claim, ar, fn, expected, degenerate=degenerate))
+        check = run_check(name, claim, ar, fn, expected, degenerate=degenerate)
+        why = moot() if moot is not None and check.applicable else None
+        checks.append(inapplicable(check, why) if why else check)
 
     def add_eq(name, claim, ks, sides, expected=True):  # sides(k) -> (lhs, rhs) at point k
         add(name, claim, lambda: compare(ar, ((k, lambda k=k: sides(k)) for k in ks)), expected)
@@ -465,7 +468,7 @@ def _run_checks(system, x0, eps, steps, ar, signs, poisson_points, progress):
         f"H~(x_{steps}) on the orbit",
         lambda: compare(ar, [(0, lambda: (Htilde(fields["f"], _perturb(ar, F.pts[0], rel), eps, ar),
                                           value("f", F, steps)))]), expected=False,
-        degenerate=lambda: degen.perturbed(F.pts[steps], ar))
+        degenerate=lambda: degen.perturbed(F.pts[steps], ar), moot=degen.equilibrium)
     values = {}
     for key in orbits:
         try:
