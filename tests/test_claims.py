@@ -134,3 +134,10 @@ def test_the_perturbed_point_control_of_the_family_is_moot_at_an_equilibrium():
     moved = cert.check("control: integral H~ at a perturbed point")
     assert moved.holds is False and not moved.applicable and "equilibrium" in moved.detail
     assert cert.check("control: integral H~ conserved for a non-admissible Hessian").applicable
+
+
+def test_system_files_name_the_registry_claims():
+    """systems/ sits below certification/, so system files keep their own list of claim names: the same."""
+    from exact_khk.systems import expressions
+
+    assert expressions.CLAIMS == CLAIMS
