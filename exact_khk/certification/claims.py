@@ -75,15 +75,26 @@ def claim(name, declared=lambda system: True):
 # --- reversibility ------------------------------------------------------------------
 
 
+def reversible(ar, name, phi, pts):
+    """(check name, statement, evaluate) of Φ(Φ(x, ε), −ε) = x along the orbit ``pts`` of the map
+    ``phi`` of the field ``name`` (also the paper's certificate's, for f and every g[s])."""
+    inv = phi.with_eps(-phi.eps)
+    return (f"reversibility Phi_{name}", f"Phi_{name}(Phi_{name}(x, eps), -eps) = x at the {len(pts) - 1} points "
+            f"of its orbit", lambda: compare(ar, reversible_items(inv, pts)))
+
+
+def commuting(ar, name, phi_f, phi_g, pts):
+    """(check name, statement, evaluate) of Φ_f∘Φ_g = Φ_g∘Φ_f at the points ``pts`` of the Φ_f orbit,
+    Φ_g the map of the field ``name`` (also the paper's certificate's, for every g[s])."""
+    return (f"commutation Phi_f o Phi_{name}", f"Phi_f(Phi_{name}(x)) = Phi_{name}(Phi_f(x)) at the {len(pts) - 1} "
+            f"points x_k of the Phi_f orbit", lambda: compare(ar, commute_items(phi_f, phi_g, pts)))
+
+
 @claim("reversibility")
 def reversibility(run):
     ar, K = run.ar, run.steps
     for name in run.system.field_names():
-        phi = run.map(name)
-        pts = run.orbit(name)
-        inv = phi.with_eps(-phi.eps)
-        run.add(f"reversibility Phi_{name}", f"Phi_{name}(Phi_{name}(x, eps), -eps) = x at the {K} points "
-                f"of its orbit", lambda inv=inv, pts=pts: compare(ar, reversible_items(inv, pts)))
+        run.add(*reversible(ar, name, run.map(name), run.orbit(name)))
     pts = run.pts
     run.add("control: Phi_f applied twice returns",
             "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
@@ -205,11 +216,9 @@ def _plus_w(ar, P, e):
 
 @claim("commutation", lambda system: len(system.field_names()) > 1)
 def commutation(run):
-    ar, K, pts = run.ar, run.steps, run.pts
+    ar, pts = run.ar, run.pts
     for g in run.system.field_names()[1:]:
-        phi_g = run.map(g)
-        run.add(f"commutation Phi_f o Phi_{g}", f"Phi_f(Phi_{g}(x)) = Phi_{g}(Phi_f(x)) at the {K} points x_k "
-                f"of the Phi_f orbit", lambda phi_g=phi_g: compare(ar, commute_items(run.phi, phi_g, pts)))
+        run.add(*commuting(ar, g, run.phi, run.map(g), pts))
         phi_2g = KahanMap(run.system.field(g), 2 * run.eps, ar)
         run.add(f"control: commutation with Phi_{g} at 2 eps",
                 f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
