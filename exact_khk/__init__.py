@@ -30,7 +30,7 @@ _EXPORTS = {
                          "SingularStepError", "UndecidedError"),
     "exact_khk.kahan.map": ("KahanMap", "kahan_step", "map_jacobian", "orbit"),
     "exact_khk.parsing": ("parse_rational", "parse_signs", "parse_vector"),
-    "exact_khk.systems.base": ("System",),
+    "exact_khk.systems.catalogue": ("System",),  # with its constructors System.load, System.from_expressions
     "exact_khk.systems.quadratic": ("QuadraticField",),
     "exact_khk.systems.lie_poisson.system": ("LiePoissonField", "LiePoissonSystem", "b0_signs",
                                              "involution_circulant", "rational_sign_patterns"),
@@ -82,7 +82,7 @@ if TYPE_CHECKING:  # for type checkers and linters; at run time the names come f
                                   PoleError, SingularStepError, UndecidedError)
     from exact_khk.kahan.map import KahanMap, kahan_step, map_jacobian, orbit
     from exact_khk.parsing import parse_rational, parse_signs, parse_vector
-    from exact_khk.systems.base import System
+    from exact_khk.systems.catalogue import System
     from exact_khk.systems.lie_poisson.invariants import Htilde
     from exact_khk.systems.lie_poisson.system import (LiePoissonField, LiePoissonSystem, b0_signs,
                                                       involution_circulant, rational_sign_patterns)

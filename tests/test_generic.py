@@ -1,4 +1,4 @@
-"""The generic certificate of any quadratic system (exact_khk.certification.generic).
+"""The generic certificate of any quadratic system (exact_khk.certification.engine).
 
 Golden facts are derived by hand or by SymPy here, never by the code under test:
 the CMOQ modified energy and Sanz-Serna's Poisson structure of Kahan's
@@ -13,7 +13,8 @@ import pytest
 import sympy as sp
 
 from exact_khk import InputError, KahanMap, certify, get_arith
-from exact_khk.certification.generic import CLAIMS, certify_system, modified_energy
+from exact_khk.certification.claims import CLAIMS, modified_energy
+from exact_khk.certification.engine import certify_system
 from exact_khk.cli.main import main
 from exact_khk.systems.expressions import ExpressionSystem
 

@@ -3,7 +3,7 @@
 ``certify(LiePoissonSystem.random(n, seed), x0=random_point(n, seed), steps=K)``
 with default options: every claim of the paper is true, so INVALID would be a
 false alarm.  Negative controls that cannot fail at the chosen point (the
-degenerate sets of :class:`exact_khk.certification.lie_poisson.ControlDegeneracy`)
+degenerate sets of :class:`exact_khk.certification.controls.ControlDegeneracy`)
 must be reported inapplicable, and :func:`random_point` avoids the degenerate
 point sets (J(x) singular).  INCONCLUSIVE (a claim undefined at every orbit
 point, e.g. after a singular step of another map) and singular steps are
@@ -21,7 +21,7 @@ from fractions import Fraction
 import pytest
 
 from exact_khk import LiePoissonSystem, SingularStepError, certify
-from exact_khk.certification.lie_poisson import ControlDegeneracy, non_admissible_hessian
+from exact_khk.certification.controls import ControlDegeneracy, non_admissible_hessian
 from exact_khk.systems.lie_poisson.system import hankel_singular, random_point
 
 CONTROLS = ("control: commutation with non-associated field", "control: integral H~ conserved by Phi_control",
@@ -120,7 +120,7 @@ def test_random_point_with_system_avoids_the_critical_set_of_phi_g():
 
 
 def test_random_point_system_check_matches_the_dense_solve():
-    """The rejection rules step Φ_f and Φ_g by the structured solve: the points are those of
+    """The rejection rules step Φ_f, every Φ_g and the control map by the structured solve: the points are those of
     the dense Fraction solve, checked here by redoing the rules with it for n = 2..7."""
     from exact_khk import KahanMap
     from exact_khk.errors import PoleError
@@ -131,10 +131,11 @@ def test_random_point_system_check_matches_the_dense_solve():
             return False
         try:
             Htilde(system.field("f"), x, "1/10", "fraction")
-            ys = [KahanMap(system.field(k), "1/10", "fraction", method="dense").step(x) for k in ("f", "g")]
+            ys = [KahanMap(system.field(k), "1/10", "fraction", method="dense").step(x)
+                  for k in system.field_names() + ("control",)]  # every map a certificate steps from x
         except (PoleError, SingularStepError):
             return False
-        return not hankel_singular(ys[0][:system.n]) and not hankel_singular(ys[1][:system.n])
+        return not any(hankel_singular(y[:system.n]) for y in ys)
 
     def draws(n, seed):  # random_point's draws off the Hankel-singular set (its docstring)
         rng = random.Random(f"x0-{seed}")

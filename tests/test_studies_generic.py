@@ -18,7 +18,7 @@ import sympy
 
 from exact_khk import InputError, KahanMap
 from exact_khk.cli.main import main
-from exact_khk.studies import hard, scaling
+from exact_khk.studies import common, hard, scaling
 from exact_khk.studies.hard import det_polynomial, run_case, singular_step_sizes, system_cases
 from exact_khk.studies.scaling import (LOG10_2, declared, exact_orbit, precision_needed, run_orbit,
                                        scaling_study, write_study)
@@ -237,7 +237,7 @@ def test_system_cases_and_their_runs():
 
 
 def test_long_orbit_stops_where_the_reference_is_out_of_reach(monkeypatch):
-    monkeypatch.setattr(scaling, "MAX_EXACT_BITS", 1000)
+    monkeypatch.setattr(common, "MAX_EXACT_BITS", 1000)
     long = system_cases(SYSTEM, long_steps=1000, distances=())[-1]
     assert long.name == "long orbit 9" and "of 1000 asked" in long.description and "1994 bits" in long.description
     r = run_case(long, ["float"], precision=False)          # the exact reference reaches every step
@@ -313,7 +313,7 @@ def test_cli_refusal_in_a_fresh_process(toml_path):
 
 
 def test_cli_bad_system_inputs(toml_path, capsys, monkeypatch):
-    monkeypatch.setattr(scaling, "MAX_EXACT_BITS", 1000)    # 40 steps would reach 2^40 bits
+    monkeypatch.setattr(common, "MAX_EXACT_BITS", 1000)    # 40 steps would reach 2^40 bits
     for argv, msg in ((["hard", "--system", str(toml_path), "--x0", "1,2"], "--x0"),
                       (["hard", "--system", str(toml_path), "--eps", "0"], "--eps"),
                       (["scale", "--system", str(toml_path), "--steps", "40"], "steps")):

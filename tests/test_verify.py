@@ -10,7 +10,7 @@ from fractions import Fraction
 
 import pytest
 
-from exact_khk.certification.generic import certify_system
+from exact_khk.certification.engine import certify_system
 from exact_khk.certification.lie_poisson import certify
 from exact_khk.certification.records import Certificate
 from exact_khk.certification.verify import VerifyReport, cyclotomic_polynomial, verify

@@ -3,7 +3,8 @@
 :func:`certify` certifies any :class:`~exact_khk.systems.base.System`: a system
 that knows the paper's theorems (the Lie–Poisson family) gets the paper's
 certificate (:mod:`~exact_khk.certification.lie_poisson`), every other system
-the checks of what it declares (:mod:`~exact_khk.certification.generic`).
+the claims of the registry it declares (:mod:`~exact_khk.certification.claims`, run by
+:mod:`~exact_khk.certification.engine`).
 """
 
 from __future__ import annotations
@@ -13,15 +14,14 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
     """Certify ``system`` (default: the built-in Lie–Poisson system) on the orbit of
     ``x0``; see :func:`exact_khk.certification.lie_poisson.certify` (options
     ``signs``, ``poisson_points``, ``identities``, ``prove``) and
-    :func:`exact_khk.certification.generic.certify_system` (option ``claims``)."""
-    from exact_khk.certification import generic, lie_poisson
+    :func:`exact_khk.certification.engine.certify_system` (option ``claims``)."""
+    from exact_khk.certification import engine, lie_poisson
     from exact_khk.errors import InputError
-    from exact_khk.systems.base import System
-    from exact_khk.systems.lie_poisson.system import LiePoissonSystem
+    from exact_khk.systems.catalogue import System, resolve
 
     if isinstance(system, (str, bytes)) or hasattr(system, "__fspath__"):
-        system = System.load(system)  # a catalogue name or a system file, as on the command line
-    if system is None or isinstance(system, LiePoissonSystem):
+        system = resolve(system)  # a catalogue name or a system file, as on the command line
+    if system is None or getattr(system, "certificate_options", ()):  # a system with theorems of its own
         return lie_poisson.certify(system, x0, eps, steps, arith, **options)
     if not isinstance(system, System):
         raise InputError(f"system: expected a System (e.g. System.load('euler-top')) or a catalogue name, "
@@ -29,4 +29,4 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
     other = sorted(set(options) - {"claims", "progress"})
     if other:
         raise InputError(f"{other[0]}: an option of Lie-Poisson systems only; {system.name} takes claims=")
-    return generic.certify_system(system, x0, eps, steps, arith, **options)
+    return engine.certify_system(system, x0, eps, steps, arith, **options)

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 from exact_khk.certification.records import Check
 from exact_khk.errors import InputError, PoleError, SingularStepError, UndecidedError
-from exact_khk.linalg.dual import jacobian
+from exact_khk.linalg.dual import jacobiator  # noqa: F401  (one Jacobi identity for every claim)
 from exact_khk.linalg.dense import matmul, matvec, transpose
 
 
@@ -127,8 +127,12 @@ def inapplicable_if(check: Check, degenerate) -> Check:
     if check.expected or check.holds is False or degenerate is None:
         return check
     why = degenerate()
-    if not why:
-        return check
+    return inapplicable(check, why) if why else check
+
+
+def inapplicable(check: Check, why: str) -> Check:
+    """``check`` recorded as an inapplicable control, ``why`` saying why it cannot fail here (also
+    when it did fail: at an equilibrium a failing control shows nothing about the map)."""
     return replace(check, applicable=False,
                    detail=f"inapplicable: {why}" + (f"; {check.detail}" if check.detail else ""))
 
@@ -195,19 +199,3 @@ def bracket(u, P, v):
     """{F, G}_P = ∇Fᵀ P ∇G."""
     Pv = matvec(P, v)
     return sum((a * b for a, b in zip(u, Pv)), u[0] * 0)
-
-
-def jacobiator(ar, matrix, x):
-    """All cyclic sums Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k, of the
-    bivector ``matrix(context, point)`` at x, its derivatives exact by dual numbers."""
-    N = len(x)
-    vals, grads = jacobian(ar, lambda d, xd: [t for row in matrix(d, xd) for t in row], list(x))
-    P = [vals[i * N:(i + 1) * N] for i in range(N)]
-    dP = lambda j, k: grads[j * N + k]  # noqa: E731  (∂_m Π_jk for m = 0..N-1)
-    out = []
-    for i in range(N):
-        for j in range(i + 1, N):
-            for k in range(j + 1, N):
-                out.append(sum((P[i][m] * dP(j, k)[m] + P[j][m] * dP(k, i)[m] + P[k][m] * dP(i, j)[m]
-                                for m in range(N)), ar.zero))
-    return out

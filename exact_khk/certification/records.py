@@ -234,9 +234,9 @@ class Certificate:
         for i, s in enumerate(signs):
             if not isinstance(s, str):
                 raise InputError(f"signs[{i}]: expected a string such as '-++', got {_kind(s)}")
-            if getattr(system, "kind", "") == "lie-poisson":
+            if "signs" in system.certificate_options:
                 parse_signs(s, system.n)
-        if signs and getattr(system, "kind", "") != "lie-poisson":
+        if signs and "signs" not in system.certificate_options:
             raise InputError("signs: only a Lie–Poisson certificate has involutions")
         checks = tuple(_check_from_json(c, f"checks[{i}]")
                        for i, c in enumerate(_json_key(d, "checks", list)))
@@ -278,27 +278,11 @@ class Certificate:
 
 
 def system_from_json(d: dict):
-    """The system of a certificate's ``"system"`` JSON: a Lie–Poisson system when the
-    dict has a ``"family"`` key (which must be ``"lie-poisson"``), else an
-    :class:`~exact_khk.systems.expressions.ExpressionSystem`; InputError if malformed."""
-    from exact_khk.systems.expressions import ExpressionSystem
-    from exact_khk.systems.lie_poisson.system import LiePoissonSystem
+    """The system of a certificate's ``"system"`` JSON (:func:`exact_khk.systems.catalogue.from_json`:
+    a family's system when the dict has a ``"family"`` key, else a system file's); InputError if malformed."""
+    from exact_khk.systems.catalogue import from_json
 
-    d = _json_object(d, "system")
-    if "family" not in d:
-        return ExpressionSystem.from_json(d)
-    if d["family"] != "lie-poisson":
-        raise InputError(f"system.family: unknown family {d['family']!r}; known: 'lie-poisson'")
-    unknown = sorted(set(d) - {"family", "n", "a", "b", "c"})
-    if unknown:
-        raise InputError(f"system: unknown key(s) {', '.join(map(repr, unknown))} for the Lie–Poisson family")
-    for key in ("a", "b", "c"):
-        if key in d and not isinstance(d[key], list):
-            raise InputError(f"system.{key}: expected a list of rationals (strings), got {_kind(d[key])}")
-    system = LiePoissonSystem.from_json(d)
-    if "n" in d and (type(d["n"]) is not int or d["n"] != system.n):
-        raise InputError(f"system.n: {d['n']!r} does not match the length {system.n} of the vectors a, b, c")
-    return system
+    return from_json(_json_object(d, "system"))
 
 
 #: the fields of a check in its JSON: (type(s), required)
@@ -361,8 +345,7 @@ def _kind(v) -> str:
 
 
 def _short(system) -> str:
-    n = getattr(system, "n", None)
-    return f"n = {n}" if n is not None and getattr(system, "kind", "") == "lie-poisson" else system.name
+    return system.short_name
 
 
 def abbreviate(text: str, width: int = 24) -> str:

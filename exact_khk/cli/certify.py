@@ -8,8 +8,12 @@ is false, but a check is undecided or a control did not fail); 2 bad input;
 
 from __future__ import annotations
 
+import sys
+
 from exact_khk.arith import get_arith
-from exact_khk.certification.generic import CLAIMS, certify_system
+from exact_khk.certification.claims import CLAIMS
+from exact_khk.certification.controls import degenerate_point
+from exact_khk.certification.engine import certify_system
 from exact_khk.certification.lie_poisson import certify, default_signs
 from exact_khk.cli.options import (Progress, add_json_option, add_system_options, check_output, check_resources,
                                    invocation, system_from_args, write_json)
@@ -89,7 +93,7 @@ def cmd_certify(args):
         args.steps = system.default_steps
     if args.steps < 1:
         raise InputError(f"--steps: certify needs at least 1 step, got {args.steps}")
-    if system.kind != "lie-poisson":
+    if not system.certificate_options:  # the certificate of what the system declares
         return _certify_system(args, system, x0, eps)
     if args.claims is not None:
         raise InputError("--claims applies to --system; the Lie–Poisson certificate checks every theorem")
@@ -112,6 +116,7 @@ def cmd_certify(args):
               f"arithmetic {cert.arith}, associated fields g[{'], g['.join(cert.signs)}]")
         print(cert.table())
         print(cert.verdict())
+    _advise(cert)
     if args.json is not None:
         write_json(_with_invocation(cert, args, x0, eps), args.json)
     return EXIT_STATUS[cert.status]
@@ -121,6 +126,13 @@ def _with_invocation(cert, args, x0, eps) -> dict:
     """The certificate's JSON with the informational key ``invocation`` (the command line and
     its resolved options; the verifier does not read it)."""
     return {**cert.to_json(), "invocation": invocation(args, arith=cert.arith, x0=x0, eps=eps, steps=args.steps)}
+
+
+def _advise(cert):
+    """On stderr: why the point is degenerate and how to pick another, when it is."""
+    advice = degenerate_point(cert)
+    if advice:
+        print(advice, file=sys.stderr)
 
 
 def _certify_system(args, system, x0, eps):
@@ -137,6 +149,7 @@ def _certify_system(args, system, x0, eps):
         print(cert.summary().rsplit("\n", 1)[0])
         print(cert.table())
         print(cert.verdict())
+    _advise(cert)
     if args.json is not None:
         write_json(_with_invocation(cert, args, x0, eps), args.json)
     return EXIT_STATUS[cert.status]
@@ -146,7 +159,7 @@ def cmd_integrals(args):
     check_output(args.json)
     system, x0, eps = system_from_args(args)
     ar = get_arith(args.arith)
-    if system.kind != "lie-poisson":
+    if "signs" not in system.certificate_options:  # no involutions: the declared integrals
         return _system_integrals(args, system, x0, eps, ar)
     phi = KahanMap(system.field("f"), eps, ar)
     # H~ takes the structured solve for exact flint arithmetic and n >= 3, else the dense one

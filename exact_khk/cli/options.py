@@ -142,7 +142,7 @@ def field_name(system, args) -> str:
     of the Lie–Poisson family."""
     if args.signs is None:
         return args.field
-    if system.kind != "lie-poisson" or args.field != "g":
+    if "signs" not in system.certificate_options or args.field != "g":
         raise InputError("--signs applies only to --field g of the Lie–Poisson family")
     return f"g[{args.signs}]"
 
@@ -295,7 +295,7 @@ def _named_system(args, reals=None):
     # default point is searched for (N^3 work)
     check_dense(getattr(args, "command", None) or "this command", system)
     return _point_and_eps(args, system, reals, system.default_eps, lambda: system.default_x0,
-                          lambda eps: system.random_point(args.seed))
+                          lambda eps: system.seeded_point(args.seed, eps))
 
 
 # --- limits, estimated before the work ------------------------------------------
@@ -393,18 +393,18 @@ def check_dense(what, system, ar=None, dense=True, cube_numbers=0):
     need = per_cube * N ** 3
     if need <= limit:
         return
-    cube = "(2n)^3" if system.kind == "lie-poisson" else "N^3"
+    cube = "N^3" if system.size_option is None else "(2n)^3"
     about = (f"which need about {human_bytes(need)} (estimate: {DENSE_BYTES_PER_CUBE} bytes x {cube}"
              + (f" + {cube_numbers} x {cube} numbers" if cube_numbers else "")
              + f"), beyond the limit of {human_bytes(limit)} (EXACT_KHK_MAX_MEMORY)")
-    if system.kind != "lie-poisson":
+    if system.size_option is None:
         fits = int((limit / per_cube) ** (1 / 3))
         raise InputError(f"--system: {system.name} has {N} variables, and {what} solves dense {N}x{N} systems, "
                          f"{about}; within that limit a system has at most about {fits} variables")
     hint = (" (the structured path, --method structured, needs O(n) memory with --arith float or mp:P; "
             f"an exact structured step about {STRUCTURED_STEP_BYTES_PER_BIT} bytes x n x (its output's + "
             f"twice its input's height in bits))" if what == "orbit" else "")
-    raise InputError(f"--n: {what} at n = {N // 2} solves dense {N}x{N} systems, {about}{hint}")
+    raise InputError(f"{system.size_option}: {what} at n = {N // 2} solves dense {N}x{N} systems, {about}{hint}")
 
 
 def check_resources(what, system, phi, x0, steps, dense=False, orbits=1, per_point=1, cube_numbers=0,

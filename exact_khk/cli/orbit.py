@@ -156,4 +156,4 @@ def _abbreviate(q) -> str:
 
 
 def _names(system):
-    return [f"x{i}" for i in range(system.dim)] if system.kind == "lie-poisson" else list(system.variables)
+    return list(system.coordinate_names())

@@ -260,8 +260,8 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim
-    variables = list(getattr(sysobj, "variables", ()) or ())
-    if len(variables) != N or sysobj.kind == "lie-poisson":
+    variables = list(sysobj.coordinate_names()) if hasattr(sysobj, "coordinate_names") else []
+    if len(variables) != N:
         variables = [f"x{i}" for i in range(N)]
     if (degree is None) == (monomials_list is None):
         raise InputError("degree: give either degree or monomials_list")

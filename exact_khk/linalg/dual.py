@@ -166,3 +166,19 @@ def jacobian(ar, fn, x):
 def gradient(ar, fn, x):
     """The exact gradient of ``fn(dual_arith, point)`` (a scalar) at ``x``."""
     return jacobian(ar, lambda d, xd: [fn(d, xd)], x)[1][0]
+
+
+def jacobiator(ar, matrix, x):
+    """All cyclic sums Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k, of the
+    bivector ``matrix(context, point)`` at x, its derivatives exact by dual numbers."""
+    N = len(x)
+    vals, grads = jacobian(ar, lambda d, xd: [t for row in matrix(d, xd) for t in row], list(x))
+    P = [vals[i * N:(i + 1) * N] for i in range(N)]
+    dP = lambda j, k: grads[j * N + k]  # noqa: E731  (∂_m Π_jk for m = 0..N-1)
+    out = []
+    for i in range(N):
+        for j in range(i + 1, N):
+            for k in range(j + 1, N):
+                out.append(sum((P[i][m] * dP(j, k)[m] + P[j][m] * dP(k, i)[m] + P[k][m] * dP(i, j)[m]
+                                for m in range(N)), ar.zero))
+    return out

@@ -390,7 +390,7 @@ def enclose(system, x0, eps, steps, prec=256, method="lohner", exact=None, integ
                 points.append(tuple(X))
             if progress is not None and k > 0:
                 progress(1)
-    from exact_khk.studies.scaling import _slope  # one least-squares slope for every study
+    from exact_khk.studies.common import _slope  # one least-squares slope for every study
 
     rate = _slope([r.step for r in rows], [r.rad_log2 for r in rows])
     checked = [r.encloses for r in rows if r.encloses is not None]
@@ -430,7 +430,7 @@ def compare(system, x0, eps, steps, prec=256, methods=METHODS, check_exact=False
     """:func:`enclose` by every method of ``methods`` on the same input (side by side).
     ``check_exact``: compute the exact orbit (x0 and ε must be rational) and check
     every enclosure against it; ``diagnostics``: enclose the declared integrals' drift."""
-    from exact_khk.studies.scaling import declared, exact_prefix
+    from exact_khk.studies.common import declared, exact_prefix
 
     exact = None
     if check_exact:
@@ -494,7 +494,7 @@ def scale_run(system, x0, eps, steps, spec, exact, diagnostics=True, progress=No
     exactly, the integrals' drift enclosed (I(X_k) − I(X_0): |mid| + rad); time per step:
     the least CPU time of ``repeats`` bare runs of the steps done (as for the other
     arithmetics of a study)."""
-    from exact_khk.studies.scaling import LOG10_2, ArithRun, StepRow, _slope as slope, declared, vs_exact
+    from exact_khk.studies.common import LOG10_2, ArithRun, StepRow, _slope as slope, declared, vs_exact
 
     integrals = declared(system)[0] if diagnostics else None
     run = enclose(system, [str(t) for t in x0], str(eps), steps, spec.prec, "lohner", exact, integrals,

@@ -195,7 +195,7 @@ def system_cases(system, x0=None, eps=None, long_steps: int = 1000, distances=DI
       det(I − εf′(x0)) nearest 0 (certified: :func:`singular_step_sizes`);
     * ``singular (eps=r)``: 1 step at every rational root r (det = 0 exactly);
     * ``long orbit K``: K = ``long_steps`` steps at ε, fewer if the exact orbit
-      grows higher than :data:`~exact_khk.studies.scaling.MAX_EXACT_BITS` first.
+      grows higher than :data:`~exact_khk.studies.common.MAX_EXACT_BITS` first.
 
     >>> from exact_khk.systems.expressions import ExpressionSystem
     >>> s = ExpressionSystem.from_expressions(["x", "y"], field=["x*y", "y*y"], x0=["1", "2"], eps="1/10")

@@ -62,7 +62,7 @@ GROUPS = {"failed": FAILED}
 #: machine, up to ten times a no-op task (scripts/bench_sweep.py).
 SYNC_SECONDS = 1.0
 #: modules imported once by the fork server, before it forks the local workers
-PRELOAD = ["exact_khk.sweep.tasks", "exact_khk.certification.lie_poisson", "exact_khk.certification.generic",
+PRELOAD = ["exact_khk.sweep.tasks", "exact_khk.certification.lie_poisson", "exact_khk.certification.engine",
            "exact_khk.studies.scaling"]
 
 

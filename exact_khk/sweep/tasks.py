@@ -179,7 +179,7 @@ def _signs(value, where, ctx=None):
 
 
 def _claims(value, where, ctx=None):
-    from exact_khk.certification.generic import CLAIMS
+    from exact_khk.certification.claims import CLAIMS
 
     if isinstance(value, str):
         value = [value]
@@ -477,12 +477,10 @@ def build_system(params: dict, system_spec=None):
     """The system of a task: the Lie–Poisson family from (n, seed), or a system
     file's spec (``system_spec``, shipped with the payload; cached by digest)."""
     s = params["system"]
-    if s.get("family") == "lie-poisson":
-        from exact_khk.systems.lie_poisson.system import LiePoissonSystem, default_system
+    if "family" in s:
+        from exact_khk.systems.catalogue import from_spec
 
-        if s.get("default"):
-            return default_system()
-        return LiePoissonSystem.random(s["n"], s["seed"], s.get("bound", 3))
+        return from_spec(s)
     digest = s.get("digest")
     if digest not in _SYSTEMS:
         from exact_khk.systems.expressions import ExpressionSystem
@@ -507,10 +505,6 @@ def build_point(params: dict, system) -> tuple:
     if "x0" in p:
         return parse_vector(p["x0"], "x0", system.dim)
     if "seed" in p:
-        if system.kind == "lie-poisson":
-            from exact_khk.systems.lie_poisson.system import random_point
-
-            return random_point(system.n, p["seed"])
         return system.random_point(p["seed"])
     return parse_vector(list(system.default_x0), "x0", system.dim)
 

@@ -19,6 +19,11 @@ a system; it never tests which family a system belongs to.
   measure), else None;
 * ``default_x0``, ``default_eps``, :meth:`random_point`.
 
+The constructors ``System.load(spec)`` (a catalogue name or a system file) and
+``System.from_expressions(variables, ...)`` live with their implementations
+(:mod:`exact_khk.systems.catalogue` attaches them; ``from exact_khk import System``
+has them): this file imports no implementation of the interface.
+
 :meth:`System.named_field` resolves the name of a field as the command line, the
 sweep tasks and the diagnostics take it (the Lie–Poisson family also takes ``'b0'``,
 a sign pattern and ``'g[SIGNS]'``).
@@ -89,24 +94,23 @@ class System:
     default_steps = 20
     #: what the literature claims about the Kahan map (a system file's [literature] table)
     literature: dict = {}
-
-    @staticmethod
-    def from_expressions(variables, **parts) -> "System":
-        """A system from expressions (see :meth:`exact_khk.systems.expressions.ExpressionSystem.from_expressions`
-        and docs/system-files.md)."""
-        from exact_khk.systems.expressions import ExpressionSystem
-
-        return ExpressionSystem.from_expressions(variables, **parts)
-
-    @staticmethod
-    def load(spec) -> "System":
-        """A catalogue system by name (``'euler-top'``) or a system file by path."""
-        from exact_khk.systems.catalogue import resolve
-
-        return resolve(spec)
+    #: options of a certificate of the system's own theorems beyond the declared claims
+    #: (``certify(system, signs=...)``); empty: the certificate of what it declares
+    certificate_options: tuple = ()
+    #: the command-line option that sets the dimension (None: the system file's variables)
+    size_option = None
 
     def describe(self) -> str:
         return f"{self.name} (dimension {self.dim})"
+
+    @property
+    def short_name(self) -> str:
+        """The system in a one-line message."""
+        return self.name
+
+    def coordinate_names(self) -> tuple:
+        """Names of the coordinates in output (orbit columns, monomials)."""
+        return tuple(self.variables)
 
     def to_json(self) -> dict:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -136,6 +140,19 @@ class System:
 
     def hamiltonian_form(self):
         return None
+
+    def measure(self):
+        """A density m(x, ε) (a :class:`Function`) claimed invariant: m(Φ(x)) det dΦ(x) = m(x); or None."""
+        return None
+
+    def tracked(self) -> tuple:
+        """(integrals, commuting fields) that studies follow along an orbit (default: all of them)."""
+        return self.integrals(), {name: self.field(name) for name in self.field_names()[1:]}
+
+    def seeded_point(self, seed: int, eps=None) -> tuple:
+        """The point a command draws for ``--seed``: off the degenerate sets the system knows of
+        (default: :meth:`random_point`)."""
+        return self.random_point(seed)
 
     def random_point(self, seed: int, bound: int = 3) -> tuple:
         """A reproducible small-integer point (not all zero), coordinates in [-bound, bound]."""

@@ -52,7 +52,7 @@ MAX_FILE = 10_000_000     # bytes in a system file
 #: solves N×N systems (the commands refuse beyond a few hundred variables at 4 GB)
 MAX_VARIABLES = 10_000
 EPS = "eps"
-CLAIMS = ("reversibility", "integrals", "poisson", "commutation", "jacobian", "cmoq")
+CLAIMS = ("reversibility", "integrals", "poisson", "commutation", "jacobian", "cmoq", "measure")
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _SYSTEM_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._:=,-]*\Z")  # ':', '=', ',' name a family member
 
@@ -171,10 +171,11 @@ def _read_literature(table, where: str) -> dict:
 # --- the system ----------------------------------------------------------------------
 
 _KEYS = ("format", "kind", "name", "title", "source", "variables", "parameters", "field", "fields",
-         "integrals", "poisson", "hamiltonian", "controls", "defaults", "claims", "literature")
+         "integrals", "poisson", "hamiltonian", "controls", "measure", "defaults", "claims", "literature")
 #: [literature]: what the literature claims about the Kahan map (not the ODE); text, never checked
 LITERATURE_KEYS = ("reference", "integrable", "integrals", "measure", "poisson", "notes")
-_NEEDS = {"integrals": "integrals", "poisson": "poisson", "commutation": "fields", "cmoq": "hamiltonian"}
+_NEEDS = {"integrals": "integrals", "poisson": "poisson", "commutation": "fields", "cmoq": "hamiltonian",
+          "measure": "measure"}
 
 
 class ExpressionSystem(System):
@@ -264,6 +265,7 @@ class ExpressionSystem(System):
 
         self._integrals, self._controls = (self._read_functions(t.get(key), key) for key in ("integrals", "controls"))
         self._poisson = self._read_poisson(t.get("poisson"))
+        self._measure = self._read_measure(t.get("measure"))
         self._read_defaults(_table(t.get("defaults"), at("defaults")))
         self._read_claims(t.get("claims"))
         self.literature = _read_literature(t.get("literature"), at("literature"))
@@ -319,6 +321,17 @@ class ExpressionSystem(System):
         entries = [[self._function(e, f"poisson matrix[{i}][{j}]", f"Pi[{i}][{j}]") for j, e in enumerate(row)]
                    for i, row in enumerate(M)]
         return PolynomialTensor(entries, name=self._at("poisson matrix"), text=str(M))
+
+    def _read_measure(self, table):
+        """``[measure] density = "m(x, eps)"``: the density of a measure m(x) dx claimed invariant."""
+        if table is None:
+            return None
+        table = _table(table, self._at("measure"))
+        if set(table) != {"density"}:
+            raise InputError(self._at("measure: expected exactly one key, 'density'"))
+        text = _spec_value(table["density"], self._at("measure density"))
+        self._spec["measure"] = {"density": text}
+        return self._function(text, "measure density", "m")
 
     def _read_hamiltonian(self, table):
         """K∇H as ring polynomials (None without [hamiltonian]); sets self._hamiltonian."""
@@ -377,7 +390,7 @@ class ExpressionSystem(System):
 
     def _read_claims(self, claims):
         present = {"integrals": self._integrals, "poisson": self._poisson,
-                   "fields": len(self._fields) > 1, "hamiltonian": self._hamiltonian}
+                   "fields": len(self._fields) > 1, "hamiltonian": self._hamiltonian, "measure": self._measure}
         if claims is None:
             self.claims = tuple(c for c in CLAIMS if c not in _NEEDS or present[_NEEDS[c]])
             return
@@ -401,33 +414,40 @@ class ExpressionSystem(System):
             self._default_x0 = self._regular_point(self.default_eps)
         return self._default_x0
 
-    def _regular_point(self, eps):
-        """The first small random point where every declared function is finite and
+    def seeded_point(self, seed: int, eps=None) -> tuple:
+        """The point drawn for ``--seed``: the first regular point (:meth:`_regular_point`) from ``seed`` on."""
+        return self._regular_point(self.default_eps if eps is None else eps, seed)
+
+    def _regular_point(self, eps, start=0):
+        """The first small random point (seeds ``start``, ``start`` + 1, …) where every declared
+        function is finite, f(x) ≠ 0 (no equilibrium: there no control can fail) and
         I − ε g'(x) is invertible for every field g (reproducible)."""
         fr = get_arith("fraction")
         fns = list(self._integrals.values()) + list(self._controls.values()) + (
-            [e for row in self._poisson.entries for e in row] if self._poisson else [])
-        for seed in range(200):
+            [e for row in self._poisson.entries for e in row] if self._poisson else []) + (
+            [self._measure] if self._measure else [])
+        for seed in range(start, start + 200):
             x = self.random_point(seed)
-            if all(not fn.den.evaluate(fr, x, eps) == 0 for fn in fns) and all(
+            if any(self._fields["f"].evaluate(fr, x)) and all(
+                    not fn.den.evaluate(fr, x, eps) == 0 for fn in fns) and all(
                     flint.fmpq_mat([[_fmpq(int(i == j) - eps * t) for j, t in enumerate(row)]
                                     for i, row in enumerate(g.jacobian(fr, x))]).det() != 0
                     for g in self._fields.values()):
                 return x
-        return self.random_point(0)
+        return self.random_point(start)
 
     # --- constructors -------------------------------------------------------------
 
     @classmethod
     def from_expressions(cls, variables, field=None, parameters=None, integrals=None, poisson=None,
                          fields=None, hamiltonian=None, controls=None, x0=None, eps=None, claims=None,
-                         name="user", title="", source=""):
+                         name="user", title="", source="", measure=None):
         """A system from Python values: ``variables`` a list of names (or ``"x, y"``),
         ``field`` a list of expression strings in variable order (or a dict),
         ``parameters`` name -> rational, ``integrals``/``controls`` name -> expression,
         ``poisson`` an N×N matrix of expressions, ``fields`` name -> field,
         ``hamiltonian`` ``{"K": matrix, "H": expression}``, ``x0``/``eps`` rationals,
-        ``claims`` a list of claim names."""
+        ``claims`` a list of claim names, ``measure`` the density of an invariant measure (an expression)."""
         if isinstance(variables, str):
             variables = [v for v in re.split(r"[\s,]+", variables) if v]
         t = {"name": name, "title": title, "source": source, "variables": variables}
@@ -438,6 +458,8 @@ class ExpressionSystem(System):
                 t[key] = value
         if poisson is not None:
             t["poisson"] = poisson if isinstance(poisson, dict) else {"matrix": poisson}
+        if measure is not None:
+            t["measure"] = measure if isinstance(measure, dict) else {"density": measure}
         defaults = {k: v for k, v in (("x0", x0), ("eps", eps)) if v is not None}
         if defaults:
             t["defaults"] = defaults
@@ -488,6 +510,9 @@ class ExpressionSystem(System):
     def hamiltonian_form(self):
         return self._hamiltonian
 
+    def measure(self):
+        return self._measure
+
     def known(self) -> str:
         """What the file claims, in a few words."""
         n, others = len(self._integrals), [g for g in self._fields if g != "f"]
@@ -496,6 +521,7 @@ class ExpressionSystem(System):
             "Poisson tensor" if self._poisson else "",
             f"commuting field{'s' * (len(others) != 1)} {', '.join(others)}" if others else "",
             "Hamiltonian form f = K grad H" if self._hamiltonian else "",
+            "invariant measure" if self._measure else "",
             f"{len(self._controls)} control{'s' * (len(self._controls) != 1)}" if self._controls else "") if s) or "the field only"
 
     def describe(self) -> str:

@@ -100,3 +100,35 @@ def resolve(spec) -> System:
         return load_system(text)
     raise InputError(f"system: {text!r} is neither a catalogue system (available: "
                      f"{', '.join(names()) or 'none'}) nor a .toml file")
+
+
+#: the families of systems given by parameters, by the JSON's ``"family"`` key: (module, class)
+FAMILIES = {"lie-poisson": ("exact_khk.systems.lie_poisson.system", "LiePoissonSystem")}
+
+
+def family(name: str):
+    """The class of the family ``name`` (InputError naming the known ones)."""
+    import importlib
+
+    if name not in FAMILIES:
+        raise InputError(f"system.family: unknown family {name!r}; known: {', '.join(map(repr, FAMILIES))}")
+    module, cls = FAMILIES[name]
+    return getattr(importlib.import_module(module), cls)
+
+
+def from_json(d: dict) -> System:
+    """A system from its JSON (``System.to_json``): a family's when ``d`` has a ``"family"``
+    key, else a system file's (:meth:`ExpressionSystem.from_json`)."""
+    if "family" not in d:
+        return ExpressionSystem.from_json(d)
+    return family(d["family"]).from_json(d)
+
+
+def from_spec(d: dict) -> System:
+    """A family's system from a sweep's spec ``{"family": NAME, ...}`` (its ``from_spec``)."""
+    return family(d["family"]).from_spec(d)
+
+
+# The interface's constructors, with their implementations (systems/base imports none of them).
+System.load = staticmethod(resolve)
+System.from_expressions = staticmethod(ExpressionSystem.from_expressions)

@@ -359,3 +359,46 @@ def grad_Htilde_dual(field, x, eps, arith=None):
     ar = get_arith(arith)
     e = _eps(ar, eps)
     return gradient(ar, lambda d, xd: Htilde(field, xd, e, d), _point(ar, x, field.dim))
+
+
+# --- the family's integrals and Poisson tensor as the System interface asks them -------------
+
+
+class HtildeIntegral:
+    """H̃ of a Lie–Poisson field as a :class:`~exact_khk.systems.base.Function`
+    (``I(ar, x, eps)``, exact gradient by :func:`grad_Htilde`); ``H~`` for f, ``K~[s]`` for g[s]."""
+
+    depends_on_eps = True
+
+    def __init__(self, name, fld, text):
+        self.name, self.fld, self.text = name, fld, text
+
+    def __call__(self, ar, x, eps):
+        return Htilde(self.fld, x, eps, ar)
+
+    def gradient(self, ar, x, eps):
+        return grad_Htilde(self.fld, x, eps, ar)
+
+    def at_eps_zero(self):
+        """The ε → 0 limit is 2H = xᵀ M x, which the certificate's own controls cover: None."""
+        return None
+
+    def __repr__(self):
+        return f"HtildeIntegral({self.name}: {self.text})"
+
+
+class PiTensor:
+    """Π(x, ε) = J − ε² J Hs J Hs J as a :class:`~exact_khk.systems.base.Tensor`."""
+
+    name, text, depends_on_eps = "Pi", "J - eps^2 J Hs J Hs J", True
+
+    def __init__(self, system):
+        self.system = system
+
+    def matrix(self, ar, x, eps):
+        return Pi(self.system, x, eps, ar)
+
+    def jacobiator(self, ar, x, eps):
+        from exact_khk.linalg.dual import jacobiator
+
+        return jacobiator(ar, lambda d, xd: Pi(self.system, xd, d.convert(eps), d), x)

@@ -201,6 +201,18 @@ def expresses_omega(ar, n: int) -> bool:
     return True
 
 
+def default_involutions(n: int, arith=None) -> list:
+    """The involutions certified by default: every rational one except ±I (for n = 2:
+    '+-' = A and '-+' = −A) or, when ``arith`` contains ω = e^{2πi/n} (``cyclo:N`` with
+    n | N, ``gf:P`` with P ≡ 1 mod n), every one except ±I."""
+    if arith is not None and n >= 3:
+        from exact_khk.arith import get_arith
+
+        if expresses_omega(get_arith(arith), n):
+            return nontrivial_sign_patterns(n)
+    return sorted(s for s in rational_sign_patterns(n) if s not in ("+" * n, "-" * n))
+
+
 def check_signs_arith(n: int, signs, ar, option: str = "signs"):
     """InputError unless ``ar`` holds the involution of every pattern of ``signs``: rational
     patterns anywhere, the others only where ω = e^(2πi/n) is (:func:`expresses_omega`)."""
@@ -288,10 +300,85 @@ class LiePoissonSystem(System):
 
     @classmethod
     def from_json(cls, d: dict) -> "LiePoissonSystem":
+        """From :meth:`to_json` (InputError naming the key if malformed)."""
+        unknown = sorted(set(d) - {"family", "n", "a", "b", "c"})
+        if unknown:
+            raise InputError(f"system: unknown key(s) {', '.join(map(repr, unknown))} for the Lie–Poisson family")
+        for key in ("a", "b", "c"):
+            if key in d and not isinstance(d[key], list):
+                raise InputError(f"system.{key}: expected a list of rationals (strings), got "
+                                 f"{'a string' if isinstance(d[key], str) else type(d[key]).__name__}")
         try:
-            return cls.from_vectors(d["a"], d["b"], d["c"])
+            system = cls.from_vectors(d["a"], d["b"], d["c"])
         except (KeyError, TypeError):
             raise InputError("system: a Lie–Poisson system needs the vectors 'a', 'b', 'c'") from None
+        if "n" in d and (type(d["n"]) is not int or d["n"] != system.n):
+            raise InputError(f"system.n: {d['n']!r} does not match the length {system.n} of the vectors a, b, c")
+        return system
+
+    @classmethod
+    def from_spec(cls, d: dict) -> "LiePoissonSystem":
+        """From a sweep's system spec: ``{"default": True}`` or ``{"n": n, "seed": s, "bound": b}``."""
+        if d.get("default"):
+            return default_system()
+        return cls.random(d["n"], d["seed"], d.get("bound", 3))
+
+    # what the family knows, as the System interface asks it ---------------------
+    #: the options of the family's own certificate (the paper's theorems), beyond System's
+    certificate_options = ("signs", "poisson_points", "identities", "prove")
+    #: the command-line option that sets the dimension 2n
+    size_option = "--n"
+
+    def coordinate_names(self) -> tuple:
+        return tuple(f"x{i}" for i in range(self.dim))
+
+    @property
+    def short_name(self) -> str:
+        return f"n = {self.n}"
+
+    def involutions(self, arith=None) -> list:
+        """The involutions certified by default (:func:`default_involutions`)."""
+        return default_involutions(self.n, arith)
+
+    def field_names(self) -> tuple:
+        """f and the associated g[s] of every rational involution of :meth:`involutions`."""
+        return ("f",) + tuple(f"g[{s}]" for s in self.involutions())
+
+    def integrals(self) -> dict:
+        """H̃ (of f) and K̃[s] (H̃ of g[s]) for every field of :meth:`field_names`."""
+        from exact_khk.systems.lie_poisson.invariants import HtildeIntegral
+
+        out = {"H~": HtildeIntegral("H~", self.field("f"), "x^T (I - eps^2 (Hs J(x))^2)^-1 Hs x")}
+        for s in self.involutions():
+            out[f"K~[{s}]"] = HtildeIntegral(f"K~[{s}]", self.field("g", s), f"as H~ with B Hs, B = B[{s}]")
+        return out
+
+    def tracked(self) -> tuple:
+        """(integrals, commuting fields) a study follows along an orbit: H̃, and K̃ and g of
+        B_0 only (:meth:`integrals` has one K̃ per involution: 2^d - 2 of them for d divisors of n)."""
+        from exact_khk.systems.lie_poisson.invariants import HtildeIntegral
+
+        f, g = self.field("f"), self.field("g", signs=b0_signs(self.n))
+        return ({"H~": HtildeIntegral("H~", f, "x^T (I - eps^2 (M J(x))^2)^-1 M x, M = Hs"),
+                 "K~": HtildeIntegral("K~", g, f"as H~ with M = B_0 Hs, B_0 = {g.signs}")}, {g.label: g})
+
+    def poisson(self):
+        """Π = J − ε² J Hs J Hs J (the paper's invariant Poisson tensor)."""
+        from exact_khk.systems.lie_poisson.invariants import PiTensor
+
+        return PiTensor(self)
+
+    def controls(self) -> dict:
+        """Functions claimed not conserved: the Hamiltonian H = xᵀ Hs x / 2 of the field
+        (2H is the ε → 0 limit of H̃; the Kahan map conserves H̃, not H)."""
+        return {"H": _Hamiltonian(self)}
+
+    def random_point(self, seed: int, bound: int = 3, eps=None) -> tuple:
+        """A point off the degenerate sets of every map the certificate steps (:func:`random_point`)."""
+        return random_point(self.n, seed, bound, system=self, eps=eps)
+
+    def seeded_point(self, seed: int, eps=None) -> tuple:
+        return self.random_point(seed, eps=eps)
 
     # matrices ------------------------------------------------------------
     @property
@@ -423,6 +510,8 @@ for the Lie–Poisson family, got 'g['
         A non-rational pattern raises :class:`NotRationalError` unless
         ``cyclotomic=True``: then the field's coefficients lie in Q(ω) and it is
         usable in ``cyclo:N`` (n | N) and ``gf:P`` (P ≡ 1 mod n) only."""
+        if signs is None and isinstance(kind, str) and kind.startswith("g[") and kind.endswith("]"):
+            kind, signs = "g", kind[2:-1]  # the name of field_names()
         if isinstance(power, bool) or not hasattr(power, "__index__"):
             raise InputError(f"power: expected an integer (the power of the shift A), got {power!r}")
         power = int(power)
@@ -530,11 +619,12 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
     n ≤ :data:`RANDOM_POINT_SYSTEM_CHECK_MAX_N`, when
 
     * x is an equilibrium (Hs x = 0: every map of the family fixes it);
-    * H̃(x, ε) has a pole, or the first step of Φ_f or of Φ_g (the commuting
-      flow's map, which certificates step too) is singular;
-    * Φ_f(x) or Φ_g(x) has X(u) singular (x on the critical set of Φ_f or Φ_g,
+    * H̃(x, ε) has a pole, or the first step of a map a certificate steps from x
+      is singular: Φ_f, Φ_g[s] of every rational involution s of
+      :meth:`LiePoissonSystem.involutions` and the control map;
+    * the first step of one of these maps has X(u) singular (x on its critical set,
       which the map sends into the invariant singular set, where its inverse and
-      the other map's step are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
+      the other maps' steps are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
       steps Φ_f at Φ_g(x)).
 
     A draw that is not rejected is the same as before these rules, so points
@@ -583,11 +673,28 @@ def _degenerate_for(system, x, eps) -> bool:
 
     try:
         Htilde(system.field("f"), x, eps, ar)
-        y = first_step(system.field("f"))
-        z = first_step(system.field("g"))  # the commuting flow's map, which certificates step too
+        for name in system.field_names() + ("control",):  # every map a certificate steps from x
+            if hankel_singular(first_step(system.field(name))[:system.n]):
+                return True
     except (PoleError, SingularMatrix):
         return True
-    return hankel_singular(y[:system.n]) or hankel_singular(z[:system.n])
+    return False
+
+
+class _Hamiltonian:
+    """H(x) = xᵀ Hs x / 2 as a :class:`~exact_khk.systems.base.Function` (the continuous-time
+    energy; a control: Kahan's map conserves H̃, not H)."""
+
+    name, text, depends_on_eps = "H", "x^T Hs x / 2", False
+
+    def __init__(self, system):
+        self.system = system
+
+    def __call__(self, ar, x, eps):
+        return self.system.hamiltonian(ar, x)
+
+    def gradient(self, ar, x, eps):
+        return [sum((ar.convert(h) * t for h, t in zip(row, x)), ar.zero) for row in self.system.hessian]
 
 
 def b0_signs(n: int) -> str:
