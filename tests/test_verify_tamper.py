@@ -312,3 +312,50 @@ def test_a_claim_selection_is_partially_verified(certs):
     d["checks"] = [c for c in d["checks"] if " H12" not in c["name"] and " H23" not in c["name"]
                    and " H31" not in c["name"]]
     assert verify(consistent(d)).exit_status == 4
+
+
+# --- the registry's verdict rules and its measure claim, re-derived --------------------
+
+RULE_FILES = {
+    # Kahan's Lotka-Volterra map preserves dx dy/(xy): the measure claim and its control
+    "measure": 'name = "lv-measure"\nvariables = ["x", "y"]\n[field]\nx = "x*(1 - y)"\ny = "y*(x - 1)"\n'
+               '[measure]\ndensity = "1/(x*y)"\n',
+    # an equilibrium: every control is inapplicable, even one that fails (INCONCLUSIVE)
+    "equilibrium": 'name = "eq"\nvariables = ["x", "y"]\n[field]\nx = "x*y"\ny = "-x*y"\n[integrals]\nI = "x + y"\n'
+                   '[defaults]\nx0 = ["0", "0"]\n',
+    # the Hirota-Kimura integrals in published form: their eps -> 0 limit is the constant 1
+    "hk": 'name = "hk"\nvariables = ["x1", "x2", "x3"]\n[field]\nx1 = "x2*x3"\nx2 = "-2*x3*x1"\nx3 = "3*x1*x2"\n'
+          '[integrals]\nI1 = "(1 + 6*eps**2*x1**2)/(1 - 3*eps**2*x2**2)"\n[defaults]\nx0 = ["1", "2", "3"]\n',
+}
+
+
+@pytest.fixture(scope="module")
+def rule_certs(tmp_path_factory):
+    out = {}
+    for name, text in RULE_FILES.items():
+        path = tmp_path_factory.mktemp(name) / f"{name}.toml"
+        path.write_text(text)
+        out[name] = json.loads(json.dumps(certify(path, steps=3).to_json()))
+    return out
+
+
+def test_the_registry_rules_are_rederived(rule_certs):
+    assert [rule_certs[k]["status"] for k in ("measure", "equilibrium", "hk")] == ["VALID", "INCONCLUSIVE", "VALID"]
+    for name, d in rule_certs.items():
+        report = verify(d)
+        assert report.ok and report.exit_status == 0, (name, report.summary())
+        assert report.rederived == report.records == len(d["checks"])
+
+
+@pytest.mark.parametrize("which, record, field, value", [
+    ("measure", "invariant measure", "holds", False),
+    ("measure", "control: measure with density 1 preserved", "applicable", False),
+    ("equilibrium", "control: I at a perturbed point", "applicable", True),
+    ("hk", "control: I1 at eps = 0 conserved", "applicable", True),
+])
+def test_the_registry_rules_tampered_are_refused(rule_certs, which, record, field, value):
+    d = copy.deepcopy(rule_certs[which])
+    check = next(c for c in d["checks"] if c["name"] == record)
+    assert check[field] != value
+    check[field] = value
+    refused(consistent(d), record)

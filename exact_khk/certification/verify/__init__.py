@@ -43,7 +43,7 @@ a system file that covers only some of the claims the system declares (a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import replace, dataclass
 
 from exact_khk.certification.verify.fields import (RATIONAL_ARITHS, Undefined, _Evaluate, _Rationals,  # noqa: F401
                                                    cyclotomic_polynomial, exact_field, _show)
@@ -203,7 +203,10 @@ def expected_records(ctx) -> tuple:
                 f"(a --claims selection, which the certificate does not record)")
     from exact_khk.certification.verify.records import ex_declared_controls
 
-    return [r for k in chosen for r in by_kind[k]] + ex_declared_controls(ex), note
+    records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(ex)
+    # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
+    fixed = lambda: "x0 is a fixed point of Phi_f" if ex.ctx.same(ex.ctx.pts[1], ex.ctx.pts[0]) else None  # noqa: E731
+    return [r if r.expected else replace(r, always=fixed) for r in records], note
 
 
 def _records(cert, data, F, orbit_ok):

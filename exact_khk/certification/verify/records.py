@@ -42,14 +42,15 @@ class Expect:
     expected: bool
     derive: object = None
     degenerate: object = None
+    always: object = None      # a reason that makes the control inapplicable even when it fails
 
 
 def claim(name, statement, derive):
     return Expect(name, statement, True, derive)
 
 
-def control(name, statement, derive, degenerate=None):
-    return Expect(name, statement, False, derive, degenerate)
+def control(name, statement, derive, degenerate=None, always=None):
+    return Expect(name, statement, False, derive, degenerate, always)
 
 
 def rederive(rec):
@@ -60,6 +61,8 @@ def rederive(rec):
     except UNDEFINED:
         holds, residual = None, "n/a"
     applicable = True
+    if not rec.expected and rec.always is not None and rec.always():
+        applicable = False
     if not rec.expected and holds is not False and rec.degenerate is not None and rec.degenerate():
         applicable = False
     return holds, residual, applicable
@@ -370,6 +373,10 @@ class LPDegeneracy:
             return "x0 is an equilibrium"
         return None
 
+    def equilibrium(self):
+        """x0 an equilibrium (Hs x0 = 0): a one-point orbit shows nothing, even where a control fails."""
+        return "x0 is an equilibrium" if not any(_matvec(self.Hq, self.x0)) else None
+
     def planar(self):
         if self.n != 2:
             return None
@@ -469,7 +476,7 @@ def lp_controls(lp):
                                           lazy_orbit(_lp_field(n, bad), c.e, c.x0, K))), deg.non_admissible),
         control("control: integral H~ at a perturbed point",
                 f"[control, must fail] H~ at x0 with its last coordinate perturbed by 2^-60 relative equals "
-                f"H~(x_{K}) on the orbit", perturbed, deg.perturbed)]
+                f"H~(x_{K}) on the orbit", perturbed, deg.perturbed, deg.equilibrium)]
 
 
 #: the Lie–Poisson certificate's kinds of records, in the order ``certify`` writes them
@@ -580,7 +587,8 @@ def ex_integrals(ex):
             I0 = ex.fn(text, f"system.integrals.{name}", eps=0 * c.e, name=name, table=ex.lib_integrals)
             out.append(control(f"control: {name} at eps = 0 conserved",
                                f"[control, must fail] the eps -> 0 limit of {name} (the continuous-time quantity) "
-                               f"is conserved along the Phi_f orbit", lambda I0=I0: compare(conserved(I0, pts))))
+                               f"is conserved along the Phi_f orbit", lambda I0=I0: compare(conserved(I0, pts)),
+                               lambda lib=lib: "constant" if _constant(lib.at_eps_zero()) else None))
     return out
 
 
@@ -703,6 +711,27 @@ def ex_cmoq(ex):
                 lambda: c.same(pts[1], pts[0]))]
 
 
+def _constant(fn) -> bool:
+    """Whether the library's reduced rational function num/den is free of x (every partial of num/den is 0)."""
+    dnum, dden = fn.partials()
+    return all((fn.den * a - fn.num * b).is_zero() for a, b in zip(dnum, dden))
+
+
+def ex_measure(ex):
+    c, K, pts, f = ex.ctx, ex.ctx.K, ex.ctx.pts, ex.fields["f"]
+    text = ex.spec["measure"]["density"]
+    m = ex.fn(text, "system.measure.density")
+    det = lambda k: c.memo(("det dPhi", k), lambda: determinant(dphi(f, c.e, pts[k], pts[k + 1])))  # noqa: E731
+    lib = ex.ctx.system.measure()
+    return [
+        claim("invariant measure", f"m(Phi(x)) det dPhi(x) = m(x), m = {text}: the measure m(x) dx is preserved "
+              f"at the {K} orbit points", lambda: compare((k, lambda k=k: (m(pts[k + 1]) * det(k), m(pts[k])))
+                                                          for k in range(K))),
+        control("control: measure with density 1 preserved", "[control, must fail] det dPhi(x) = 1 at the orbit "
+                "points (the density 1 in place of m)", lambda: compare((k, lambda k=k: (det(k), 1)) for k in range(K)),
+                lambda: "constant density" if hasattr(lib, "partials") and _constant(lib) else None)]
+
+
 def ex_declared_controls(ex):
     pts = ex.ctx.pts
     return [control(f"control: {name} conserved by Phi_f",
@@ -715,7 +744,7 @@ def ex_declared_controls(ex):
 #: the claims of a system given by expressions, in the order ``certify`` writes them: name ->
 #: the function listing its records (the declared controls come after, always)
 EXPRESSION_KINDS = {"reversibility": ex_reversibility, "integrals": ex_integrals, "poisson": ex_poisson,
-                    "commutation": ex_commutation, "jacobian": ex_jacobian, "cmoq": ex_cmoq}
+                    "commutation": ex_commutation, "jacobian": ex_jacobian, "cmoq": ex_cmoq, "measure": ex_measure}
 
 
 def declared_claims(system) -> tuple:
@@ -723,7 +752,7 @@ def declared_claims(system) -> tuple:
     list (the file's ``claims``, else all of them): what ``certify`` runs without ``--claims``."""
     has = {"reversibility": True, "jacobian": True, "integrals": bool(system.integrals()),
            "poisson": system.poisson() is not None, "commutation": len(system.field_names()) > 1,
-           "cmoq": system.hamiltonian_form() is not None}
+           "cmoq": system.hamiltonian_form() is not None, "measure": system.measure() is not None}
     known = tuple(k for k in EXPRESSION_KINDS if has[k])
     own = getattr(system, "claims", None) or known
     return known, tuple(k for k in EXPRESSION_KINDS if k in own)
