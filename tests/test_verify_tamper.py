@@ -209,10 +209,16 @@ def test_undecided_holds_and_another_arithmetic_name_in_a_record(certs):
 
 
 def test_inapplicable_control_made_applicable_and_back(certs):
-    # the example's "I1 at eps = 0" control did not fail: recorded applicable (it can fail elsewhere)
+    # the example's "I1 at eps = 0" control: its eps -> 0 limit is the constant 1, so it cannot fail
+    # and is recorded inapplicable; the euler-top's perturbed-point control can fail: applicable
     d = copy.deepcopy(certs["example"])
     c = next(c for c in d["checks"] if c["name"] == "control: I1 at eps = 0 conserved")
-    assert c["holds"] is True and c["applicable"] is True
+    assert c["holds"] is True and c["applicable"] is False
+    c["applicable"] = True
+    refused(consistent(d), "control: I1 at eps = 0 conserved")
+    d = copy.deepcopy(certs["euler-top"])
+    c = next(c for c in d["checks"] if c["name"].startswith("control: ") and "perturbed" in c["name"])
+    assert c["applicable"] is True
     c["applicable"] = False
     refused(consistent(d), "recorded applicable = false, re-derived: the control can fail here")
 
