@@ -35,7 +35,7 @@ from fractions import Fraction
 
 import flint
 
-from exact_khk.diagnostics.kernels import _Evaluator, _point, lift, monomials, to_mpoly
+from exact_khk.diagnostics.kernels import _Evaluator, _point, canonical_nullspace, lift, monomials, to_mpoly
 from exact_khk.errors import InputError, SingularStepError
 
 #: the fit of one entry at degree δ solves a system with 2·C(N + δ, N)·C(k + J, J) unknowns (k integrals
@@ -48,32 +48,6 @@ MAX_TANGENT_WORK = 4_000_000
 STABLE_ORBITS = 3
 #: random column orders tried for sparse kernel vectors (:func:`circuits`)
 CIRCUIT_ORDERS = 200
-
-
-def _rref_pivots(R, rank, m):
-    pivots, row = [], 0
-    for c in range(m):
-        if row < rank and int(R[row, c]) != 0:
-            pivots.append(c)
-            row += 1
-    return pivots
-
-
-def canonical_nullspace(rows, m, p):
-    """(pivots, free, canonical basis vectors) of the nullspace of ``rows`` (ints mod p, m columns):
-    v_f = e_f − Σ_i R[i, f] e_{pivot_i} from the reduced echelon form R."""
-    R, rank = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p).rref()
-    pivots = _rref_pivots(R, rank, m)
-    piv = set(pivots)
-    free = [c for c in range(m) if c not in piv]
-    basis = []
-    for f in free:
-        v = [0] * m
-        v[f] = 1
-        for i, c in enumerate(pivots):
-            v[c] = (-int(R[i, f])) % p
-        basis.append(v)
-    return pivots, free, basis
 
 
 def _orbit_with_tangents(fld, eps, x0, steps, p):

@@ -179,16 +179,29 @@ def orbit_kernel_mod(fld, eps, x0, exps, steps, p, margin) -> _OrbitKernel:
     ev = _Evaluator(exps)
     rows = [ev(q, 1, p) for q in pts]
     m = len(exps)
-    A = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p)
-    R, rank = A.rref()
+    pivots, _free, basis = canonical_nullspace(rows, m, p)
+    rank = len(pivots)
     head = flint.nmod_mat(len(rows) - margin, m, [v for r in rows[:-margin] for v in r], p).rank() \
         if len(rows) > margin else -1
+    return _OrbitKernel(tuple(x0), basis, m - rank, head == rank, periodic)
+
+
+def _rref_pivots(R, rank, m):
     pivots, row = [], 0
     for c in range(m):
         if row < rank and int(R[row, c]) != 0:
             pivots.append(c)
             row += 1
-    free = [c for c in range(m) if c not in set(pivots)]
+    return pivots
+
+
+def canonical_nullspace(rows, m, p):
+    """(pivots, free, canonical basis vectors) of the nullspace of ``rows`` (ints mod p, m columns):
+    v_f = e_f − Σ_i R[i, f] e_{pivot_i} from the reduced echelon form R."""
+    R, rank = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p).rref()
+    pivots = _rref_pivots(R, rank, m)
+    piv = set(pivots)
+    free = [c for c in range(m) if c not in piv]
     basis = []
     for f in free:
         v = [0] * m
@@ -196,7 +209,7 @@ def orbit_kernel_mod(fld, eps, x0, exps, steps, p, margin) -> _OrbitKernel:
         for i, c in enumerate(pivots):
             v[c] = (-int(R[i, f])) % p
         basis.append(v)
-    return _OrbitKernel(tuple(x0), basis, m - rank, head == rank, periodic)
+    return pivots, free, basis
 
 
 def orbit_kernel_exact(fld, eps, x0, exps, steps) -> list:
