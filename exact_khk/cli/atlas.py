@@ -32,7 +32,7 @@ def cmd_atlas(args):
     from exact_khk.cli.options import check_output
     from exact_khk.sweep.atlas import run_atlas, write_report
 
-    check_output(args.markdown)
+    check_output(args.markdown, "--markdown")
     figure = args.figure or str(Path(args.markdown).parent / "figures" / "atlas_degrees.png")
     rows, seconds, opts = run_atlas(args.out, args.systems, args.quick, args.workers, args.dask,
                                     echo=lambda line: print(line, file=sys.stderr))
