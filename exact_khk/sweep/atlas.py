@@ -134,7 +134,7 @@ def write_report(rows, seconds, opts, markdown, figure, command, quick=False):
         dim = a["dim"] if a else "?"
         lines.append(f"| {name} | {dim} | {lit} ({ref}) | {va} (ε = {a['eps'] if a else '?'}) | {vb} | "
                      f"{_summary(a)} |")
-        if va != vb:
+        if a and b and va != vb:
             findings.append(f"- **{name}**: the verdict differs between ε = {a['eps'] if a else '?'} ({va}) and "
                             f"ε = {SECOND_EPS} ({vb}).")
         expect = {"yes": "integrable", "no": "non-integrable"}.get(lit)
