@@ -45,6 +45,7 @@ COMMANDS = {
     "find-poisson": ("exact_khk.cli.discover", "discover Poisson tensors preserved by a Kahan map, with their Casimirs"),
     "classify": ("exact_khk.cli.classify", "integrable, non-integrable or undetermined: a verdict on a Kahan map "
                  "with its evidence"),
+    "atlas": ("exact_khk.cli.atlas", "classify every catalogue system (and a folder's system files) as a sweep; write docs/atlas.md"),
     "sweep": ("exact_khk.cli.sweep", "run one task over many systems, points and step sizes (locally or on Dask)"),
     "scale": ("exact_khk.cli.study", "compare floating and ball orbits with the exact orbit, step by step"),
     "enclose": ("exact_khk.cli.study", "certified enclosure of an orbit (naive balls and Lohner), real inputs"),

@@ -38,7 +38,7 @@ local engine therefore also enforces a hard limit from outside: it kills the
 worker process and replaces it (see :mod:`exact_khk.sweep.run`).
 
 >>> sorted(TASKS)
-['certify', 'degrees', 'find-integrals', 'orbit', 'probe', 'scale']
+['certify', 'classify', 'degrees', 'find-integrals', 'orbit', 'probe', 'scale']
 >>> rec = run_task({"key": "k", "params": {"task": "probe", "system": {"family": "lie-poisson", "n": 2, "seed": 1},
 ...                 "point": {"seed": 1}, "eps": "1/10", "arith": "flint", "steps": 1, "options": {}}})
 >>> rec["verdict"], rec["figures"]["n"], rec["error"]
@@ -50,6 +50,7 @@ from __future__ import annotations
 import ctypes
 import datetime
 import functools
+import json
 import math
 import os
 import signal
@@ -388,6 +389,21 @@ def _find_integrals(inp: TaskInput) -> dict:
                         "integrals": len(res.integrals), "verified": verified, "independent": res.independent}}
 
 
+def _classify(inp: TaskInput) -> dict:
+    from exact_khk.diagnostics.classify import classify
+
+    o = inp.options
+    res = classify(inp.system, eps=inp.eps, steps=inp.steps, degree=o.get("degree"), field=o.get("field", "f"),
+                   seed=o.get("line_seed", 0), exact=o.get("exact", 6),
+                   discover=() if o.get("no_discover", False) else ("measure", "poisson"))
+    data = res.to_json()
+    return {"verdict": {"integrable": "OK", "non-integrable": "OK"}.get(res.verdict, "UNDETERMINED"),
+            "detail": _one_line(f"{res.verdict}: {res.reason}"),
+            "figures": {"classification": res.verdict, "growth": data["growth"]["class"],
+                        "independent_integrals": res.independent_integrals,
+                        "json": json.dumps(data, sort_keys=True)}}
+
+
 def _probe(inp: TaskInput) -> dict:
     """An engine probe: no mathematics.  Sleeps ``sleep`` seconds; raises at the
     system seeds in ``fail``; runs for an hour in Python (short sleeps, which
@@ -456,6 +472,16 @@ register(TaskKind(
              "line_seed": Option(_nonnegative_int, "seed of the random orbits and primes (default 0)")},
     arith="exact", default_steps=0, min_steps=0, verdicts=("FOUND", "NONE"), ok="FOUND",  # steps 0: automatic
     figures=("kernel_dim", "verified", "independent")))
+register(TaskKind(
+    "classify", _classify, "exact_khk.diagnostics.classify: integrable / non-integrable / undetermined with "
+    "its evidence (figures.json: classify's JSON)",
+    options={"field": _FIELD,
+             "degree": Option(_positive_int, "largest degree of the integral search (default: classify's)"),
+             "exact": Option(_nonnegative_int, "exact degrees over Q for the first K iterates (default 6)"),
+             "line_seed": Option(_nonnegative_int, "seed of the random primes, lines and orbits (default 0)"),
+             "no_discover": Option(_bool, "skip the invariant-measure and Poisson searches")},
+    arith="exact", default_steps=20, min_steps=4, verdicts=("OK", "UNDETERMINED"),
+    figures=("classification", "growth", "independent_integrals")))
 register(TaskKind(
     "probe", _probe, "engine probe (no mathematics): sleeps, fails or hangs on request",
     options={"sleep": Option(_seconds, "seconds every probe sleeps"),
