@@ -20,7 +20,7 @@ def register(sub):
     p = sub.add_parser(
         "sweep", help="run one task over many systems, points and step sizes (locally or on Dask)",
         description="Run the task of a sweep spec (TOML: the systems, points, step sizes, arithmetics "
-                    "and the task: certify, orbit, scale, degrees, find-integrals, probe) on every "
+                    "and the task: certify, orbit, scale, degrees, find-integrals, classify, probe) on every "
                     "combination. One JSON line per task is appended to DIR/results.jsonl as tasks "
                     "finish; rerunning the same command skips the tasks already done. A summary (counts "
                     "by verdict, tables, the slowest tasks, plots) is written to DIR and printed. See "
