@@ -29,7 +29,7 @@ import flint  # noqa: E402
 
 from exact_khk import KahanMap, LiePoissonSystem  # noqa: E402
 from exact_khk.studies.output import write_atomic  # noqa: E402
-from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
+from exact_khk.kahan.map import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 
