@@ -627,8 +627,8 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
       the other maps' steps are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
       steps Φ_f at Φ_g(x)).
 
-    A draw that is not rejected is the same as before these rules, so points
-    that were fine stay the same.  After 200 draws the system-dependent rules
+    The system-dependent rules only reject draws of the same stream: a first draw off
+    the singular sets that passes them is the point drawn without a system.  After 200 draws the system-dependent rules
     are dropped (a system whose every small point is degenerate, e.g. Hs = 0).
     """
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
