@@ -47,11 +47,11 @@ import mpmath  # noqa: E402
 import sympy  # noqa: E402
 
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
-from exact_khk.linalg.circulant import exact_step  # noqa: E402
+from exact_khk.systems.lie_poisson.circulant import exact_step  # noqa: E402
 from exact_khk.systems.lie_poisson.system import structure_from_system  # noqa: E402
-from exact_khk.linalg.paths import DENSE_BELOW  # noqa: E402
+from exact_khk.systems.lie_poisson.paths import DENSE_BELOW  # noqa: E402
 from exact_khk.studies.output import write_atomic  # noqa: E402
-from exact_khk.linalg.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
+from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
@@ -219,7 +219,7 @@ def orbit_steps(ns, heights, log, steps=16):
 def crossover(ns, heights, log, steps=4):
     """dense / structured and split / structured time of ``steps`` orbit steps from
     points of one exact orbit, by height: where ``method='auto'`` should switch to the
-    structured step (the rules in :mod:`exact_khk.kahan.map` and :mod:`exact_khk.linalg.split`)."""
+    structured step (the rules in :mod:`exact_khk.kahan.map` and :mod:`exact_khk.systems.lie_poisson.split`)."""
     rows = []
     for n in ns:
         fld = LiePoissonSystem.random(n, seed=1).field("f")

@@ -4,7 +4,7 @@
 For each n, the associated field g of the sign pattern '+-+…+' (a non-rational involution
 for n ≥ 3; over Q(ω)) of ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10, at the third
 orbit point from a small integer point: ``KahanMap(method="structured")`` (the exact DFT,
-:mod:`exact_khk.linalg.circulant_dft`) against ``method="dense"`` (in ``cyclo:n`` FLINT on
+:mod:`exact_khk.systems.lie_poisson.circulant_dft`) against ``method="dense"`` (in ``cyclo:n`` FLINT on
 the rational system of size 2n·φ(n); in ``gf:P``, P the default prime of
 :data:`exact_khk.arith.cyclotomic.DEFAULT_PRIME` (n | P − 1 for n ≤ 12), f'(x) entry by entry
 and an ``nmod_mat`` solve), and ``Htilde`` auto against ``method="dense"``; each pair

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The structured exact step's two rules of ``linalg.paths``, measured: its division routes and its split.
+"""The structured exact step's two rules of ``systems.lie_poisson.paths``, measured: its division routes and its split.
 
 Divisions (``--ns``, ``--bits``): along the orbit of ``random_point(n, 1)`` (field f of
 ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10), at the first point whose height reaches each
@@ -38,7 +38,7 @@ from bench import EPS, height  # noqa: E402
 from bench_exact import fmt, medians  # noqa: E402
 
 from exact_khk import LiePoissonSystem, get_arith  # noqa: E402
-from exact_khk.linalg import circulant as C  # noqa: E402
+from exact_khk.systems.lie_poisson import circulant as C  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The split step against the structured one high up exact orbits (n < 16), as a Markdown table.
 
-Where ``method='auto'`` splits at every height (``linalg.paths.AUTO_SPLIT_N``) or below a
+Where ``method='auto'`` splits at every height (``systems.lie_poisson.paths.AUTO_SPLIT_N``) or below a
 height (``AUTO_SPLIT_BELOW``), the split step should stay faster than the structured one
 up to the heights users reach.  Along the orbit of ``random_point(n, 1)`` (field f of
 ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10), at the first point whose height reaches

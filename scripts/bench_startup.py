@@ -36,7 +36,7 @@ n, repeats, exact_step = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3] == "1"
 t0 = time.perf_counter()
 from exact_khk import KahanMap, LiePoissonSystem
 from exact_khk.systems.lie_poisson.system import random_point
-import exact_khk.arith.cyclotomic, exact_khk.linalg.circulant  # imports are not set-up
+import exact_khk.arith.cyclotomic, exact_khk.systems.lie_poisson.circulant  # imports are not set-up
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 out = {"n": n, "import": time.perf_counter() - t0}
 times = {"system": [], "f": [], "g": []}

@@ -29,7 +29,7 @@ import flint  # noqa: E402
 
 from exact_khk import KahanMap, LiePoissonSystem  # noqa: E402
 from exact_khk.studies.output import write_atomic  # noqa: E402
-from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
+from exact_khk.kahan.map import DIXON_BITS, SMALL_ANSWER_MIN_BITS  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 
@@ -106,7 +106,7 @@ def write(path, info, args, rows, dixon, elapsed):
               "Time of python-flint's Dixon solve (`fmpq_mat.solve(algorithm=\"dixon\")`, with the conversions "
               "the dense step makes) over `fmpz_mat.solve` on the 2n×2n integer system at points of the climb "
               "(below 1: Dixon faster). The dense step uses Dixon along orbits for 8 ≤ 2n < 16 from "
-              f"{SMALL_ANSWER_MIN_BITS} bits up to {DIXON_BITS}·(2n − 6) bits (`exact_khk.linalg.paths.DIXON_BITS`).", "",
+              f"{SMALL_ANSWER_MIN_BITS} bits up to {DIXON_BITS}·(2n − 6) bits (`exact_khk.kahan.map.DIXON_BITS`).", "",
               "| n | 2n | " + " | ".join(f"≈ {h} bits" for h, _ in dixon[0][1]) + " |",
               "|---|---|" + "---|" * len(dixon[0][1])]
         L += [f"| {n} | {2 * n} | " + " | ".join(f"{q:.2f}" for _, q in cells) + " |" for n, cells in dixon]

@@ -14,7 +14,7 @@ from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import jacobiator
 from exact_khk.certification.lie_poisson_flint import FlintForms
 from exact_khk.linalg.dense import matmul, transpose
-from exact_khk.linalg.dihedral import BlockMatrix, Mixed
+from exact_khk.systems.lie_poisson.dihedral import BlockMatrix, Mixed
 from exact_khk.certification.lie_poisson import htilde_definition
 from exact_khk.linalg.flintmat import rank, rows, uses_flint
 from exact_khk.systems.lie_poisson.invariants import (Htilde, Pi, Pi_from_q, grad_Htilde, grad_Htilde_dual,

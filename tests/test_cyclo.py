@@ -407,18 +407,18 @@ def test_native_matmul_is_the_generic_product(N):
 
 
 def test_coefficient_linear_algebra_within_its_memory_bounds(monkeypatch):
-    # a rational M is solved over Q; beyond the bounds of linalg.paths the generic loops and
+    # a rational M is solved over Q; beyond the bounds of linalg.dense the generic loops and
     # elimination run (orbit --arith cyclo:10000: φ = 4000, a 24 000-square system otherwise)
-    from exact_khk.linalg import dense, paths
+    from exact_khk.linalg import dense
     ar = get_arith("cyclo:7")
     z = ar.gen
     M = [[Fraction(2), Fraction(1, 3)], [Fraction(-1), Fraction(5)]]
     B = [[z + 1], [z * z / 3]]
     X = ar.native_solve(M, B)
     assert all(sum((M[i][k] * X[k][0] for k in range(2)), ar.zero) == B[i][0] for i in range(2))
-    assert paths.coefficients_native(ar, 2) and not paths.coefficients_native(get_arith("cyclo:10000"))
-    assert not paths.coefficients_native(ar, paths.CYCLO_REGULAR_MAX_SIZE // 6 + 1)
-    monkeypatch.setattr(paths, "CYCLO_REGULAR_MAX_SIZE", 0)          # every solve by elimination
+    assert dense.coefficients_native(ar, 2) and not dense.coefficients_native(get_arith("cyclo:10000"))
+    assert not dense.coefficients_native(ar, dense.CYCLO_REGULAR_MAX_SIZE // 6 + 1)
+    monkeypatch.setattr(dense, "CYCLO_REGULAR_MAX_SIZE", 0)          # every solve by elimination
     monkeypatch.setattr(type(ar), "native_solve", lambda *a: pytest.fail("native_solve past its bound"))
     M2 = [[z, ar.convert(1)], [ar.convert(2), z * z]]
     X2, _ = dense.solve(ar, M2, B)

@@ -10,7 +10,7 @@ import sympy as sp
 
 from exact_khk import InputError, KahanMap, LiePoissonSystem, SingularStepError, get_arith
 from exact_khk.kahan import map as kahan
-from exact_khk.linalg.paths import SMALL_ANSWER_MIN_BITS
+from exact_khk.kahan.map import SMALL_ANSWER_MIN_BITS
 from exact_khk.systems.quadratic import QuadraticField
 from exact_khk.systems.lie_poisson.system import random_point
 

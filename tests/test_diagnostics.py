@@ -163,7 +163,7 @@ def test_geometric_growth_hands_over_to_polynomial_arithmetic():
 def test_no_hand_over_from_the_dimension_of_the_rule(monkeypatch):
     """From DEGREES_HAND_OVER_BELOW_DIM on, geometric growth stays with values (faster there):
     the rule lowered to 8 keeps cyclic-8 on values, which stop before the degree past max_degree."""
-    from exact_khk.linalg import paths
+    from exact_khk.systems.lie_poisson import paths
 
     _, fld = resolve_field(CYCLIC_8, "f")
     assert line_run(fld, F(1, 10), GOOD, 5, random.Random(1), 1000)[1] == "polynomials"

@@ -196,3 +196,26 @@ def test_no_family_is_named_outside_its_folder():
              and module != "exact_khk.certification.verify"
              for source in [path.read_text(encoding="utf-8")] for m in pattern.finditer(source)]
     assert found == []
+
+
+#: what only the Lie–Poisson family knows (its fast steps and their table of rules live in its folder)
+FAMILY = "exact_khk.systems.lie_poisson"
+
+
+def family_imports(source: str, module: str, is_package: bool = False) -> list:
+    """The imports of the family's modules in ``source`` (of ``module``)."""
+    return [f"{module}:{line} imports {target}" for line, target in imported_modules(source, module, is_package)
+            if target == FAMILY or target.startswith(FAMILY + ".")]
+
+
+def test_linear_algebra_and_the_kahan_map_know_no_family():
+    """linalg/ keeps rings and solvers and kahan/ asks the field for its fast steps
+    (``field.structured_steps``): neither imports the family, deferred imports included."""
+    found = [hit for module, path, is_package in package_modules() if layer_of(module) in ("linalg", "kahan")
+             for hit in family_imports(path.read_text(encoding="utf-8"), module, is_package)]
+    assert found == []
+    # negative controls: a deferred import of the family's steps, and one through its package
+    assert family_imports("def f():\n    from exact_khk.systems.lie_poisson import circulant\n",
+                          "exact_khk.kahan.map") != []
+    assert family_imports("from ..systems.lie_poisson.paths import SPLIT_N\n", "exact_khk.kahan.map") != []
+    assert family_imports("from ..systems.quadratic import QuadraticField\n", "exact_khk.kahan.map") == []

@@ -1,5 +1,5 @@
 """The division in Z[t]/(tⁿ ∓ 1) behind the structured exact step
-(:meth:`exact_khk.linalg.circulant.CirculantRing.solve`), against python-flint's dense
+(:meth:`exact_khk.systems.lie_poisson.circulant.CirculantRing.solve`), against python-flint's dense
 ``fmpz_mat.solve`` of the n×n circulant (or negacirculant) system (an independent algorithm)."""
 
 import random
@@ -8,7 +8,7 @@ import pytest
 
 flint = pytest.importorskip("flint")
 
-from exact_khk.linalg.circulant import UNIT_PRIME, CirculantRing, rational_reconstruction  # noqa: E402
+from exact_khk.systems.lie_poisson.circulant import UNIT_PRIME, CirculantRing, rational_reconstruction  # noqa: E402
 from exact_khk.linalg.dense import SingularMatrix  # noqa: E402
 
 
@@ -37,7 +37,7 @@ def _dense_reference(R, d, rhs):
 def route(request, monkeypatch):
     """Every division of the test by Cramer's rule down the tower, or (but at n = 1) by the
     fixed-point division."""
-    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson import circulant as C
 
     bits = 0 if request.param == "fixed point" else 10 ** 9
     for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK"):
@@ -100,7 +100,7 @@ def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
     starts from d's values at the roots of tⁿ + 1 (a twisted DFT): it answers without the
     fallback, whatever the hint, and equals the dense negacirculant solve; the DFT of the
     cyclic ring in its place does not converge to d⁻¹ (the negative control)."""
-    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson import circulant as C
 
     rng = random.Random(12)
     n = 16
@@ -151,7 +151,7 @@ def test_fixed_point_division_with_hints_far_off(monkeypatch):
     from fractions import Fraction
 
     from exact_khk import KahanMap, LiePoissonSystem
-    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson import circulant as C
     from exact_khk.systems.lie_poisson.system import random_point
 
     rng = random.Random(11)
@@ -240,14 +240,14 @@ def test_rational_reconstruction():
 def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     """Along an orbit the fixed-point division answers on its own: Cramer's rule down the
     tower is a fallback for numerics out of reach (and the route of small Cramer bounds,
-    :func:`~exact_khk.linalg.circulant.by_norm`: here the first step, whose small point
+    :func:`~exact_khk.systems.lie_poisson.circulant.by_norm`: here the first step, whose small point
     is solved unsplit, and the small factors of tⁿ − 1 the later steps split off), and a precision search that gives up early (as a first step with
     answers of ~n·hd bits once did for n ≥ 32) would send every first step there.  The
     first answer is checked against the fallback's."""
     from fractions import Fraction
 
     from exact_khk import get_arith
-    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson import circulant as C
     from exact_khk.systems.lie_poisson.system import LiePoissonSystem, random_point
 
     st = C.circulant_structure(LiePoissonSystem.random(n, seed=3).field("f"))
@@ -285,7 +285,7 @@ def test_certificate_divisions_need_no_bound(monkeypatch):
     definition solves (answers ≈ 1.33× d's height) missed 19 times here, each miss then
     costing an attempt at the bound's 6× precision (5edf94a to e329474)."""
     from exact_khk import LiePoissonSystem, certify
-    from exact_khk.linalg import circulant as C
+    from exact_khk.systems.lie_poisson import circulant as C
     from exact_khk.systems.lie_poisson.system import random_point
 
     asked = []
@@ -302,7 +302,7 @@ def test_split_divide_equals_dense_circulant_solve(n):
     content first) gives the quotients of python-flint's dense circulant solve, for d
     and right-hand sides with common factors and a zero right-hand side; a d that
     vanishes at a root of unity is refused like ``CirculantRing.solve`` refuses it."""
-    from exact_khk.linalg.circulant import split_divide
+    from exact_khk.systems.lie_poisson.circulant import split_divide
 
     rng = random.Random(50 + n)
     R = CirculantRing(n)
@@ -324,11 +324,11 @@ def test_split_divide_equals_dense_circulant_solve(n):
 
 
 def test_division_rule_as_documented():
-    """``by_norm`` is the rule of the table in ``linalg.paths``: the tower while
+    """``by_norm`` is the rule of the table in ``systems.lie_poisson.paths``: the tower while
     H ≤ DIVISION_BY_NORM_MAX_BITS and b·H ≤ DIVISION_BY_NORM_MAX_WORK, b the odd part of m,
     always at m = 1."""
-    from exact_khk.linalg.circulant import by_norm
-    from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS as BITS, DIVISION_BY_NORM_MAX_WORK as WORK
+    from exact_khk.systems.lie_poisson.circulant import by_norm
+    from exact_khk.systems.lie_poisson.paths import DIVISION_BY_NORM_MAX_BITS as BITS, DIVISION_BY_NORM_MAX_WORK as WORK
 
     assert by_norm(1, 10 ** 9) and by_norm(256, BITS) and not by_norm(256, BITS + 1)
     assert by_norm(2, BITS) and not by_norm(8, BITS + 1) and WORK >= BITS

@@ -12,7 +12,7 @@ import pytest
 
 from exact_khk import KahanMap, LiePoissonSystem
 from exact_khk.cli.main import main
-from exact_khk.linalg.circulant import circulant_structure
+from exact_khk.systems.lie_poisson.circulant import circulant_structure
 from exact_khk.linalg.numtheory import ramanujan_sum
 from exact_khk.systems.lie_poisson.system import (_correlate, divisor_classes, involution_circulant, rational_sign_patterns,
                                                   structure_from_system)

@@ -16,14 +16,14 @@ import sympy as sp
 
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, NearSingularWarning, QuadraticField,
                        SingularStepError, get_arith, rational_sign_patterns)
-from exact_khk.linalg.circulant import circulant_structure, exact_htilde, exact_step, numeric_step
+from exact_khk.systems.lie_poisson.circulant import circulant_structure, exact_htilde, exact_step, numeric_step
 from exact_khk.systems.lie_poisson.system import structure_from_system
 from exact_khk.systems.lie_poisson.invariants import Htilde
-from exact_khk.linalg import circulant
+from exact_khk.systems.lie_poisson import circulant
 from exact_khk.arith import point_height as _height
-from exact_khk.linalg.paths import DENSE_BELOW
-from exact_khk.linalg import split as split_mod
-from exact_khk.linalg.paths import AUTO_SPLIT_BELOW
+from exact_khk.systems.lie_poisson.paths import DENSE_BELOW
+from exact_khk.systems.lie_poisson import split as split_mod
+from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_BELOW
 from exact_khk.systems.lie_poisson.system import random_point
 
 from .conftest import EXACT
@@ -48,7 +48,7 @@ def test_small_points_solve_unsplit(monkeypatch):
     """The rule of ``paths.UNSPLIT_MAX_WORK``: at n = 16 a point of height h with 16²·h at
     most that is solved over Z[t]/(t¹⁶ − 1) in one division, a higher one over the five
     factors t⁸ + 1, t⁴ + 1, t² + 1, t + 1, t − 1 (the same point either way)."""
-    from exact_khk.linalg.paths import UNSPLIT_MAX_WORK
+    from exact_khk.systems.lie_poisson.paths import UNSPLIT_MAX_WORK
 
     n, ar = 16, get_arith("flint")
     fld = LiePoissonSystem.random(n, seed=1).field("f")
@@ -304,7 +304,7 @@ def test_structured_step_at_n_256():
     """Exact step at n = 256 (the structure from the vectors: building the dense field
     would need (2n)³ tensor entries), checked against the equivalent form (docs/conventions.md)
     Φ(x) = (I + εf'(Φ(x))) x, an equation the solver never used."""
-    from exact_khk.linalg.circulant import circulant_ring, kahan_system, reflect
+    from exact_khk.systems.lie_poisson.circulant import circulant_ring, kahan_system, reflect
 
     n = 256
     s = LiePoissonSystem.random(n, seed=3)
@@ -364,7 +364,7 @@ def _cyclo_fields(n, rng):
 def test_cyclotomic_dft_step_and_htilde_equal_dense(n):
     """At points of Q(ζ_N) with ε in Q(ζ_N) (N = n and 2n), the DFT step and H̃ equal the dense
     solve over Q(ζ_N), for fields over Q and over Q(ω); ``auto`` takes the DFT step from n = 3."""
-    from exact_khk.linalg import circulant_dft
+    from exact_khk.systems.lie_poisson import circulant_dft
 
     rng = random.Random(n)
     for N in (n, 2 * n):
@@ -389,7 +389,7 @@ GF_PRIME = 4611686018420360881
 def test_finite_field_dft_step_and_htilde_equal_dense(n):
     """In gf:P with P ≡ 1 (mod n) the DFT over F_P gives the dense solve's step and H̃,
     for fields over Q and over Q(ω) (ω mapped to the n-th root of unity of gf:P)."""
-    from exact_khk.linalg import circulant_dft
+    from exact_khk.systems.lie_poisson import circulant_dft
 
     rng, ar = random.Random(n), get_arith(f"gf:{GF_PRIME}")
     for fld in _cyclo_fields(n, rng):
@@ -448,7 +448,7 @@ def test_cyclotomic_dft_needs_the_roots_of_unity():
     with pytest.raises(InputError, match="needs a field whose Jacobian blocks are circulant"):
         KahanMap(fld, "1/10", "ball:64", method="structured")
     import flint
-    from exact_khk.linalg.circulant import hankel_first_row
+    from exact_khk.systems.lie_poisson.circulant import hankel_first_row
     assert hankel_first_row([[flint.arb(1), flint.arb(2)], [flint.arb(2), flint.arb(1)]], cyclotomic=True) is None
 
 

@@ -148,7 +148,7 @@ class Arith:
     # A context may hold the n-th roots of unity exactly, for the n dividing
     # ``roots_of_unity`` (cyclo:N: ζ_N): then dft(rows, n, sign) -> for each list w of
     # n elements, [Σ_i w_i ω^(sign·i·j) for j < n], ω a primitive n-th root of unity,
-    # the exact DFT of the structured step (:mod:`exact_khk.linalg.circulant_dft`).
+    # the exact DFT of the structured step (:mod:`exact_khk.systems.lie_poisson.circulant_dft`).
     roots_of_unity = 0
     dft = None
     # A context may evaluate many linear forms at one point at once:

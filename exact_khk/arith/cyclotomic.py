@@ -58,7 +58,7 @@ DEFAULT_PRIME = 4611686018420360881
 
 #: the largest n·φ of ``dft`` (φ = 1 in gf:P): its transform holds (n·φ)² integers, built once
 #: (a memory bound: 4 million entries; the structured steps stay below 1024,
-#: ``linalg.paths.exact_dft_fits``)
+#: ``systems.lie_poisson.paths.exact_dft_fits``)
 DFT_MAX_SIZE = 2048
 
 #: the largest N of ``cyclo:N``: an element is a polynomial of degree < φ(N) ≤ N − 1,
@@ -434,7 +434,7 @@ class CycloArith(Arith):
         entries, C the companion matrix of Φ_N (multiplication by ζ).  Its determinant
         is the norm of det M, so it is singular exactly when M is (ZeroDivisionError).
         A rational M is solved over Q directly.  (``linalg.dense.solve`` calls this only
-        for sizes within ``linalg.paths.coefficients_native``.)"""
+        for sizes within ``linalg.dense.coefficients_native``.)"""
         K, phi, n, m = self.K, self.K.degree, len(M), len(B[0]) if B else 0
         q = flint.fmpq_mat
         Mc = self._coefficient_rows([e for row in M for e in row])  # entry (i, j), power k: [(i n + j) φ + k]

@@ -49,9 +49,9 @@ from __future__ import annotations
 import flint
 
 from exact_khk.errors import SingularStepError
-from exact_khk.linalg import circulant
+from exact_khk.systems.lie_poisson import circulant
 from exact_khk.linalg.dense import SingularMatrix
-from exact_khk.linalg.dihedral import BlockMatrix, Mixed
+from exact_khk.systems.lie_poisson.dihedral import BlockMatrix, Mixed
 from exact_khk.linalg.flintmat import column, fmpq_mat, fmpz_mat, mat, signed_columns, signed_rows
 from exact_khk.systems.lie_poisson.invariants import shift_index
 

@@ -323,8 +323,9 @@ def prove_jacobi(system, symbolic_hessian=False, eps_zero=False, perturb=False):
 
 #: the largest n whose conservation and commutation proofs ``prove_all`` runs.  n = 3 takes
 #: minutes (the default n = 3 system: 1.5, 1.3, 2.1 and 6.3 CPU minutes for conservation,
-#: its control, commutation and its control, under 130 MB; before Henrici's arithmetic
-#: conservation alone did not finish in 13 minutes); n ≥ 4 was not attempted and is refused
+#: its control, commutation and its control, under 130 MB, with Henrici's products and sums of
+#: fractions; with SymPy's plain rational-function arithmetic conservation alone did not finish
+#: in 13 minutes); n ≥ 4 is refused (not measured)
 PROVE_MAX_N = 3
 #: the largest coefficient (bits of a numerator or denominator of a, b, c) the proofs take: SymPy's
 #: rational functions grow with them (`prove --n 2` with a_0 = 2^b + 1: 1.9 s at b = 64, 4.8 s at

@@ -251,7 +251,7 @@ def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
 def line_route(dim: int, p: int) -> str:
     """Where :func:`line_run` starts for dimension ``dim`` over F_p: ``'values'`` or
     ``'polynomials'`` (the rule of :mod:`exact_khk.linalg.paths`)."""
-    from exact_khk.linalg.paths import DEGREES_BY_VALUES_MIN_DIM
+    from exact_khk.systems.lie_poisson.paths import DEGREES_BY_VALUES_MIN_DIM
 
     return "values" if dim >= DEGREES_BY_VALUES_MIN_DIM and p >= VALUES_MIN_PRIME else "polynomials"
 
@@ -263,7 +263,7 @@ def line_run(fld, eps, p, steps, rng, max_degree=None, progress=None) -> tuple:
     :data:`~exact_khk.linalg.paths.DEGREES_HAND_OVER_BELOW_DIM` (there the values' new
     points, each iterated from the line, and a last step that must fail at
     D = ``max_degree`` make that route about 1.6× slower, docs/benchmarks.md)."""
-    from exact_khk.linalg.paths import DEGREES_HAND_OVER_BELOW_DIM
+    from exact_khk.systems.lie_poisson.paths import DEGREES_HAND_OVER_BELOW_DIM
 
     if line_route(fld.dim, p) == "values":
         degs = valued_line_degrees(fld, eps, p, steps, rng, max_degree, progress,

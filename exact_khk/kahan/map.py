@@ -37,25 +37,16 @@ Methods (``method=``): ``'dense'`` solves the 2n×2n system (rational
 arithmetics with an integer kernel clear denominators once and solve over Z:
 python-flint ``fmpz_mat.solve``, along orbits its Dixon solve once the answers
 are known to be small, or Bareiss elimination for gmpy2; ``fraction`` is the
-plain-elimination reference); ``'structured'`` solves it as a 2×2
-system over circulants (:mod:`exact_khk.linalg.circulant`: exact in Q[t]/(tⁿ − 1), or
-by the DFT for ``float``/``mp:P``, or by the exact DFT in ``cyclo:N`` with n | N and
-``gf:P`` with n | P − 1, for the fields over Q(ω) too:
-:mod:`exact_khk.linalg.circulant_dft`); ``'split'`` (exact, n < 16, ``flint`` or
-``gmpy2``) as one 2×2 system over each factor Q(ζ_d) of Q[t]/(tⁿ − 1)
-(:mod:`exact_khk.linalg.split`).  ``'auto'`` (default) takes, for Lie–Poisson fields
-whose Hessian blocks are cyclic Hankel, the split path for ``gmpy2`` when
-n < 16, and for ``flint`` when n = 2, 3, 4, 5, 6, 12
-(:data:`~exact_khk.linalg.paths.AUTO_SPLIT_N`) and, below a height where the
-structured path overtakes it, n = 7, 8, 9, 10, 15 (:data:`~exact_khk.linalg.paths.AUTO_SPLIT_BELOW`);
-otherwise the structured path for exact ``flint`` steps, at n = 11, 13 once the
-point's height reaches :data:`~exact_khk.linalg.paths.DENSE_BELOW` (dense below);
-the exact DFT in ``cyclo:N`` (n | N) and ``gf:P`` (n | P − 1) when n ≥ 3
-(:data:`~exact_khk.linalg.paths.EXACT_DFT_STEP_MIN_N`);
-otherwise dense.  The rules follow the crossovers
-measured along orbits (docs/benchmarks.md).  Every path gives the same
-rational point; :attr:`KahanMap.path` says which a map takes.  ``gmpy2`` and
-``fraction`` may ask for the structured path explicitly.
+plain-elimination reference); ``'structured'`` and ``'split'`` are fast steps a field
+may offer: the map asks the field once
+(:meth:`~exact_khk.systems.quadratic.QuadraticField.structured_steps`), which answers
+with its steps and the rule choosing among them and the dense solve by dimension,
+point height and arithmetic, or with None (every step dense; 'structured' and
+'split' refused).  The Lie–Poisson fields offer a 2×2 solve over circulants and a
+split over the cyclotomic factors (:mod:`exact_khk.systems.lie_poisson.steps`, rules
+and their measurements in :mod:`exact_khk.systems.lie_poisson.paths`).  ``'auto'``
+(default) takes what the field's rule chooses.  Every path gives the same rational
+point; :attr:`KahanMap.path` says which a map takes.
 
 Floating arithmetics stay dense under ``'auto'``, so that ``float`` and ``mp:P``
 results are what p-bit arithmetic gives: the ``float`` step is LAPACK's
@@ -80,16 +71,18 @@ import math
 import warnings
 from fractions import Fraction
 
-from exact_khk.linalg import circulant, circulant_dft
 from exact_khk.arith import _is_element as _arith_is_element, as_point, get_arith, point_height as _height, to_element  # noqa: F401
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, SingularStepError
 from exact_khk.linalg.dense import SingularMatrix, solve
 from exact_khk.parsing import MAX_STEPS, _short, parse_rational
-from exact_khk.linalg.split import split_system
 from exact_khk.systems.quadratic import QuadraticField
-from exact_khk.linalg.paths import DIXON_BITS, SMALL_ANSWER_MIN_BITS, SPLIT_N, auto_path, EXACT_DFT_STEP_MIN_N
 
 METHODS = ("auto", "dense", "structured", "split")
+#: dense exact orbit steps (python-flint, 8 ≤ N < 16): Dixon's solve from this height (crossover measured for N = 8..14) ...
+SMALL_ANSWER_MIN_BITS = 128
+#: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
+#: 40 000, 60 000 bits for N = 8, 10, 12)
+DIXON_BITS = 10_000
 
 @functools.cache
 def _floating():
@@ -130,15 +123,15 @@ class KahanMap:
     ``eps`` is an exact rational (``'1/10'``, Fraction, int) or an element of
     the arithmetic; ``arith`` a name (see :func:`exact_khk.arith.get_arith`) or
     context, default the fastest exact one; ``method`` one of :data:`METHODS`
-    (see the module docstring).  ``structure`` is the
-    :class:`~exact_khk.linalg.circulant.CirculantStructure` the structured step uses, or
-    None; ``split`` whether exact steps take the split step (:mod:`exact_khk.linalg.split`)
-    instead of the dense one; ``switch_bits`` the point height in bits from which
-    the structured step takes over (0: the structured step, if any, everywhere).
-    See :attr:`path`.
+    (see the module docstring).  ``steps`` is what the field answered when asked for its
+    fast steps (:meth:`~exact_khk.systems.quadratic.QuadraticField.structured_steps`), or
+    None: every step dense.  ``structure`` is the structure the structured step uses, or
+    None; ``split`` whether exact steps take the split step instead of the dense one;
+    ``switch_bits`` the point height in bits from which the structured step takes over
+    (0: the structured step, if any, everywhere).  See :attr:`path`.
     """
 
-    method, split, structure, switch_bits = "dense", False, None, 0  # for maps built without __init__
+    method, steps = "dense", None  # for maps built without __init__
     #: whether this map's last dense step found a small answer (see ``_integer_steps``)
     _small_answers = False
     #: the prepared ``float`` step of this map's field and ε (see ``_lapack_step``)
@@ -152,12 +145,24 @@ class KahanMap:
         self.arith = ar = get_arith(arith)
         self.method = method
         self.eps, self.eps_exact = _read_eps(ar, eps)
-        self.split, self.structure, self.switch_bits = _choose_path(field, ar, method, self.eps)
+        self.steps = _ask_field(field, ar, method, self.eps)
         if not ar.exact:
             _floating()  # numpy's import belongs to the set-up, not to the first step's time
 
     def __repr__(self):
         return f"KahanMap({self.field.label}, eps={self.arith.format(self.eps)}, arith={self.arith.name})"
+
+    @property
+    def split(self) -> bool:
+        return self.steps is not None and self.steps.split
+
+    @property
+    def structure(self):
+        return None if self.steps is None else self.steps.structure
+
+    @property
+    def switch_bits(self) -> int:
+        return 0 if self.steps is None else self.steps.switch_bits
 
     @property
     def path(self) -> str:
@@ -177,9 +182,9 @@ class KahanMap:
         out = KahanMap.__new__(KahanMap)
         out.field, out.arith = self.field, self.arith
         out.eps, out.eps_exact = _read_eps(self.arith, eps)
-        # the split step's blocks are circulant for every ε ≠ 0 if for one (split.py)
-        out.method, out.split, out.structure, out.switch_bits = (self.method, self.split, self.structure,
-                                                                 self.switch_bits)
+        # the field's fast steps hold for every ε ≠ 0 if for one (the blocks' structure does not
+        # depend on ε)
+        out.method, out.steps = self.method, self.steps
         return out
 
     def system_matrix(self, x, sign=1):
@@ -245,16 +250,15 @@ class KahanMap:
                                  condition=None if ar.exact else math.inf)
 
     def _structured_step(self, x):
-        """The 2×2-over-circulants step (exact in Q[t]/(tⁿ − 1), or by the DFT)."""
+        """The field's structured step (``steps.step``), its singularity and κ read as the
+        dense step's."""
         ar, eps = self.arith, self.eps
-        if ar.exact:
-            exact = circulant_dft.exact_step if ar.dft is not None else circulant.exact_step
-            try:
-                return exact(self.structure, x, eps, ar)
-            except SingularMatrix:
-                raise self._singular(x, eps) from None
-        z, cond, _ = circulant.numeric_step(self.structure, x, eps, ar)
-        self._check_condition(z, cond, x, eps)
+        try:
+            z, cond = self.steps.step(x, eps, ar)
+        except SingularMatrix:
+            raise self._singular(x, eps) from None
+        if not ar.exact:
+            self._check_condition(z, cond, x, eps)
         return z
 
     def _integer_steps(self, x):
@@ -295,7 +299,7 @@ class KahanMap:
         last solution as kernel integers (s, L), x = s/L, so that no step clears
         denominators again."""
         K, eps = self.arith.integers, self.eps
-        S = split_system(self.field, K, K.num(eps), K.den(eps))
+        S = self.steps.split_system(K, K.num(eps), K.den(eps))
         s, L = K.split(x)
         while True:
             try:
@@ -311,9 +315,12 @@ class KahanMap:
 
     def _kind_at(self, x) -> str:
         """How the step at x is solved: ``'structured'``, ``'split'`` or ``'dense'``."""
-        if self.structure is not None and (not self.switch_bits or _height(self.arith, x) >= self.switch_bits):
+        steps = self.steps
+        if steps is None:
+            return "dense"
+        if steps.structure is not None and (not steps.switch_bits or _height(self.arith, x) >= steps.switch_bits):
             return "structured"
-        return "split" if self.split else "dense"
+        return "split" if steps.split else "dense"
 
     def _step(self, x):
         ar, eps = self.arith, self.eps
@@ -403,40 +410,12 @@ class KahanMap:
             return D.tolist() if self.arith.lapack else D
 
 
-def _choose_path(field, ar, method, eps):
-    """(split, circulant structure the step may use or None, ``switch_bits``): the
-    field declares its structure, :func:`~exact_khk.linalg.paths.auto_path` decides."""
+def _ask_field(field, ar, method, eps):
+    """The field's fast steps for ``method`` (:meth:`~exact_khk.systems.quadratic.QuadraticField.structured_steps`),
+    or None: dense.  The field decides, by its own table of rules."""
     if method not in METHODS:
         raise InputError(f"method: expected one of {', '.join(METHODS)}, got {method!r}")
-    if method == "dense":
-        return False, None, 0
-    K = ar.integers
-    if method == "split":
-        if K is None or split_system(field, K, K.num(eps), K.den(eps)) is None:
-            raise InputError("method: 'split' needs a rational arithmetic with an integer kernel (flint, "
-                             "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
-                             "blocks are circulant (Lie–Poisson fields)")
-        return True, None, 0
-    n = field.dim // 2
-    dft = ar.exact and circulant_dft.applies(ar, n)  # cyclo:N with n | N, gf:P with n | P − 1
-    usable = ar.rational or ar.fourier or dft
-    st = field.circulant_structure(cyclotomic=dft) if usable else None
-    # a declared structure splits for every n of SPLIT_N: built by the first split step, not here
-    splits = K is not None and st is not None and field.dim // 2 in SPLIT_N
-    if method == "structured":
-        if st is None:
-            why = circulant_dft.why_not(ar, n) if ar.dft is not None else None
-            raise InputError(f"method: 'structured' {why}" if why else
-                             "method: 'structured' needs a field whose Jacobian blocks are circulant "
-                             "(Lie–Poisson fields with cyclic Hankel Hessian blocks) and a rational, "
-                             "float or mp:P arithmetic, or cyclo:N with n | N or gf:P with n | P - 1")
-        return False, st, 0
-    if dft:
-        return False, (st if n >= EXACT_DFT_STEP_MIN_N else None), 0
-    if not ar.exact or K is None:
-        return False, None, 0  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
-    split, structured, bits = auto_path(n, K.name, splits, st is not None)
-    return split, (st if structured else None), bits
+    return None if method == "dense" else field.structured_steps(ar, method, eps)
 
 
 def kahan_step(field, x, eps, arith=None):

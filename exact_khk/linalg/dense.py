@@ -17,7 +17,30 @@ uses it instead of the generic elimination.
 from __future__ import annotations
 
 from exact_khk.errors import SingularMatrix
-from exact_khk.linalg.paths import EXACT_INVERSE_MAX_N, coefficients_native
+
+#: generic floating dense solve (``mp:P``): κ from the exact inverse up to this N, where
+#: N column solves cost no more than the estimator's five triangular solves (an
+#: operation count; at N = 4 the estimate would be ~50 % of the step)
+EXACT_INVERSE_MAX_N = 5
+#: ``cyclo:N`` linear algebra in FLINT on the coefficients (``CycloArith.native_solve``,
+#: ``native_matmul``, ``linear_forms``) for φ(N) up to this degree, and a solve of size m as
+#: one rational system of size m·φ(N) up to the next bound (1.2–9× faster than elimination
+#: over Q(ζ_N) for m·φ ≤ 32, 13× at 160, 45× at 240, 84× at 400, random systems).  Memory
+#: bounds, not tuned ones: that system has (m·φ)² entries and the companion powers φ³
+#: (``orbit --arith cyclo:10000``: m·φ = 24 000, tens of GB); beyond them elimination over
+#: Q(ζ_N), and a rational matrix is solved over Q at any N
+CYCLO_REGULAR_MAX_DEGREE = 128
+CYCLO_REGULAR_MAX_SIZE = 1024
+
+
+def coefficients_native(ar, m: int = 0) -> bool:
+    """Whether linear algebra of size m over ``ar`` runs in FLINT on its rational
+    coefficients (the ``cyclo:N`` row of the table of rules,
+    :mod:`exact_khk.systems.lie_poisson.paths`): always for arithmetics without a
+    ``coefficient_degree``; else φ ≤ :data:`CYCLO_REGULAR_MAX_DEGREE` and
+    m·φ ≤ :data:`CYCLO_REGULAR_MAX_SIZE`."""
+    phi = getattr(ar, "coefficient_degree", None)
+    return phi is None or (phi <= CYCLO_REGULAR_MAX_DEGREE and m * phi <= CYCLO_REGULAR_MAX_SIZE)
 
 
 def identity(ar, n):
@@ -184,7 +207,7 @@ def solve(ar, M, B, condition=None):
     estimate ``|M|_1 |M^-1|_1``: what the ``condition`` argument (a callable
     ``M ↦ κ or None``, e.g. :func:`~exact_khk.linalg.floating.binary64_condition`)
     returns, if anything; else from the same factorisation, |M⁻¹|₁ of the
-    inverse for N ≤ :data:`~exact_khk.linalg.paths.EXACT_INVERSE_MAX_N`, else
+    inverse for N ≤ :data:`EXACT_INVERSE_MAX_N`, else
     estimated (:func:`inverse_norm1_estimate`, O(N²), LAPACK's method).
     Raises :class:`SingularMatrix` if ``M`` is (exactly) singular.
     """

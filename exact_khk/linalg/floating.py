@@ -4,10 +4,10 @@
 ways, both plain p-bit arithmetic (every entry a sum of rounded products, in
 some order):
 
-* a field whose Jacobian blocks are circulant (it declares a
-  :class:`~exact_khk.linalg.circulant.CirculantStructure`, as Lie–Poisson
-  fields do) from the Hankel first rows m_kl of its Hessian: with y = Mx the
-  blocks of f'(x) are the circulants with first rows (docs/conventions.md)
+* a field whose Jacobian blocks are circulant (``field.circulant_structure()``
+  is not None) from the Hankel first rows m_kl of its Hessian and the structure's
+  ``jacobian_first_rows`` F: with y = Mx the blocks of f'(x) are the circulants
+  with first rows F applied to the X(m_kl)u, X(m_kl)v, e.g. (docs/conventions.md)
 
       f11: 2 X(m21)u + X(m22)v   f12: X(m22)u
       f21: −2 X(m11)u − X(m12)v  f22: −X(m12)u
@@ -55,15 +55,19 @@ import threading
 import numpy
 from numpy.lib.stride_tricks import as_strided
 
-from exact_khk.linalg.circulant import JACOBIAN_FIRST_ROWS as _FIRST_ROWS
 from exact_khk.linalg.dense import SingularMatrix
-from exact_khk.linalg.paths import BINARY64_CONDITION_MAX
+
+#: ``mp:P`` dense steps: κ from binary64 (M rounded, LAPACK's inverse) when N·κ ≤ this, where
+#: rounding and the inverse move κ by less than 2^-20 (an accuracy rule, not a tuned one;
+#: :func:`binary64_condition`); 0.6–0.7× mpmath.lu_solve's time
+#: at n = 2, 3 against 0.94–0.99× with κ in p bits
+BINARY64_CONDITION_MAX = 2.0 ** 32
 
 
 def _data(field, ar):
     """The field's coefficients as numpy data for ``ar`` (cached on the field):
     ``('circulant', X, F)`` with X the (4, n, n) cyclic Hankel matrices X(m11),
-    X(m12), X(m21), X(m22) (views of one (4, 2n) array) and F :data:`~exact_khk.linalg.circulant.JACOBIAN_FIRST_ROWS`, or ``('terms', rows, ks, coefs, L)`` (binary64 only)."""
+    X(m12), X(m21), X(m22) (views of one (4, 2n) array) and F the structure's ``jacobian_first_rows``, or ``('terms', rows, ks, coefs, L)`` (binary64 only)."""
     key = ("numpy system", ar.name)
     hit = field._cache.get(key)
     if hit is not None:
@@ -75,7 +79,7 @@ def _data(field, ar):
         m = numpy.array(rows, dtype=dtype).reshape(4, st.n)
         # the four cyclic Hankel matrices X(m_kl) as views (row k: m_kl[k], …, m_kl[k+n−1])
         hit = ("circulant", _viewer(dtype, 0, (4, st.n, st.n), (2 * st.n, 1, 1))(numpy.concatenate([m, m], axis=1)),
-               numpy.array([[ar.convert(t) for t in row] for row in _FIRST_ROWS], dtype=dtype))
+               numpy.array([[ar.convert(t) for t in row] for row in st.jacobian_first_rows], dtype=dtype))
     elif ar.lapack:
         N = field.dim
         _, jterms, lin, _ = field._converted(ar)  # ∂f_i/∂x_j = Σ_k c x_k, in the arithmetic
@@ -127,13 +131,13 @@ def _matrix_builder(data, N, ar, eps):
         # block (a, c), entry (i, k) = w_ac[(k − i) mod n] = [w | w][2a + c, n − i + k]
         blocks = _viewer(float if ar.lapack else object, n, (2, n, 2, n), (4 * n, -1, 2 * n, 1))
         # X(m) is symmetric: row 2b + c of p is X(m_b) u (c = 0) or X(m_b) v (c = 1); w = −ε × the
-        # first rows of f11, f12, f21, f22 = (−ε F) p, F = circulant.JACOBIAN_FIRST_ROWS
+        # first rows of f11, f12, f21, f22 = (−ε F) p, F = the structure's jacobian_first_rows
         if ar.lapack:
             eF = F * -eps
             first_rows = lambda x: eF @ (x.reshape(2, n) @ hankel).reshape(8, n)  # noqa: E731
         else:  # objects: only the products that F's zeros do not cancel (p: 6 of 8 rows, F: 6 of 32
             # entries), summed in the same order: the same values
-            terms = [[(k, F[r, k] * -eps) for k in range(8) if _FIRST_ROWS[r][k]] for r in range(4)]
+            terms = [[(k, F[r, k] * -eps) for k in range(8) if F[r, k] != 0] for r in range(4)]
 
             def first_rows(x):
                 p = {k: x[n * (k % 2):][:n] @ hankel[k // 2] for k in (0, 2, 3, 4, 6, 7)}

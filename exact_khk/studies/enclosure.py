@@ -98,7 +98,7 @@ every p in the box P.  The enclosures then hold for every p ∈ P at once:
   coefficients whose system gives no ``parameter_fields`` (q = (ε) only) is
   still enclosed: step 1 then steps the centre with the ball field, so
   y ∋ Φ(c_k; p) for every p ∈ P and the spread over P is wrapped into r at
-  every step (so were the Lie–Poisson blocks before: the box above was
+  every step (for the Lie–Poisson blocks that wrapping leaves the box above
   undecided at step 12).
 
 The drift of every integral the system declares is enclosed as
@@ -168,7 +168,7 @@ class BallKahan:
         # wide coefficients (real parameters in boxes): arb's preconditioned solve (elimination on
         # mid(M)^-1 M), far tighter than its default LU on wide entries (one step of the built-in
         # orbit with a_2 in [1.99, 2.01]: radius 4.7 by LU, 0.09 preconditioned); point coefficients:
-        # the default, as before
+        # arb's default solve
         self.algorithm = "precond" if _wide(fld) else None
 
     def _matrix(self, Jf, eps, sign):

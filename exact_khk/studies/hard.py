@@ -181,7 +181,7 @@ def _sci(q: Fraction, digits: int) -> str:
     """
     try:
         f = float(q)
-        if f or not q:  # in binary64's range: as before, e.g. '0.333333', '1e-12'
+        if f or not q:  # in binary64's range: %g of the float, e.g. '0.333333', '1e-12'
             return f"{f:.{digits}g}"
     except OverflowError:
         pass

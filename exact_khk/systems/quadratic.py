@@ -30,7 +30,7 @@ from math import lcm
 from ..arith import _as_fraction
 from ..errors import InputError
 from ..parsing import _short
-from ..linalg.paths import coefficients_native
+from ..linalg.dense import coefficients_native
 
 
 def certainly_zero(c) -> bool:
@@ -100,9 +100,21 @@ class QuadraticField:
         return self.quad
 
     def circulant_structure(self, cyclotomic=False):
-        """The :class:`~exact_khk.linalg.circulant.CirculantStructure` of a field whose
+        """The :class:`~exact_khk.systems.lie_poisson.circulant.CirculantStructure` of a field whose
         step's four n×n blocks are circulant (declared by the field), or None;
         ``cyclotomic``: blocks with entries in Q(ζ) count too."""
+        return None
+
+    def structured_steps(self, ar, method, eps):
+        """What a :class:`~exact_khk.kahan.map.KahanMap` solves its steps by besides the dense
+        solve, for ``method`` 'auto', 'structured' or 'split' and ε = ``eps`` (an element of
+        ``ar``): an object with ``split``, ``structure``, ``switch_bits``, ``step(x, eps, ar)``
+        and ``split_system(kernel, p, q)`` (a family's fast steps, e.g.
+        :class:`~exact_khk.systems.lie_poisson.steps.CirculantSteps`), or None: every step
+        dense.  A field without such steps (this default) refuses 'structured' and 'split'."""
+        if method in ("structured", "split"):
+            raise InputError(f"method: {method!r} needs a field whose Jacobian blocks are circulant "
+                             f"(Lie–Poisson fields); this field's steps are solved densely ('auto', 'dense')")
         return None
 
     @property
@@ -227,24 +239,19 @@ class QuadraticField:
         so the Kahan step x̃ = (I − εf'(x))^{-1}((I + εL)x + 2εc) — equal to
         x + 2ε(I − εf'(x))^{-1} f(x), since f'(x)x = 2Q(x) + Lx — is one
         integer solve.  For homogeneous f, R · v = q·den·xi.  Cached for the
-        last few (kernel, ε).  A field that declares circulant blocks gets its rows
-        from the structure (:func:`~exact_khk.linalg.circulant.structure_rows`, O(n²)
-        integer work, one common factor apart: the same solutions) instead of the
-        O(n³) rational Jacobian.
+        last few (kernel, ε).  The rows are :meth:`integer_tensor_rows` (a field that
+        knows a cheaper form of them overrides that).
         """
         def build(p, q):
-            st = self.circulant_structure()
-            if st is None:
-                V, R = self.integer_rows(p, q)
-            else:
-                from exact_khk.linalg.circulant import structure_rows
-
-                first, R = structure_rows(st, p, q)
-                n, N = st.n, self.dim  # entry (bi·n + i, bj·n + j) is the first row's entry (j − i) mod n
-                V = [first[i // n][j // n][(j % n - i % n) % n] for i in range(N) for j in range(N)]
+            V, R = self.integer_tensor_rows(p, q)
             return kernel.square_tensor(V), kernel.tensor(R)
 
         return self.cached_system(("intsys", kernel.name), int(p), int(q), build)
+
+    def integer_tensor_rows(self, p, q):
+        """``(V, R)`` of :meth:`integer_system` as integer rows over [xi, dx] (N² and N rows,
+        up to one common factor): :meth:`integer_rows`, the O(n³) rational Jacobian."""
+        return self.integer_rows(p, q)
 
     def integer_rows(self, p, q):
         """(V, R) of :meth:`integer_system` as plain lists of integer rows (N² and N

@@ -20,11 +20,11 @@ from __future__ import annotations
 import math
 import warnings
 
-from exact_khk.linalg import circulant, circulant_dft
+from exact_khk.systems.lie_poisson import circulant, circulant_dft
 from exact_khk.arith import get_arith, as_point, to_element
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
-from exact_khk.linalg.paths import HTILDE_STRUCTURED_MIN_N
+from exact_khk.systems.lie_poisson.paths import HTILDE_STRUCTURED_MIN_N
 
 
 def _eps(ar, eps):
@@ -66,13 +66,13 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     singular (there the integral has a pole).
 
     Exact rational arithmetics with python-flint solve the 2n×2n system as a
-    2×2 system over circulants (:func:`exact_khk.linalg.circulant.exact_htilde`) when
-    the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.linalg.paths.HTILDE_STRUCTURED_MIN_N`
+    2×2 system over circulants (:func:`exact_khk.systems.lie_poisson.circulant.exact_htilde`) when
+    the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.systems.lie_poisson.paths.HTILDE_STRUCTURED_MIN_N`
     (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
     40×, 160× faster than the dense solve); the result is the same rational
     number.  In ``cyclo:N`` with n | N and ``gf:P`` with n | P − 1 (fields over Q(ω)
     included) it is n 2×2 systems over Q(ζ_N) or F_P by the exact DFT
-    (:func:`exact_khk.linalg.circulant_dft.exact_htilde`).
+    (:func:`exact_khk.systems.lie_poisson.circulant_dft.exact_htilde`).
     ``method='dense'`` forces the 2n×2n solve.
     """
     ar = get_arith(arith)

@@ -482,7 +482,7 @@ for the Lie–Poisson family, got 'g['
         """The field f(x) = J(x) M x for any 2n×2n matrix M (no admissibility check).
 
         ``M`` may be a :class:`LazyHessian` (built on first use) and ``structure``
-        the field's :class:`~exact_khk.linalg.circulant.CirculantStructure`, known
+        the field's :class:`~exact_khk.systems.lie_poisson.circulant.CirculantStructure`, known
         from a, b, c: the structured step then never builds the (2n)² matrix."""
         N = self.dim
         if isinstance(M, LazyHessian):
@@ -545,7 +545,7 @@ for the Lie–Poisson family, got 'g['
 
     def _declared_field(self, hessian, label, structure):
         """The field of the Hessian ``hessian()`` (built on first use) with the circulant
-        structure the system declares for it: a :class:`~exact_khk.linalg.circulant.CirculantStructure`,
+        structure the system declares for it: a :class:`~exact_khk.systems.lie_poisson.circulant.CirculantStructure`,
         or None for none (then it is not looked for in the Hessian either)."""
         fld = self.field_from_hessian(LazyHessian(self.dim, hessian), label)
         fld._cache["circulant"] = structure
@@ -627,8 +627,8 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
       the other maps' steps are undefined: the commutation Φ_f∘Φ_g = Φ_g∘Φ_f
       steps Φ_f at Φ_g(x)).
 
-    A draw that is not rejected is the same as before these rules, so points
-    that were fine stay the same.  After 200 draws the system-dependent rules
+    The system-dependent rules only reject draws of the same stream: a first draw off
+    the singular sets that passes them is the point drawn without a system.  After 200 draws the system-dependent rules
     are dropped (a system whose every small point is degenerate, e.g. Hs = 0).
     """
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
@@ -650,7 +650,7 @@ def _degenerate_for(system, x, eps) -> bool:
     """The system-dependent rejection rules of :func:`random_point`."""
     from exact_khk.arith import get_arith, to_element
     from exact_khk.errors import PoleError, SingularMatrix
-    from exact_khk.linalg import circulant
+    from exact_khk.systems.lie_poisson import circulant
     from exact_khk.linalg.dense import solve
     from exact_khk.systems.lie_poisson.invariants import Htilde
 
@@ -748,9 +748,30 @@ class LiePoissonField(QuadraticField):
         """The circulant structure of the step's blocks (Hessian blocks cyclic Hankel), or
         None; ``cyclotomic``: entries in Q(ω) count too (the associated fields of
         non-rational involutions)."""
-        from exact_khk.linalg.circulant import circulant_structure
+        from exact_khk.systems.lie_poisson.circulant import circulant_structure
 
         return circulant_structure(self, cyclotomic)
+
+    def structured_steps(self, ar, method, eps):
+        """The family's fast steps for a Kahan map (:func:`~exact_khk.systems.lie_poisson.steps.circulant_steps`:
+        the split and structured steps where the blocks are circulant), or None (dense)."""
+        from exact_khk.systems.lie_poisson.steps import circulant_steps
+
+        return circulant_steps(self, ar, method, eps)
+
+    def integer_tensor_rows(self, p, q):
+        """``(V, R)`` of :meth:`integer_system`: from the declared circulant structure when there
+        is one (:func:`~exact_khk.systems.lie_poisson.circulant.structure_rows`, O(n²) integer
+        work, one common factor apart: the same solutions) instead of the O(n³) rational
+        Jacobian."""
+        st = self.circulant_structure()
+        if st is None:
+            return self.integer_rows(p, q)
+        from exact_khk.systems.lie_poisson.circulant import structure_rows
+
+        first, R = structure_rows(st, p, q)
+        n, N = st.n, self.dim  # entry (bi·n + i, bj·n + j) is the first row's entry (j − i) mod n
+        return [first[i // n][j // n][(j % n - i % n) % n] for i in range(N) for j in range(N)], R
 
     def terms(self) -> tuple:
         """The quadratic terms of f(x) = J(x) M x, built once on first use:
@@ -797,7 +818,7 @@ def _correlate(coeffs, w):
 
 
 def structure_from_system(system, kind="f", signs=None, power=0):
-    """The :class:`~exact_khk.linalg.circulant.CirculantStructure` of ``system.field(kind,
+    """The :class:`~exact_khk.systems.lie_poisson.circulant.CirculantStructure` of ``system.field(kind,
     signs, power)`` computed from the vectors a, b, c alone: O(n) for f and the control
     field, O(n log n) for g (one polynomial product per block for n > 64), where the
     dense Hessian would cost O(n²) memory and its product with B O(n³) time.
@@ -825,6 +846,6 @@ def structure_from_system(system, kind="f", signs=None, power=0):
     else:
         raise InputError(f"field: unknown kind {kind!r}; expected 'f', 'g' or 'control'")
     a, b, c = system.a, system.b, system.c
-    from exact_khk.linalg.circulant import CirculantStructure
+    from exact_khk.systems.lie_poisson.circulant import CirculantStructure
 
     return CirculantStructure(n, ((left(coeffs, a), left(coeffs, b)), (left(coeffs, b), left(coeffs, c))))

@@ -2,7 +2,7 @@
 
 By the Chinese remainder theorem Q[t]/(tⁿ − 1) ≅ ∏_{d | n} Q(ζ_d), t ↦ ζ_d.  When
 the four n×n blocks C of the step's system M = I − εf'(x) are circulant,
-C_ij = c_{(j − i) mod n} (Lie–Poisson fields, :mod:`exact_khk.linalg.circulant`), the
+C_ij = c_{(j − i) mod n} (Lie–Poisson fields, :mod:`exact_khk.systems.lie_poisson.circulant`), the
 character χ_d(u) = Σ_i ζ_d^i u_i satisfies χ_d(C u) = c(ζ_d^{−1}) χ_d(u) with
 c(s) = Σ_m c_m s^m.  So M z = r splits into one 2×2 system over Q(ζ_d) per
 divisor d of n,
@@ -41,8 +41,8 @@ from __future__ import annotations
 
 import math
 
-from exact_khk.linalg.circulant import structure_rows
-from exact_khk.linalg.paths import SPLIT_N
+from exact_khk.systems.lie_poisson.circulant import structure_rows
+from exact_khk.systems.lie_poisson.paths import SPLIT_N
 from exact_khk.linalg.numtheory import ramanujan_sum
 
 def _factors(n):

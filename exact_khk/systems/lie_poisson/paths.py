@@ -1,4 +1,4 @@
-"""The one table of rules by which ``method='auto'`` picks how an exact step is solved.
+"""The one table of rules by which ``method='auto'`` picks how a step is solved.
 
 Every rule here was measured along exact orbits (docs/benchmarks.md,
 docs/benchmarks_tall.md) and kept only where it buys at least 20 % somewhere;
@@ -7,7 +7,12 @@ every fast path gives the same rational point as the dense solve (tested with
 2×2 blocks are circulant (``field.circulant_structure()``, n = dim/2) — on the
 arithmetic's integer kernel (``flint``: python-flint; ``gmpy2``: Bareiss
 elimination) and on the point's height h (bits of its largest numerator or
-denominator); never on a family's name.
+denominator); never on a family's name.  The table sits beside the steps it
+chooses among (:mod:`~exact_khk.systems.lie_poisson.steps`, which a Kahan map asks
+through ``field.structured_steps``); the constants of its generic rows are defined
+with the generic solver they tune: the Dixon row in :mod:`exact_khk.kahan.map`, the
+κ and ``cyclo:N`` rows in :mod:`exact_khk.linalg.dense` and
+:mod:`exact_khk.linalg.floating`.
 
 =============================  ==================================================
 circulant blocks, kernel gmpy2  split for n in :data:`SPLIT_N` (Bareiss is
@@ -22,8 +27,8 @@ circulant blocks, kernel flint  split for n in :data:`AUTO_SPLIT_N`;
 no structure, or other kernels  dense
 dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 8 ≤ N < 16) once an answer grew by < 2× and
-                                :data:`SMALL_ANSWER_MIN_BITS` ≤ h <
-                                :data:`DIXON_BITS` · (N − 6)
+                                :data:`~exact_khk.kahan.map.SMALL_ANSWER_MIN_BITS` ≤ h <
+                                :data:`~exact_khk.kahan.map.DIXON_BITS` · (N − 6)
 exact H̃ (flint, rational)       structured for n ≥ :data:`HTILDE_STRUCTURED_MIN_N`
 a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``circulant.
                                 split_solve``), but one over Z[t]/(tⁿ − 1) for points of
@@ -35,19 +40,19 @@ by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is smal
                                 part of m), or m = 1; otherwise the fixed-point
                                 division (``CirculantRing.solve``)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
-                                binary64 where N·κ ≤ :data:`BINARY64_CONDITION_MAX`,
+                                binary64 where N·κ ≤ :data:`~exact_khk.linalg.floating.BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
-                                N ≤ :data:`EXACT_INVERSE_MAX_N`, else estimated
+                                N ≤ :data:`~exact_khk.linalg.dense.EXACT_INVERSE_MAX_N`, else estimated
                                 (``linalg.dense.solve``)
-exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.linalg.circulant_dft`:
+exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.systems.lie_poisson.circulant_dft`:
 (n | N) and gf:P (n | P − 1)    n 2×2 systems over Q(ζ_N) or F_P, the fields over
                                 Q(ω) included): steps for n ≥
                                 :data:`EXACT_DFT_STEP_MIN_N`, H̃ for every n; within
                                 the memory bounds below (n·φ as m·φ, φ = 1 for gf:P)
 linear algebra over Q(ζ_N)      FLINT on the coefficients for φ(N) ≤
-(``cyclo:N``)                   :data:`CYCLO_REGULAR_MAX_DEGREE`, a solve as one
+(``cyclo:N``)                   :data:`~exact_khk.linalg.dense.CYCLO_REGULAR_MAX_DEGREE`, a solve as one
                                 rational system up to size
-                                :data:`CYCLO_REGULAR_MAX_SIZE`; else the generic loops
+                                :data:`~exact_khk.linalg.dense.CYCLO_REGULAR_MAX_SIZE`; else the generic loops
                                 and elimination; a rational matrix solved over Q
 degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly``)
 (``diagnostics.degrees``)       below dimension :data:`DEGREES_BY_VALUES_MIN_DIM`;
@@ -57,6 +62,8 @@ degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly`
                                 dimension :data:`DEGREES_HAND_OVER_BELOW_DIM`
 =============================  ==================================================
 """
+
+from exact_khk.linalg import dense
 
 #: the n for which the split step exists (the generated code grows like the cube
 #: of the largest degree φ(d); for n ≥ 16 the structured step is as fast)
@@ -82,29 +89,6 @@ AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 15: 768}
 #: step 447 against 177 µs at n = 16's; a dense step's first call also builds the field's
 #: integer system, 10 ms at n = 32)
 DENSE_BELOW = {11: 512, 13: 512}
-#: dense orbit steps: Dixon from this height (crossover measured for N = 8..14) ...
-SMALL_ANSWER_MIN_BITS = 128
-#: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
-#: 40 000, 60 000 bits for N = 8, 10, 12)
-DIXON_BITS = 10_000
-#: generic floating dense solve (``mp:P``): κ from the exact inverse up to this N, where
-#: N column solves cost no more than the estimator's five triangular solves (an
-#: operation count; at N = 4 the estimate would be ~50 % of the step)
-EXACT_INVERSE_MAX_N = 5
-#: ``mp:P`` dense steps: κ from binary64 (M rounded, LAPACK's inverse) when N·κ ≤ this, where
-#: rounding and the inverse move κ by less than 2^-20 (an accuracy rule, not a tuned one;
-#: :func:`~exact_khk.linalg.floating.binary64_condition`); 0.6–0.7× mpmath.lu_solve's time
-#: at n = 2, 3 against 0.94–0.99× with κ in p bits
-BINARY64_CONDITION_MAX = 2.0 ** 32
-#: ``cyclo:N`` linear algebra in FLINT on the coefficients (``CycloArith.native_solve``,
-#: ``native_matmul``, ``linear_forms``) for φ(N) up to this degree, and a solve of size m as
-#: one rational system of size m·φ(N) up to the next bound (1.2–9× faster than elimination
-#: over Q(ζ_N) for m·φ ≤ 32, 13× at 160, 45× at 240, 84× at 400, random systems).  Memory
-#: bounds, not tuned ones: that system has (m·φ)² entries and the companion powers φ³
-#: (``orbit --arith cyclo:10000``: m·φ = 24 000, tens of GB); beyond them elimination over
-#: Q(ζ_N), and a rational matrix is solved over Q at any N
-CYCLO_REGULAR_MAX_DEGREE = 128
-CYCLO_REGULAR_MAX_SIZE = 1024
 #: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
 HTILDE_STRUCTURED_MIN_N = 3
 #: a structured step (and H̃) solves over Z[t]/(tⁿ − 1) unsplit for points of height h (bits
@@ -144,15 +128,6 @@ DEGREES_BY_VALUES_MIN_DIM = 8
 DEGREES_HAND_OVER_BELOW_DIM = 13
 
 
-def coefficients_native(ar, m: int = 0) -> bool:
-    """Whether linear algebra of size m over ``ar`` runs in FLINT on its rational
-    coefficients (the ``cyclo:N`` row of the table): always for arithmetics without a
-    ``coefficient_degree``; else φ ≤ :data:`CYCLO_REGULAR_MAX_DEGREE` and
-    m·φ ≤ :data:`CYCLO_REGULAR_MAX_SIZE`."""
-    phi = getattr(ar, "coefficient_degree", None)
-    return phi is None or (phi <= CYCLO_REGULAR_MAX_DEGREE and m * phi <= CYCLO_REGULAR_MAX_SIZE)
-
-
 #: exact steps by the DFT in ``cyclo:N`` (n | N) and ``gf:P`` (n | P − 1) from this n: against
 #: the dense solve at an orbit point of g[+-+…+] one step is 1.5–13× faster in cyclo:n and
 #: 1.2–9× in gf:P at n = 3..12, but 0.7–0.85× at n = 2 in cyclo:2, 4, 6 (the dense system is
@@ -164,9 +139,9 @@ EXACT_DFT_STEP_MIN_N = 3
 def exact_dft_fits(ar, n: int) -> bool:
     """Whether the exact DFT of length n in ``ar`` (its transform: an (nφ)² integer matrix,
     φ = 1 for ``gf:P``) is within the memory bounds of the ``cyclo:N`` row
-    (:func:`coefficients_native` with m = n; ``cyclo:10000`` at n = 20 would need
+    (:func:`~exact_khk.linalg.dense.coefficients_native` with m = n; ``cyclo:10000`` at n = 20 would need
     (80 000)² entries)."""
-    return coefficients_native(ar, n) and n <= CYCLO_REGULAR_MAX_SIZE
+    return dense.coefficients_native(ar, n) and n <= dense.CYCLO_REGULAR_MAX_SIZE
 
 
 def auto_path(n: int, kernel: str, splits: bool, circulant: bool):

@@ -58,7 +58,7 @@ from math import gcd, lcm
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.numtheory import ramanujan_sum
-from exact_khk.linalg.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK, UNSPLIT_MAX_WORK
+from exact_khk.systems.lie_poisson.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK, UNSPLIT_MAX_WORK
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
@@ -71,6 +71,13 @@ _MINUS_T = flint.fmpz_poly([0, -1]) if flint is not None else None
 GUARD_BITS = 20
 
 
+#: the first rows of the blocks f11, f12, f21, f22 of f'(x) (docs/conventions.md) as combinations
+#: of p[2b + c] = X(m_b) times u (c = 0) or v (c = 1), b = 11, 12, 21, 22:
+#: 2 p[4] + p[7], p[6], −2 p[0] − p[3], −p[2]  (f11 = 2 X(m21)u + X(m22)v, …)
+JACOBIAN_FIRST_ROWS = ((0, 0, 0, 0, 2, 0, 0, 1), (0, 0, 0, 0, 0, 0, 1, 0), (-2, 0, 0, -1, 0, 0, 0, 0),
+                       (0, 0, -1, 0, 0, 0, 0, 0))
+
+
 @dataclass(frozen=True)
 class CirculantStructure:
     """The Hankel first rows m11, m12, m21, m22 of a field's Hessian M: Fractions, or
@@ -78,6 +85,9 @@ class CirculantStructure:
 
     n: int
     m: tuple  # ((m11, m12), (m21, m22)), each a tuple of n Fractions
+    #: :data:`JACOBIAN_FIRST_ROWS`, for the numpy builder of I − εf'(x)
+    #: (:func:`exact_khk.linalg.floating.system_matrix`), which asks the structure
+    jacobian_first_rows = JACOBIAN_FIRST_ROWS
 
     def __hash__(self):  # computed once: every step looks the structure up in caches
         h = self.__dict__.get("_hash")
@@ -115,7 +125,7 @@ def circulant_structure(field, cyclotomic=False):
     :class:`~exact_khk.systems.quadratic.QuadraticField`), non-homogeneous fields, or a
     Hessian with a block that is not cyclic Hankel.  With ``cyclotomic``, also the
     structure of a field over Q(ω) (an associated field of a non-rational involution),
-    for the exact DFT step (:mod:`exact_khk.linalg.circulant_dft`).  Cached on the field.
+    for the exact DFT step (:mod:`exact_khk.systems.lie_poisson.circulant_dft`).  Cached on the field.
     """
     key = "circulant over Q(zeta)" if cyclotomic else "circulant"
     cache = getattr(field, "_cache", None)
@@ -134,18 +144,13 @@ def circulant_structure(field, cyclotomic=False):
     return out
 
 
-#: the first rows of the blocks f11, f12, f21, f22 of f'(x) (docs/conventions.md) as combinations
-#: of p[2b + c] = X(m_b) times u (c = 0) or v (c = 1), b = 11, 12, 21, 22:
-#: 2 p[4] + p[7], p[6], −2 p[0] − p[3], −p[2]  (f11 = 2 X(m21)u + X(m22)v, …)
-JACOBIAN_FIRST_ROWS = ((0, 0, 0, 0, 2, 0, 0, 1), (0, 0, 0, 0, 0, 0, 1, 0), (-2, 0, 0, -1, 0, 0, 0, 0),
-                       (0, 0, -1, 0, 0, 0, 0, 0))
 
 
 def structure_rows(st, p, q):
     """``(first, R)``: the rows over [x_0, …, x_{2n−1}, D] of the first row of each
     block of D·(I − εf'(x)), ``first[bi][bj][m]`` for entry (bi·n, bj·n + m), and of
     the right-hand side D·x (``R``, 2n rows), at ε = p/q, for a homogeneous field
-    with the declared :class:`~exact_khk.linalg.circulant.CirculantStructure` ``st``
+    with the declared :class:`~exact_khk.systems.lie_poisson.circulant.CirculantStructure` ``st``
     — what :meth:`~exact_khk.systems.quadratic.QuadraticField.integer_rows` gives for
     those entries up to one common factor, in O(n²) integer operations instead of the
     O(n³) rational Jacobian.  The first rows of the blocks of f'(x) are
@@ -674,7 +679,7 @@ def _galois_data(n):
 
 def by_norm(n, bound) -> bool:
     """Whether a division over Z[t]/(tⁿ ∓ 1) whose answer has at most ``bound`` bits
-    (Cramer's) is Cramer's rule down the tower (the rule of ``linalg.paths``: b·bound bounded,
+    (Cramer's) is Cramer's rule down the tower (the rule of ``systems.lie_poisson.paths``: b·bound bounded,
     b the odd part of n, where the tower ends in the Galois conjugates)."""
     b = n >> ((n & -n).bit_length() - 1)
     return n == 1 or (bound <= DIVISION_BY_NORM_MAX_BITS and b * bound <= DIVISION_BY_NORM_MAX_WORK)
@@ -767,7 +772,7 @@ def split_solve(R, u, v, dx, solve_part):
     """``(W, δ)``: a 2×2 solve over R for the point with integer polynomials (u, v) and
     denominator dx, one solve over each factor of tⁿ − 1 (:meth:`CirculantRing.factors`;
     the caller's per-factor data: :meth:`CirculantRing.parts`), joined; one solve over R
-    itself for points of height h with n²·h ≤ :data:`~exact_khk.linalg.paths.UNSPLIT_MAX_WORK`.
+    itself for points of height h with n²·h ≤ :data:`~exact_khk.systems.lie_poisson.paths.UNSPLIT_MAX_WORK`.
 
     Every product in R is one at each n-th root of unity, so a system whose entries are
     products of the point's polynomials with fixed ones is one system over each factor,

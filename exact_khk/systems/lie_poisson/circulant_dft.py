@@ -3,10 +3,10 @@
 Over a field K with a primitive n-th root of unity ω (``cyclo:N`` with n | N: ω = ζ_N^(N/n);
 ``gf:P`` with n | P − 1),
 tⁿ − 1 = Π_j (t − ωʲ) splits, so the ring R = K[t]/(tⁿ − 1) of the circulant blocks of
-I − εf'(x) (:mod:`exact_khk.linalg.circulant`) is Kⁿ by evaluation at the ωʲ — exactly,
+I − εf'(x) (:mod:`exact_khk.systems.lie_poisson.circulant`) is Kⁿ by evaluation at the ωʲ — exactly,
 not only over C.  A Kahan step is then n independent 2×2 systems over K (the frequencies),
 between one exact DFT of the point and one inverse DFT of the answer; the floating step
-(:func:`~exact_khk.linalg.circulant.numeric_step`) is the same computation in balls.  This is
+(:func:`~exact_khk.systems.lie_poisson.circulant.numeric_step`) is the same computation in balls.  This is
 what makes the associated fields of the non-rational involutions (Hessians over Q(ω),
 ``liouville``) cheap: the dense alternative is a 2n·φ(N)-dimensional rational system (in
 F_P, f'(x) entry by entry and a 2n×2n solve).
@@ -29,14 +29,14 @@ True
 
 from __future__ import annotations
 
-from exact_khk.linalg.circulant import _mul, cramer, htilde_system, kahan_system, reflect
+from exact_khk.systems.lie_poisson.circulant import _mul, cramer, htilde_system, kahan_system, reflect
 from exact_khk.linalg.dense import SingularMatrix
-from exact_khk.linalg.paths import exact_dft_fits
+from exact_khk.systems.lie_poisson.paths import exact_dft_fits
 
 
 def applies(ar, n: int) -> bool:
     """Whether ``ar`` holds the n-th roots of unity and their exact DFT, within the memory
-    bounds of :func:`~exact_khk.linalg.paths.exact_dft_fits`."""
+    bounds of :func:`~exact_khk.systems.lie_poisson.paths.exact_dft_fits`."""
     return ar.dft is not None and ar.roots_of_unity % n == 0 and exact_dft_fits(ar, n)
 
 
@@ -48,7 +48,7 @@ def why_not(ar, n: int):
     if not exact_dft_fits(ar, n):
         return (f"in {ar.name} at n = {n} would need an exact DFT on n·φ = "
                 f"{n * (getattr(ar, 'coefficient_degree', None) or 1)} coefficients, beyond the memory "
-                f"bounds of exact_khk/linalg/paths.py (use a smaller N)")
+                f"bounds of exact_khk/systems/lie_poisson/paths.py (use a smaller N)")
     return None
 
 
@@ -86,8 +86,8 @@ def _frequencies(ar, m, system, u, v, eps, scale=1):
 def exact_step(st, x, eps, ar):
     """Φ_f(x, ε) = (I − εf'(x))⁻¹x in ``ar`` (exact, with the n-th roots of unity).
 
-    As :func:`~exact_khk.linalg.circulant.exact_step`: û, v̂ the reflected halves of x,
-    at each frequency the 2×2 system of :func:`~exact_khk.linalg.circulant.kahan_system`,
+    As :func:`~exact_khk.systems.lie_poisson.circulant.exact_step`: û, v̂ the reflected halves of x,
+    at each frequency the 2×2 system of :func:`~exact_khk.systems.lie_poisson.circulant.kahan_system`,
     and the answer's reflected halves from the inverse DFT (its 1/n folded into the
     frequencies' divisions)."""
     n = st.n
@@ -100,7 +100,7 @@ def exact_step(st, x, eps, ar):
 def exact_htilde(st, x, eps, ar):
     """H̃(x, ε) = xᵀ(I − ε²(M J(x))²)⁻¹ M x in ``ar`` (exact, with the n-th roots of unity).
 
-    As :func:`~exact_khk.linalg.circulant.exact_htilde` (reflected Hankel polynomials,
+    As :func:`~exact_khk.systems.lie_poisson.circulant.exact_htilde` (reflected Hankel polynomials,
     the plain halves u, v); xᵀz is the constant coefficient of u ẑ_u + v ẑ_v, the mean
     over the frequencies of the products of their values."""
     n = st.n
