@@ -1,4 +1,4 @@
-"""The flint route of the Lie–Poisson certificate (certification/lie_poisson_flint.py,
+"""The flint route of the Lie–Poisson certificate (systems/lie_poisson/flint_forms.py,
 linalg/flintmat.py, the flint branch of grad_Htilde): every quantity equals (``==``)
 its generic counterpart — lists of rows, dual-number derivatives, the dense H̃ — at
 random rational points, and certificates are the same check for check."""
@@ -12,7 +12,7 @@ import pytest
 from exact_khk import KahanMap, LiePoissonSystem, certify, get_arith
 from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import jacobiator
-from exact_khk.certification.lie_poisson_flint import FlintForms
+from exact_khk.systems.lie_poisson.flint_forms import FlintForms
 from exact_khk.linalg.dense import matmul, transpose
 from exact_khk.linalg.dihedral import BlockMatrix, Mixed
 from exact_khk.certification.lie_poisson import htilde_definition
@@ -100,7 +100,7 @@ def test_shared_integrals_and_gradients(n, seed):
     s, x, e = _case(n, seed)
     fm = FlintForms(s, e)
     inv = _involutions(s)
-    assert fm.share_integrals(inv) == set(inv)  # the hypotheses are checked, and hold
+    assert fm.share_matrices(inv) == set(inv)  # the hypotheses are checked, and hold
     values = fm.integral_values(x)
     w = fm.htilde_adjoint(x)
     xq = [F(int(t.p), int(t.q)) for t in x]
@@ -118,7 +118,7 @@ def test_sharing_refused_for_a_matrix_that_does_not_commute():
     fm = FlintForms(s, e)
     not_involution = [[F(int(i == j)) for j in range(6)] for i in range(6)]
     not_involution[0][1] = F(1)
-    assert fm.share_integrals({"f": (s.field("f"), None), "x": (s.field("g"), not_involution)}) == {"f"}
+    assert fm.share_matrices({"f": (s.field("f"), None), "x": (s.field("g"), not_involution)}) == {"f"}
 
 
 @pytest.mark.parametrize("n,seed", [(2, 1), (3, 3), (4, 2), (5, 1)])

@@ -16,6 +16,10 @@ from exact_khk.errors import PoleError
 from exact_khk.linalg.dense import matvec
 from exact_khk.systems.lie_poisson.invariants import Htilde
 
+#: relative size of the perturbation of the last coordinate of x0 in the "perturbed point"
+#: control, for exact arithmetics (floating ones use one ulp)
+PERTURBATION = Fraction(1, 2 ** 60)
+
 
 def non_admissible_hessian(system):
     """Hs with its (0, 0) entry raised by 1: the block X(a) is no longer cyclic Hankel.
@@ -184,6 +188,57 @@ class ControlDegeneracy:
             if self._pole(f, y) or Htilde(f, y, self.eps, self._ar) != h0:
                 return None
         return "H~ does not depend on the perturbed (last) coordinate near x0"
+
+
+def family_controls(run):
+    """The negative controls of the Lie–Poisson certificate (after its claims; ``run``: the
+    engine's :class:`~exact_khk.certification.engine.Run`): commutation with the control field
+    (non-associated), H̃ under the control map, H̃ for a non-admissible Hessian, and H̃ at a
+    point perturbed by 2^-60 (relative).  Each is inapplicable on the degenerate sets of
+    :class:`ControlDegeneracy` (which include the equilibria), the last also when it fails at
+    an equilibrium (it then compares H̃ near x0 with H̃(x0) and shows nothing about the map)."""
+    from exact_khk.certification.checks import (commute_points_items, compare, conserved_items, inapplicable,
+                                                lazy_orbit, run_check)
+    from exact_khk.kahan.map import KahanMap
+
+    system, ar, eps, x0, K, pts = run.system, run.ar, run.eps, run.x0, run.steps, run.pts
+    n = system.n
+
+    def add(name, claim, fn, degenerate, moot=None):
+        if run.progress is not None:
+            run.progress(name)
+        check = run_check(name, claim, ar, fn, False, degenerate=degenerate)
+        why = moot() if moot is not None and check.applicable else None
+        run.checks.append(inapplicable(check, why) if why else check)
+
+    def H(field):
+        return lambda x: Htilde(field, x, eps, ar)
+
+    ctrl = system.field("control")
+    phi_c = KahanMap(ctrl, eps, ar)
+    degen = ControlDegeneracy(system, x0, eps)
+    add("control: commutation with non-associated field",
+        f"[control, must fail] Phi_f commutes with the Kahan map of the control field "
+        f"({'A Hs' if n >= 3 else '(2I + A) Hs'}) at the points of the Phi_f orbit",
+        lambda: compare(ar, commute_points_items(run.phi, phi_c, pts)), degen.commutation)
+    add("control: integral H~ conserved by Phi_control",
+        "[control, must fail] H~ is conserved along the orbit of the control map",
+        lambda: compare(ar, conserved_items(H(run.f), lazy_orbit(phi_c, x0, K))), degen.control_conserves)
+    bad_field = system.field_from_hessian(non_admissible_hessian(system), "non-admissible")
+    add("control: integral H~ conserved for a non-admissible Hessian",
+        "[control, must fail] with " + ("Hs[0][0]" if n >= 3 else "Hs[0][2] = Hs[2][0]") + " raised by 1 "
+        "(block X(" + ("a" if n >= 3 else "b") + ") not cyclic Hankel), the closed "
+        "form H~ is conserved by the Kahan map of J(x) Hs' x",
+        lambda: compare(ar, conserved_items(H(bad_field), lazy_orbit(KahanMap(bad_field, eps, ar), x0, K))),
+        degen.non_admissible)
+    rel = ar.convert(PERTURBATION if ar.exact else Fraction(2, 2 ** ar.prec))
+    last = pts[0][-1]
+    moved = tuple(pts[0][:-1]) + (rel if ar.is_zero(last) is True else last + last * rel,)
+    add("control: integral H~ at a perturbed point",
+        f"[control, must fail] H~ at x0 with its last coordinate perturbed by "
+        f"{'2^-60 relative' if ar.exact else 'one ulp'} equals H~(x_{K}) on the orbit",
+        lambda: compare(ar, [(0, lambda: (H(run.f)(moved), run.value("H~", "f", K)))]),
+        lambda: degen.perturbed(pts[K], ar), moot=degen.equilibrium)
 
 
 def degenerate_point(cert) -> str | None:

@@ -141,6 +141,23 @@ class System:
     def hamiltonian_form(self):
         return None
 
+    #: the order in which the certificate checks the claims (None: the registry's,
+    #: :data:`~exact_khk.certification.claims.CLAIMS`)
+    claim_order = None
+
+    def fast_forms(self, ar, eps):
+        """An evaluator of the claims' quantities by closed forms of this system in ``ar`` at the
+        step ``eps`` (an element of ``ar``): the same values as the generic route, faster; None:
+        the generic route (the protocol is that of
+        :class:`~exact_khk.systems.lie_poisson.flint_forms.FlintForms`)."""
+        return None
+
+    def gradient_ranks(self, ar) -> list:
+        """Ranks claimed of gradients of the integrals, as (name, statement, rows, rank) with
+        ``rows(grad)`` the rows at a point from ``grad(name)`` (the gradient of the integral
+        ``name`` there); functional independence where full rank holds at one point."""
+        return []
+
     def measure(self):
         """A density m(x, ε) (a :class:`Function`) claimed invariant: m(Φ(x)) det dΦ(x) = m(x); or None."""
         return None

@@ -2,8 +2,8 @@
 (the ``flint`` arithmetic only): whole products and solves in C, derivatives by
 closed forms instead of dual numbers.
 
-:func:`~exact_khk.certification.lie_poisson.certify` uses :class:`FlintForms`
-when the arithmetic's elements are ``fmpq``; every other arithmetic (``fraction``,
+The certificate's claims (:mod:`exact_khk.certification.claims`) use :class:`FlintForms`
+(:meth:`LiePoissonSystem.fast_forms`) when the arithmetic's elements are ``fmpq``; every other arithmetic (``fraction``,
 ``gmpy2``, cyclotomic, finite fields, floating, balls) keeps the generic
 list-of-rows code and the dual-number derivatives.  Each quantity is the same
 rational matrix as its generic counterpart (tests compare them with ``==``);
@@ -48,12 +48,12 @@ from __future__ import annotations
 
 import flint
 
-from exact_khk.errors import SingularStepError
+from exact_khk.errors import NotRationalError, SingularStepError
 from exact_khk.linalg import circulant
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.dihedral import BlockMatrix, Mixed
 from exact_khk.linalg.flintmat import column, fmpq_mat, fmpz_mat, mat, signed_columns, signed_rows
-from exact_khk.systems.lie_poisson.invariants import shift_index
+from exact_khk.systems.lie_poisson.invariants import _pole, shift_index
 
 
 class FlintForms:
@@ -392,7 +392,22 @@ class FlintForms:
             rings[purpose] = circulant.CirculantRing(self.n)
         return rings[purpose]
 
-    def share_integrals(self, involutions):
+    def share_integrals(self, integrals):
+        """``integrals``: {name: :class:`~exact_khk.systems.lie_poisson.invariants.HtildeIntegral`}
+        (H̃ itself, ``signs`` None, and K̃[signs]).  Returns the names of those that
+        :meth:`share_matrices` shares (non-rational patterns are not: their B is not rational);
+        ``base`` is the name of H̃."""
+        pairs = {}
+        for name, fn in integrals.items():
+            try:
+                pairs[name] = (fn.fld, None if fn.signs is None else self.system.involution(fn.signs))
+            except NotRationalError:
+                continue
+        self.base = next((name for name, fn in integrals.items() if fn.signs is None), None)
+        shared = self.share_matrices(pairs)
+        return shared if self.base in shared else set()
+
+    def share_matrices(self, involutions):
         """``involutions``: {key: (field, B as rows or None for H~ itself)}.  Returns the
         keys whose integral is xᵀ B z (see the module docstring), after checking exactly
         that M_key = B Hs, B² = I and B Hs E_m = Hs E_m B for m < n."""
@@ -406,6 +421,10 @@ class FlintForms:
         self._shared = shared
         self._structure = circulant.circulant_structure(self.system.field("f"))
         return set(shared)
+
+    def pole(self, ar, x):
+        """The PoleError of H̃ at x (a singular solve of the shared integrals)."""
+        return _pole(ar, list(x), self.eps)
 
     def htilde_solution(self, x, field=None):
         """z = R^{-1} M x (R = I − ε²(M J(x))², M the Hessian of ``field``, default f's)
