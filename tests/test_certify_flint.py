@@ -191,3 +191,26 @@ def test_certified_rank_equals_the_exact_rank():
     # a row independent over Q but dependent modulo the prime: the exact fallback
     from exact_khk.linalg.flintmat import RANK_PRIME
     assert rank([[1, 0], [2, 2 * RANK_PRIME]]) == 2 and rank([[1, 1], [RANK_PRIME + 1, 1]]) == 2
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_fast_forms_behind_the_claims_equal_the_generic_route(n):
+    """In one arithmetic (flint), every record of the certificate with the family's fast forms
+    (System.fast_forms) equals the record by the generic route (fast_forms None): the same exact
+    residuals, verdicts and details; only the wording of how the q_l gradients were taken differs."""
+    from exact_khk.certification.engine import certify_system
+
+    class Generic(LiePoissonSystem):
+        def fast_forms(self, ar, eps):
+            return None
+
+    s = LiePoissonSystem.random(n, seed=n)
+    g = Generic(s.a, s.b, s.c)
+    x0 = s.random_point(1)
+    fast, plain = (certify_system(t.with_involutions(t.involutions(FL)), x0, "1/9", 4, "flint", poisson_points=3)
+                   for t in (s, g))
+    key = lambda c: [(k.name, k.claim.replace("closed form", "dual numbers"), k.holds, k.residual,  # noqa: E731
+                      k.applicable, k.detail) for k in c.checks]
+    assert key(fast) == key(plain) and len(fast.checks) > 20
+    assert any("closed form" in k.claim for k in fast.checks)
+    assert fast.values == plain.values and fast.orbit == plain.orbit

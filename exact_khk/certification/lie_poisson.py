@@ -42,7 +42,6 @@ import time
 from dataclasses import replace
 
 from exact_khk.arith import as_point, get_arith
-from exact_khk.certification.controls import non_admissible_hessian  # noqa: F401
 from exact_khk.certification.engine import certify_system
 from exact_khk.certification.proofs import PROVE_MAX_N
 from exact_khk.errors import InputError
