@@ -13,6 +13,8 @@ orbit.  Every control of every claim is inapplicable at a fixed point of Φ_f
 
 The claims, in the order they are checked (:data:`CLAIMS`):
 
+* ``definition`` — I(x) = h(x, Φ(x)) along the orbit of I's own map for every integral
+  declaring a definition h (the family's H̃ and K̃: h(x, x̃) = (2ε)^{-1} xᵀ J((x+x̃)/2)^{-1} x̃);
 * ``reversibility`` — Φ(Φ(x, ε), −ε) = x for every declared field;  control: Φ_f(Φ_f(x, ε), ε) = x
   (inapplicable on 2-periodic orbits);
 * ``integrals`` — every declared integral I(x, ε) is conserved by Φ_f and by every commuting map;
@@ -25,6 +27,11 @@ The claims, in the order they are checked (:data:`CLAIMS`):
   dimension 2, where every bivector is Poisson), and (1 + x_j)Π is not preserved;
 * ``commutation`` — Φ_f∘Φ_g = Φ_g∘Φ_f for every declared field g at the same ε;  control: with Φ_g
   at step 2ε they do not commute;
+* ``involution`` — for every integral I_B declared as the image of I under an involution B:
+  ∇I_B = B ∇I and {I, I_B} = 0 for Π and for its ε → 0 limit J; first ∇q_l = A^l ∇q_0 for the
+  coefficients of Π's second form, where the tensor declares one;
+* ``rank`` — the gradient families the system declares (``gradient_ranks``) have their rank at
+  some orbit point (functional independence; undecided if at none);
 * ``jacobian`` — the derivative of the step (dual numbers through the solve) equals
   (I − εf'(x))^{-1}(I + εf'(Φ(x)));  control: with f'(x) in place of f'(Φ(x)) it does not
   (inapplicable where f'(Φ(x)) = f'(x));
@@ -34,6 +41,15 @@ The claims, in the order they are checked (:data:`CLAIMS`):
 * ``measure`` — the declared density m(x, ε) of :meth:`~exact_khk.systems.base.System.measure`
   is preserved: m(Φ(x)) det dΦ(x) = m(x);  control: the density 1 (det dΦ(x) = 1) is not
   (inapplicable when m is a constant: then the claim is that control).
+
+A system with a certificate of its own theorems (``certificate_options``: the Lie–Poisson
+family, :mod:`~exact_khk.certification.lie_poisson`) is run as that certificate
+(``run.paper``): its claims in its ``claim_order``, every map's orbit at every claim, the Poisson
+checks at the ``poisson_points`` subset, the paper's wording, and its own negative controls
+(:func:`~exact_khk.certification.controls.family_controls`, after the claims) in place of the
+automatic ones (:meth:`~exact_khk.certification.engine.Run.control`).  Quantities the claims
+share (integrals, gradients, Π) come memoised from the run, by the system's fast forms where it
+has them (:meth:`~exact_khk.systems.base.System.fast_forms`; the generic route where None).
 
 Adding a kind of claim is one :class:`Claim` here (plus what a system declares for it).
 """
@@ -45,6 +61,7 @@ from fractions import Fraction
 from exact_khk.arith import get_arith
 from exact_khk.certification.checks import (bracket, commute_items, compare, conserved_items, jacobiator,
                                             lazy_orbit, poisson_map_items, rank, reversible_items)
+from exact_khk.certification.controls import PERTURBATION, family_controls
 from exact_khk.errors import PoleError, UndecidedError
 from exact_khk.kahan.map import KahanMap
 from exact_khk.linalg.dense import SingularMatrix, determinant, matvec, solve
@@ -52,8 +69,6 @@ from exact_khk.linalg.flintmat import column, fmpq_mat
 from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dual import jacobian as dual_jacobian
 
-#: relative perturbation of the "perturbed point" control (exact arithmetics)
-PERTURBATION = Fraction(1, 2 ** 60)
 
 
 class Claim:
@@ -77,7 +92,7 @@ def claim(name, declared=lambda system: True, files=True):
 
 
 def orbit_statement(run, what):
-    """"... at the K points of the Phi_f orbit" (the paper's certificate's wording)."""
+    """``what`` at every point of the Φ_f orbit, in the paper's certificate's wording."""
     return f"{what} at the {len(run.pts)} points of the Phi_f orbit"
 
 
@@ -175,7 +190,7 @@ def integrals(run):
 
 
 def _perturbed_point_control(run, name, fn):
-    if run.paper:
+    if run.paper:  # the family's own perturbed-point control replaces it (run.control)
         return
     ar, e, pts = run.ar, run.e, run.pts
     grad = []
@@ -222,8 +237,6 @@ def declared_controls(run):
     for a certificate of the system's own theorems, that certificate's controls
     (:func:`~exact_khk.certification.controls.family_controls`)."""
     if run.paper:
-        from exact_khk.certification.controls import family_controls
-
         return family_controls(run)
     ar, e, pts = run.ar, run.e, run.pts
     for name, fn in run.system.controls().items():

@@ -2,9 +2,9 @@
 
 A negative control that did not fail at a point of a degenerate set is recorded
 as *inapplicable* (``run_check(..., degenerate=...)``), never as a failure.
-:class:`ControlDegeneracy` decides these sets for the Lie–Poisson family's
-controls exactly, in Fractions, independently of the arithmetic of the checks;
-the certificate, ``liouville`` (identities) and ``prove`` (proofs) all ask it.
+:func:`family_controls` are the Lie–Poisson certificate's controls; :class:`ControlDegeneracy`
+decides their degenerate sets exactly, in Fractions, independently of the arithmetic of the
+checks; the certificate, ``liouville`` (identities) and ``prove`` (proofs) all ask it.
 """
 
 from __future__ import annotations
@@ -12,7 +12,10 @@ from __future__ import annotations
 from fractions import Fraction
 
 from exact_khk.arith import get_arith
+from exact_khk.certification.checks import (commute_points_items, compare, conserved_items, inapplicable, lazy_orbit,
+                                            run_check)
 from exact_khk.errors import PoleError
+from exact_khk.kahan.map import KahanMap
 from exact_khk.linalg.dense import matvec
 from exact_khk.systems.lie_poisson.invariants import Htilde
 
@@ -197,10 +200,6 @@ def family_controls(run):
     point perturbed by 2^-60 (relative).  Each is inapplicable on the degenerate sets of
     :class:`ControlDegeneracy` (which include the equilibria), the last also when it fails at
     an equilibrium (it then compares H̃ near x0 with H̃(x0) and shows nothing about the map)."""
-    from exact_khk.certification.checks import (commute_points_items, compare, conserved_items, inapplicable,
-                                                lazy_orbit, run_check)
-    from exact_khk.kahan.map import KahanMap
-
     system, ar, eps, x0, K, pts = run.system, run.ar, run.eps, run.x0, run.steps, run.pts
     n = system.n
 

@@ -2,8 +2,10 @@
 
 :func:`certify_system` iterates the Kahan map Φ_f of a
 :class:`~exact_khk.systems.base.System` from x0 and checks, in one arithmetic, with
-``==`` for exact ones, every claim the system declares (``claims`` selects), then the
-system's own controls.  A control that cannot fail on this orbit is recorded as
+``==`` for exact ones, every claim the system declares (``claims`` selects; in the
+system's ``claim_order`` if it has one), then the system's own controls.  The Lie–Poisson
+family's certificate (:func:`exact_khk.certification.lie_poisson.certify`) is this engine
+on the family's system (:class:`Run`).  A control that cannot fail on this orbit is recorded as
 inapplicable (each claim's rule, and one for all: at a fixed point of Φ_f every
 control is inapplicable), and a certificate with no applicable control is
 INCONCLUSIVE (:func:`~exact_khk.certification.records.status_of`).
@@ -101,17 +103,17 @@ class Run:
         self.f = system.named_field("f")
         self.phi = KahanMap(self.f, eps, ar)
         self._maps, self._orbits, self._dets, self._memo = {"f": self.phi}, {}, {}, {}
-        if not self.paper:
-            self.orbit("f")
-        for name in self.field_names if self.paper else ():
+        for name in self.field_names if self.paper else ("f",):
             try:
                 self.orbit(name)
             except SingularStepError as exc:  # say which map (the message's f' is that map's field)
+                if not self.paper:
+                    raise
                 raise SingularStepError(exc.x, exc.eps, step=exc.step, condition=exc.condition,
                                         detail="; ".join(filter(None, [f"a step of Phi_{name}", exc.detail]))
                                         ) from None
-        self.pts = self._orbits["f"]
-        K = steps
+        self.pts = self.orbit("f")
+        K = steps  # the Poisson checks' points: all, or poisson_points of them evenly spread
         self.ks = list(range(K)) if poisson_points is None or poisson_points >= K else sorted(
             {round(i * (K - 1) / max(poisson_points - 1, 1)) for i in range(poisson_points)})
         self.integrals = system.integrals()
