@@ -46,7 +46,7 @@ from exact_khk.certification.engine import certify_system
 from exact_khk.certification.proofs import PROVE_MAX_N
 from exact_khk.errors import InputError
 from exact_khk.kahan.map import KahanMap
-from exact_khk.parsing import format_signs, parse_rational, parse_signs, parse_vector
+from exact_khk.parsing import format_signs, parse_signs, parse_vector
 from exact_khk.systems.lie_poisson.invariants import htilde_definition as _definition
 from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, check_signs_arith, default_system
 from exact_khk.systems.lie_poisson.system import default_involutions as default_signs
@@ -93,14 +93,7 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     system = default_system() if system is None else system
     n = system.n
     ar = get_arith(arith)
-    x0 = parse_vector(DEFAULT_X0 if x0 is None else x0, "x0", system.dim)
-    eps = parse_rational(DEFAULT_EPS if eps is None else eps, "eps")
-    if eps == 0:
-        raise InputError("eps: the step size must be nonzero")
-    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
-        raise InputError(f"steps: expected a positive integer, got {steps!r}")
-    if poisson_points is not None and (not isinstance(poisson_points, int) or poisson_points < 1):
-        raise InputError(f"poisson_points: expected a positive integer, got {poisson_points!r}")
+    x0 = parse_vector(DEFAULT_X0 if x0 is None else x0, "x0", system.dim)  # the engine checks the rest
     signs = default_signs(n, ar) if signs is None else [format_signs(parse_signs(s, n)) for s in signs]
     signs = list(dict.fromkeys(signs))
     if any(s in ("+" * n, "-" * n) for s in signs):
@@ -108,8 +101,8 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     check_signs_arith(n, signs, ar)
     if prove and not 2 <= n <= PROVE_MAX_N:
         raise InputError(f"prove: symbolic proofs are available for n = 2 and 3 only (got n = {n})")
-    cert = certify_system(system.with_involutions(signs), x0, eps, steps, ar, progress=progress,
-                          poisson_points=poisson_points)
+    cert = certify_system(system.with_involutions(signs), x0, DEFAULT_EPS if eps is None else eps, steps, ar,
+                          progress=progress, poisson_points=poisson_points)
     checks = list(cert.checks)
     if identities is not None:
         from exact_khk.certification.identities import liouville_identities
