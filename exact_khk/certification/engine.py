@@ -213,7 +213,8 @@ class Run:
         x = self.orbit(m)[k]
         try:
             if m == "f":
-                return self.fast.integral_values(x, self.memo(("f", "z", k), lambda: self._solutions(k))[self.fast.base])
+                z = self.memo(("f", "z", k), lambda: self._solutions(k))[self.fast.base]
+                return self.fast.integral_values(x, z)
             return self.fast.integral_values(x)
         except SingularMatrix:
             raise self.fast.pole(self.ar, x) from None
