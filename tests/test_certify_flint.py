@@ -214,3 +214,27 @@ def test_fast_forms_behind_the_claims_equal_the_generic_route(n):
     assert key(fast) == key(plain) and len(fast.checks) > 20
     assert any("closed form" in k.claim for k in fast.checks)
     assert fast.values == plain.values and fast.orbit == plain.orbit
+
+
+def test_a_wrong_fast_form_behind_the_claims_makes_the_certificate_invalid():
+    """The claims decide with what the fast forms return: the integer Π (Pi_int) off by one
+    antisymmetric pair fails the Π formula and the Π brackets, and nothing else (the Poisson-map
+    claim takes Π by circulant blocks, Pi_blocks, here)."""
+    from exact_khk.certification.engine import certify_system
+
+    class Broken(FlintForms):
+        def Pi_int(self, x):
+            Pz, c = super().Pi_int(x)
+            Pz[0, 1] += c
+            Pz[1, 0] -= c
+            return Pz, c
+
+    class System(LiePoissonSystem):
+        def fast_forms(self, ar, eps):
+            return Broken(self, eps)
+
+    s = LiePoissonSystem.random(3, seed=3)
+    cert = certify_system(System(s.a, s.b, s.c), s.random_point(1), "1/9", 3, "flint")
+    assert cert.status == "INVALID"
+    failed = {k.name for k in cert.checks if k.expected and k.holds is False}
+    assert failed == {"Poisson tensor Pi formula", "involution {H~,K~[+--]}_Pi", "involution {H~,K~[-++]}_Pi"}
