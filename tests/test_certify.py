@@ -10,7 +10,7 @@ import sympy as sp
 from exact_khk import (Arith, Certificate, Check, InputError, KahanMap, LiePoissonSystem,
                        SingularStepError, certify, get_arith)
 from exact_khk.certification.checks import compare
-from exact_khk.certification.controls import non_admissible_hessian
+from exact_khk.systems.lie_poisson.controls import non_admissible_hessian
 from exact_khk.certification.lie_poisson import default_signs
 from exact_khk.systems.lie_poisson.invariants import Pi
 from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system, random_point

@@ -29,7 +29,10 @@ def test_the_family_declares_its_integrals_fields_tensor_and_control():
     s = default_system()
     assert s.field_names() == ("f", "g[+--]", "g[-++]")
     assert list(s.integrals()) == ["H~", "K~[+--]", "K~[-++]"]
-    assert s.poisson() is not None and list(s.controls()) == ["H"]
+    assert s.poisson() is not None and s.controls() == {}
+    assert [c.name for c in s.negative_controls(DEFAULT_X0, Fraction(1, 10))] == [
+        "control: commutation with non-associated field", "control: integral H~ conserved by Phi_control",
+        "control: integral H~ conserved for a non-admissible Hessian", "control: integral H~ at a perturbed point"]
     ar, x, eps = get_arith("fraction"), [Fraction(t) for t in DEFAULT_X0], Fraction(1, 10)
     Hs = sp.Matrix(s.hessian)
     for name, fn in s.integrals().items():  # values against SymPy from the formula

@@ -46,7 +46,7 @@ A system with a certificate of its own theorems (``certificate_options``: the Li
 family, :mod:`~exact_khk.certification.lie_poisson`) is run as that certificate
 (``run.paper``): its claims in its ``claim_order``, every map's orbit at every claim, the Poisson
 checks at the ``poisson_points`` subset, the paper's wording, and its own negative controls
-(:func:`~exact_khk.certification.controls.family_controls`, after the claims) in place of the
+(``negative_controls``, run by :func:`declared_controls` after the claims) in place of the
 automatic ones (:meth:`~exact_khk.certification.engine.Run.control`).  Quantities the claims
 share (integrals, gradients, Π) come memoised from the run, by the system's fast forms where it
 has them (:meth:`~exact_khk.systems.base.System.fast_forms`; the generic route where None).
@@ -59,15 +59,18 @@ from __future__ import annotations
 from fractions import Fraction
 
 from exact_khk.arith import get_arith
-from exact_khk.certification.checks import (bracket, commute_items, compare, conserved_items, jacobiator,
-                                            lazy_orbit, poisson_map_items, rank, reversible_items)
-from exact_khk.certification.controls import PERTURBATION, family_controls
+from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, conserved_items,
+                                            inapplicable, jacobiator, lazy_orbit, poisson_map_items, rank,
+                                            reversible_items, run_check)
 from exact_khk.errors import PoleError, UndecidedError
 from exact_khk.kahan.map import KahanMap
 from exact_khk.linalg.dense import SingularMatrix, determinant, matvec, solve
 from exact_khk.linalg.flintmat import column, fmpq_mat
 from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dual import jacobian as dual_jacobian
+
+#: relative perturbation of the "perturbed point" controls (exact arithmetics)
+PERTURBATION = Fraction(1, 2 ** 60)
 
 
 
@@ -233,16 +236,37 @@ def _constant(fn) -> bool:
 
 
 def declared_controls(run):
-    """The system's own controls: functions claimed not conserved (checked with every claim list);
-    for a certificate of the system's own theorems, that certificate's controls
-    (:func:`~exact_khk.certification.controls.family_controls`)."""
-    if run.paper:
-        return family_controls(run)
-    ar, e, pts = run.ar, run.e, run.pts
+    """The system's own controls (checked with every claim list): the functions it claims not
+    conserved, then its :class:`~exact_khk.systems.base.Control` s, each with its own degeneracy
+    rules (:meth:`~exact_khk.systems.base.System.negative_controls`)."""
+    ar, e, pts, K = run.ar, run.e, run.pts, run.steps
     for name, fn in run.system.controls().items():
         run.add(f"control: {name} conserved by Phi_f",
                 f"[control, must fail] {name} = {fn.text} is conserved along the Phi_f orbit",
                 lambda fn=fn: compare(ar, conserved_items(lambda x: fn(ar, x, e), pts)), expected=False)
+    for c in run.system.negative_controls(run.x0, run.eps):
+        fn, statement = c.function, c.statement
+        if c.kind == "commutes":
+            evaluate = lambda c=c: compare(ar, commute_points_items(  # noqa: E731
+                run.phi, KahanMap(c.field, run.eps, ar), pts))
+        elif c.kind == "conserved":
+            evaluate = lambda c=c, fn=fn: compare(ar, conserved_items(  # noqa: E731
+                lambda x: fn(ar, x, e), lazy_orbit(KahanMap(c.field, run.eps, ar), run.x0, K)))
+        else:  # "perturbed": the last coordinate of x0 moved
+            rel = ar.convert(PERTURBATION if ar.exact else Fraction(2, 2 ** ar.prec))
+            last = pts[0][-1]
+            moved = tuple(pts[0][:-1]) + (rel if ar.is_zero(last) is True else last + last * rel,)
+            at_end = (lambda fn=fn: run.value(fn.name, "f", K)) if fn.name in run.integrals else \
+                (lambda fn=fn: fn(ar, pts[K], e))
+            evaluate = lambda fn=fn, moved=moved, at_end=at_end: compare(  # noqa: E731
+                ar, [(0, lambda: (fn(ar, moved, e), at_end()))])
+            statement = statement.format(how="2^-60 relative" if ar.exact else "one ulp", K=K)
+        if run.progress is not None:
+            run.progress(c.name)
+        check = run_check(c.name, statement, ar, evaluate, False,
+                          degenerate=(lambda c=c: c.degenerate(ar, pts)) if c.degenerate else None)
+        why = c.moot() if c.moot is not None and check.applicable else None
+        run.checks.append(inapplicable(check, why) if why else check)
 
 
 # --- Poisson tensor -----------------------------------------------------------------

@@ -11,7 +11,7 @@ through the engine (:mod:`~exact_khk.certification.engine`) and the claims of th
   satisfies the Jacobi identity, and dΦ Π dΦᵀ = Π∘Φ for Φ_f and every Φ_g[s];
 * **involution** — ∇q_l = A^l ∇q_0; ∇K̃ = B∇H̃ and {H̃, K̃[s]} = 0 for J and for Π;
 * **rank** of the gradients of the integrals the arithmetic can express, and of A^i ∇H̃ (i < n);
-* **negative controls** (:func:`~exact_khk.certification.controls.family_controls`), which must
+* **negative controls** (:func:`~exact_khk.systems.lie_poisson.controls.negative_controls`), which must
   come out False: commutation with the non-associated control field, H̃ under the control map,
   H̃ for a non-admissible Hessian, and H̃ at a point perturbed by 2^-60 (relative).
 

@@ -414,10 +414,15 @@ class LiePoissonSystem(System):
 
         return PiTensor(self)
 
-    def controls(self) -> dict:
-        """Functions claimed not conserved: the Hamiltonian H = xᵀ Hs x / 2 of the field
-        (2H is the ε → 0 limit of H̃; the Kahan map conserves H̃, not H)."""
-        return {"H": _Hamiltonian(self)}
+    def negative_controls(self, x0, eps) -> list:
+        """The four controls of the paper's certificate (:func:`~.controls.negative_controls`)."""
+        from exact_khk.systems.lie_poisson.controls import negative_controls
+
+        return negative_controls(self, x0, eps)
+
+    def singular_J(self, x) -> bool:
+        """Whether J(x) is singular (:func:`hankel_singular` of u)."""
+        return hankel_singular(list(x)[:self.n])
 
     def random_point(self, seed: int, bound: int = 3, eps=None) -> tuple:
         """A point off the degenerate sets of every map the certificate steps (:func:`random_point`)."""
@@ -725,22 +730,6 @@ def _degenerate_for(system, x, eps) -> bool:
     except (PoleError, SingularMatrix):
         return True
     return False
-
-
-class _Hamiltonian:
-    """H(x) = xᵀ Hs x / 2 as a :class:`~exact_khk.systems.base.Function` (the continuous-time
-    energy; a control: Kahan's map conserves H̃, not H)."""
-
-    name, text, depends_on_eps = "H", "x^T Hs x / 2", False
-
-    def __init__(self, system):
-        self.system = system
-
-    def __call__(self, ar, x, eps):
-        return self.system.hamiltonian(ar, x)
-
-    def gradient(self, ar, x, eps):
-        return [sum((ar.convert(h) * t for h, t in zip(row, x)), ar.zero) for row in self.system.hessian]
 
 
 def b0_signs(n: int) -> str:
