@@ -10,7 +10,8 @@ import sympy as sp
 from exact_khk import (Arith, Certificate, Check, InputError, KahanMap, LiePoissonSystem,
                        SingularStepError, certify, get_arith)
 from exact_khk.certification.checks import compare
-from exact_khk.certification.lie_poisson import default_signs, non_admissible_hessian
+from exact_khk.systems.lie_poisson.controls import non_admissible_hessian
+from exact_khk.certification.lie_poisson import default_signs
 from exact_khk.systems.lie_poisson.invariants import Pi
 from exact_khk.systems.lie_poisson.system import DEFAULT_EPS, DEFAULT_X0, default_system, random_point
 from exact_khk.testing import (assert_certificate_valid, assert_commute, assert_conserved,

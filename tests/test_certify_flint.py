@@ -1,4 +1,4 @@
-"""The flint route of the Lie–Poisson certificate (certification/lie_poisson_flint.py,
+"""The flint route of the Lie–Poisson certificate (systems/lie_poisson/flint_forms.py,
 linalg/flintmat.py, the flint branch of grad_Htilde): every quantity equals (``==``)
 its generic counterpart — lists of rows, dual-number derivatives, the dense H̃ — at
 random rational points, and certificates are the same check for check."""
@@ -12,7 +12,7 @@ import pytest
 from exact_khk import KahanMap, LiePoissonSystem, certify, get_arith
 from exact_khk.linalg.dual import jacobian
 from exact_khk.certification.checks import jacobiator
-from exact_khk.certification.lie_poisson_flint import FlintForms
+from exact_khk.systems.lie_poisson.flint_forms import FlintForms
 from exact_khk.linalg.dense import matmul, transpose
 from exact_khk.systems.lie_poisson.dihedral import BlockMatrix, Mixed
 from exact_khk.certification.lie_poisson import htilde_definition
@@ -100,7 +100,7 @@ def test_shared_integrals_and_gradients(n, seed):
     s, x, e = _case(n, seed)
     fm = FlintForms(s, e)
     inv = _involutions(s)
-    assert fm.share_integrals(inv) == set(inv)  # the hypotheses are checked, and hold
+    assert fm.share_matrices(inv) == set(inv)  # the hypotheses are checked, and hold
     values = fm.integral_values(x)
     w = fm.htilde_adjoint(x)
     xq = [F(int(t.p), int(t.q)) for t in x]
@@ -118,7 +118,7 @@ def test_sharing_refused_for_a_matrix_that_does_not_commute():
     fm = FlintForms(s, e)
     not_involution = [[F(int(i == j)) for j in range(6)] for i in range(6)]
     not_involution[0][1] = F(1)
-    assert fm.share_integrals({"f": (s.field("f"), None), "x": (s.field("g"), not_involution)}) == {"f"}
+    assert fm.share_matrices({"f": (s.field("f"), None), "x": (s.field("g"), not_involution)}) == {"f"}
 
 
 @pytest.mark.parametrize("n,seed", [(2, 1), (3, 3), (4, 2), (5, 1)])
@@ -191,3 +191,50 @@ def test_certified_rank_equals_the_exact_rank():
     # a row independent over Q but dependent modulo the prime: the exact fallback
     from exact_khk.linalg.flintmat import RANK_PRIME
     assert rank([[1, 0], [2, 2 * RANK_PRIME]]) == 2 and rank([[1, 1], [RANK_PRIME + 1, 1]]) == 2
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+def test_fast_forms_behind_the_claims_equal_the_generic_route(n):
+    """In one arithmetic (flint), every record of the certificate with the family's fast forms
+    (System.fast_forms) equals the record by the generic route (fast_forms None): the same exact
+    residuals, verdicts and details; only the wording of how the q_l gradients were taken differs."""
+    from exact_khk.certification.engine import certify_system
+
+    class Generic(LiePoissonSystem):
+        def fast_forms(self, ar, eps):
+            return None
+
+    s = LiePoissonSystem.random(n, seed=n)
+    g = Generic(s.a, s.b, s.c)
+    x0 = s.random_point(1)
+    fast, plain = (certify_system(t.with_involutions(t.involutions(FL)), x0, "1/9", 4, "flint", poisson_points=3)
+                   for t in (s, g))
+    key = lambda c: [(k.name, k.claim.replace("closed form", "dual numbers"), k.holds, k.residual,  # noqa: E731
+                      k.applicable, k.detail) for k in c.checks]
+    assert key(fast) == key(plain) and len(fast.checks) > 20
+    assert any("closed form" in k.claim for k in fast.checks)
+    assert fast.values == plain.values and fast.orbit == plain.orbit
+
+
+def test_a_wrong_fast_form_behind_the_claims_makes_the_certificate_invalid():
+    """The claims decide with what the fast forms return: the integer Π (Pi_int) off by one
+    antisymmetric pair fails the Π formula and the Π brackets, and nothing else (the Poisson-map
+    claim takes Π by circulant blocks, Pi_blocks, here)."""
+    from exact_khk.certification.engine import certify_system
+
+    class Broken(FlintForms):
+        def Pi_int(self, x):
+            Pz, c = super().Pi_int(x)
+            Pz[0, 1] += c
+            Pz[1, 0] -= c
+            return Pz, c
+
+    class System(LiePoissonSystem):
+        def fast_forms(self, ar, eps):
+            return Broken(self, eps)
+
+    s = LiePoissonSystem.random(3, seed=3)
+    cert = certify_system(System(s.a, s.b, s.c), s.random_point(1), "1/9", 3, "flint")
+    assert cert.status == "INVALID"
+    failed = {k.name for k in cert.checks if k.expected and k.holds is False}
+    assert failed == {"Poisson tensor Pi formula", "involution {H~,K~[+--]}_Pi", "involution {H~,K~[-++]}_Pi"}

@@ -29,7 +29,10 @@ def test_the_family_declares_its_integrals_fields_tensor_and_control():
     s = default_system()
     assert s.field_names() == ("f", "g[+--]", "g[-++]")
     assert list(s.integrals()) == ["H~", "K~[+--]", "K~[-++]"]
-    assert s.poisson() is not None and list(s.controls()) == ["H"]
+    assert s.poisson() is not None and s.controls() == {}
+    assert [c.name for c in s.negative_controls(DEFAULT_X0, Fraction(1, 10))] == [
+        "control: commutation with non-associated field", "control: integral H~ conserved by Phi_control",
+        "control: integral H~ conserved for a non-admissible Hessian", "control: integral H~ at a perturbed point"]
     ar, x, eps = get_arith("fraction"), [Fraction(t) for t in DEFAULT_X0], Fraction(1, 10)
     Hs = sp.Matrix(s.hessian)
     for name, fn in s.integrals().items():  # values against SymPy from the formula
@@ -39,20 +42,26 @@ def test_the_family_declares_its_integrals_fields_tensor_and_control():
     assert s.field("g[-++]") is s.field("g", "-++")
 
 
-def test_the_generic_certificate_of_the_family_is_valid():
+def test_the_engine_runs_the_papers_certificate_of_the_family():
+    """The one engine on the family is the paper's certificate: same records, same order."""
+    from exact_khk.certification.lie_poisson import certify
+
     cert = certify_system(default_system(), DEFAULT_X0, "1/10", 4)
     assert cert.status == "VALID"
     names = [c.name for c in cert.checks]
     assert "integral K~[-++] conserved by Phi_g[+--]" in names and "commutation Phi_f o Phi_g[-++]" in names
-    assert "Poisson map Phi_f" in names and "control: H conserved by Phi_f" in names
+    assert "Poisson map Phi_f" in names and "involution {H~,K~[-++]}_Pi" in names
     assert all(c.holds is False for c in cert.checks if not c.expected)
+    paper = certify(default_system(), DEFAULT_X0, "1/10", 4)
+    key = lambda c: [(k.name, k.claim, k.holds, k.residual, k.applicable, k.detail) for k in c.checks]  # noqa: E731
+    assert key(cert) == key(paper) and cert.values == paper.values and cert.orbit == paper.orbit
 
 
 def test_the_fast_paths_agree_with_the_interface_exactly():
     """The paper's certificate evaluates H~, K~ and Pi by flint closed forms; the System interface
     by the plain formulas in Fractions: the same rationals (==) at every orbit point."""
     from exact_khk.certification.lie_poisson import certify
-    from exact_khk.certification.lie_poisson_flint import FlintForms
+    from exact_khk.systems.lie_poisson.flint_forms import FlintForms
     from exact_khk.linalg.flintmat import rows
 
     s, fr, fl = default_system(), get_arith("fraction"), get_arith("flint")

@@ -3,7 +3,7 @@
 ``certify(LiePoissonSystem.random(n, seed), x0=random_point(n, seed), steps=K)``
 with default options: every claim of the paper is true, so INVALID would be a
 false alarm.  Negative controls that cannot fail at the chosen point (the
-degenerate sets of :class:`exact_khk.certification.controls.ControlDegeneracy`)
+degenerate sets of :class:`exact_khk.systems.lie_poisson.controls.ControlDegeneracy`)
 must be reported inapplicable, and :func:`random_point` avoids the degenerate
 point sets (J(x) singular).  INCONCLUSIVE (a claim undefined at every orbit
 point, e.g. after a singular step of another map) and singular steps are
@@ -21,7 +21,7 @@ from fractions import Fraction
 import pytest
 
 from exact_khk import LiePoissonSystem, SingularStepError, certify
-from exact_khk.certification.controls import ControlDegeneracy, non_admissible_hessian
+from exact_khk.systems.lie_poisson.controls import ControlDegeneracy, non_admissible_hessian
 from exact_khk.systems.lie_poisson.system import hankel_singular, random_point
 
 CONTROLS = ("control: commutation with non-associated field", "control: integral H~ conserved by Phi_control",

@@ -350,7 +350,7 @@ def test_exact_orbit_at_n_256_is_reversible():
     assert len(set(pts)) == 4  # control: the orbit moves
 
 
-# --- the exact DFT over Q(ζ_N), n | N (linalg.circulant_dft) -------------------------------
+# --- the exact DFT over Q(ζ_N), n | N (systems/lie_poisson/circulant_dft.py) -------------------------------
 
 def _cyclo_fields(n, rng):
     """f, the control and g for two rational and up to three non-rational sign patterns."""

@@ -1,10 +1,10 @@
 """Certification: records, generic checks, the Lie–Poisson theorems, evidence of other kinds.
 
-:func:`certify` certifies any :class:`~exact_khk.systems.base.System`: a system
-that knows the paper's theorems (the Lie–Poisson family) gets the paper's
-certificate (:mod:`~exact_khk.certification.lie_poisson`), every other system
-the claims of the registry it declares (:mod:`~exact_khk.certification.claims`, run by
-:mod:`~exact_khk.certification.engine`).
+:func:`certify` certifies any :class:`~exact_khk.systems.base.System` by the claims of the
+registry it declares (:mod:`~exact_khk.certification.claims`, run by
+:mod:`~exact_khk.certification.engine`); a system that knows the paper's theorems (the
+Lie–Poisson family) takes the paper's options on top (:mod:`~exact_khk.certification.lie_poisson`:
+involutions, Poisson points, identities, proofs).
 """
 
 from __future__ import annotations

@@ -13,6 +13,8 @@ orbit.  Every control of every claim is inapplicable at a fixed point of Φ_f
 
 The claims, in the order they are checked (:data:`CLAIMS`):
 
+* ``definition`` — I(x) = h(x, Φ(x)) along the orbit of I's own map for every integral
+  declaring a definition h (the family's H̃ and K̃: h(x, x̃) = (2ε)^{-1} xᵀ J((x+x̃)/2)^{-1} x̃);
 * ``reversibility`` — Φ(Φ(x, ε), −ε) = x for every declared field;  control: Φ_f(Φ_f(x, ε), ε) = x
   (inapplicable on 2-periodic orbits);
 * ``integrals`` — every declared integral I(x, ε) is conserved by Φ_f and by every commuting map;
@@ -25,6 +27,11 @@ The claims, in the order they are checked (:data:`CLAIMS`):
   dimension 2, where every bivector is Poisson), and (1 + x_j)Π is not preserved;
 * ``commutation`` — Φ_f∘Φ_g = Φ_g∘Φ_f for every declared field g at the same ε;  control: with Φ_g
   at step 2ε they do not commute;
+* ``involution`` — for every integral I_B declared as the image of I under an involution B:
+  ∇I_B = B ∇I and {I, I_B} = 0 for Π and for its ε → 0 limit J; first ∇q_l = A^l ∇q_0 for the
+  coefficients of Π's second form, where the tensor declares one;
+* ``rank`` — the gradient families the system declares (``gradient_ranks``) have their rank at
+  some orbit point (functional independence; undecided if at none);
 * ``jacobian`` — the derivative of the step (dual numbers through the solve) equals
   (I − εf'(x))^{-1}(I + εf'(Φ(x)));  control: with f'(x) in place of f'(Φ(x)) it does not
   (inapplicable where f'(Φ(x)) = f'(x));
@@ -35,6 +42,15 @@ The claims, in the order they are checked (:data:`CLAIMS`):
   is preserved: m(Φ(x)) det dΦ(x) = m(x);  control: the density 1 (det dΦ(x) = 1) is not
   (inapplicable when m is a constant: then the claim is that control).
 
+A system with a certificate of its own theorems (``certificate_options``: the Lie–Poisson
+family, :mod:`~exact_khk.certification.lie_poisson`) is run as that certificate
+(``run.paper``): its claims in its ``claim_order``, every map's orbit at every claim, the Poisson
+checks at the ``poisson_points`` subset, the paper's wording, and its own negative controls
+(``negative_controls``, run by :func:`declared_controls` after the claims) in place of the
+automatic ones (:meth:`~exact_khk.certification.engine.Run.control`).  Quantities the claims
+share (integrals, gradients, Π) come memoised from the run, by the system's fast forms where it
+has them (:meth:`~exact_khk.systems.base.System.fast_forms`; the generic route where None).
+
 Adding a kind of claim is one :class:`Claim` here (plus what a system declares for it).
 """
 
@@ -42,34 +58,80 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from exact_khk.certification.checks import (commute_items, compare, conserved_items, jacobiator, lazy_orbit,
-                                            poisson_map_items, reversible_items)
+from exact_khk.arith import get_arith
+from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, conserved_items,
+                                            inapplicable, jacobiator, lazy_orbit, poisson_map_items, rank,
+                                            reversible_items, run_check)
 from exact_khk.errors import PoleError, UndecidedError
 from exact_khk.kahan.map import KahanMap
-from exact_khk.linalg.dense import SingularMatrix, determinant, solve
+from exact_khk.linalg.dense import SingularMatrix, determinant, matvec, solve
+from exact_khk.linalg.flintmat import column, fmpq_mat
+from exact_khk.linalg.flintmat import rank as flint_rank
 from exact_khk.linalg.dual import jacobian as dual_jacobian
 
-#: relative perturbation of the "perturbed point" control (exact arithmetics)
+#: relative perturbation of the "perturbed point" controls (exact arithmetics)
 PERTURBATION = Fraction(1, 2 ** 60)
+
 
 
 class Claim:
     """One kind of claim (see the module docstring)."""
 
-    def __init__(self, name, declared, check):
-        self.name, self.declared, self.check = name, declared, check
+    def __init__(self, name, declared, check, files):
+        self.name, self.declared, self.check, self.files = name, declared, check, files
 
 
 #: name -> Claim, in the order the claims are checked
 REGISTRY: dict = {}
 
 
-def claim(name, declared=lambda system: True):
-    """Register ``check(run)`` as the claim ``name``."""
+def claim(name, declared=lambda system: True, files=True):
+    """Register ``check(run)`` as the claim ``name`` (``files``: a system file's ``claims`` may name it;
+    otherwise only a system's own objects declare it)."""
     def register(check):
-        REGISTRY[name] = Claim(name, declared, check)
+        REGISTRY[name] = Claim(name, declared, check, files)
         return check
     return register
+
+
+def orbit_statement(run, what):
+    """``what`` at every point of the Φ_f orbit, in the paper's certificate's wording."""
+    return f"{what} at the {len(run.pts)} points of the Phi_f orbit"
+
+
+def at_points(run, sides, ks=None):
+    """compare(sides(k)) for k in ``ks`` (default: every point of the Φ_f orbit)."""
+    ks = range(len(run.pts)) if ks is None else ks
+    return lambda: compare(run.ar, ((k, lambda k=k: sides(k)) for k in ks))
+
+
+# --- closed form = definition -------------------------------------------------------
+
+
+@claim("definition", lambda system: any(hasattr(fn, "definition") for fn in system.integrals().values()),
+       files=False)
+def definition(run):
+    """I(x) = h(x, Φ(x)) along the orbit of I's own map, for every integral I that declares a
+    definition h (a discrete Lagrangian: :meth:`HtildeIntegral.definition`)."""
+    ar, e, K, fast = run.ar, run.e, run.steps, run.fast
+    for name, fn in run.integrals.items():
+        if not hasattr(fn, "definition"):
+            continue
+        m = fn.fld.label
+        pts = run.orbit(m)
+
+        def h(k, fn=fn, pts=pts):
+            if fast is not None:
+                try:
+                    return fast.htilde_definition(pts[k], pts[k + 1])
+                except SingularMatrix:
+                    pass  # J((x+x~)/2) singular: the generic route raises the PoleError
+            return fn.definition(ar, pts[k], pts[k + 1], e)
+
+        run.add(f"integral {name} (closed form = definition)",
+                f"{name}(x) {fn.definition_text.format(map=f'Phi_{m}')} at the {K} points "
+                f"of the Phi_{m} orbit", at_points(run, lambda k, name=name, m=m, h=h: (run.value(name, m, k), h(k)),
+                                                   range(K)))
 
 
 # --- reversibility ------------------------------------------------------------------
@@ -96,13 +158,13 @@ def reversibility(run):
     for name in run.system.field_names():
         run.add(*reversible(ar, name, run.map(name), run.orbit(name)))
     pts = run.pts
-    run.add("control: Phi_f applied twice returns",
-            "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
-            lambda: compare(ar, ((k, lambda k=k: (pts[k + 2], pts[k])) for k in range(K - 1)))
-            if K >= 2 else compare(ar, [(0, lambda: (run.phi.step(pts[1]), pts[0]))]),
-            expected=False,
-            degenerate=lambda: "the orbit is 2-periodic (Phi_f(Phi_f(x0)) = x0)"
-            if run.same(run.phi.step(pts[1]), pts[0]) else None)
+    run.control("control: Phi_f applied twice returns",
+                "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
+                lambda: compare(ar, ((k, lambda k=k: (pts[k + 2], pts[k])) for k in range(K - 1)))
+                if K >= 2 else compare(ar, [(0, lambda: (run.phi.step(pts[1]), pts[0]))]),
+                expected=False,
+                degenerate=lambda: "the orbit is 2-periodic (Phi_f(Phi_f(x0)) = x0)"
+                if run.same(run.phi.step(pts[1]), pts[0]) else None)
 
 
 # --- integrals ----------------------------------------------------------------------
@@ -110,22 +172,29 @@ def reversibility(run):
 
 @claim("integrals", lambda system: bool(system.integrals()))
 def integrals(run):
-    ar, e, K, pts = run.ar, run.e, run.steps, run.pts
-    others = [n for n in run.system.field_names() if n != "f"]
-    for name, fn in run.system.integrals().items():
-        value = lambda x, fn=fn: fn(ar, x, e)  # noqa: E731
-        run.add(f"integral {name} conserved by Phi_f", f"{name}(x_k) = {name}(x_0) for k = 1..{K} along "
-                f"the Phi_f orbit; {name} = {fn.text}", lambda value=value: compare(ar, conserved_items(value, pts)))
-        for g in others:
-            run.add(f"integral {name} conserved by Phi_{g}", f"{name}(y_k) = {name}(y_0) along the Phi_{g} "
-                    f"orbit of x0", lambda value=value, g=g: compare(
-                        ar, conserved_items(value, lazy_orbit(run.map(g), run.x0, K))))
+    ar, K = run.ar, run.steps
+    for name, fn in run.integrals.items():
+        for m in run.field_names:
+            if run.paper:  # every orbit computed
+                statement = f"{name}(x_k) = {name}(x_0) for k = 1..{K} along the Phi_{m} orbit"
+                evaluate = at_points(run, lambda k, name=name, m=m: (run.value(name, m, k), run.value(name, m, 0)),
+                                     range(1, K + 1))
+            elif m == "f":
+                statement = f"{name}(x_k) = {name}(x_0) for k = 1..{K} along the Phi_f orbit; {name} = {fn.text}"
+                evaluate = lambda fn=fn: compare(ar, conserved_items(lambda x: fn(ar, x, run.e), run.pts))  # noqa: E731
+            else:
+                statement = f"{name}(y_k) = {name}(y_0) along the Phi_{m} orbit of x0"
+                evaluate = lambda fn=fn, m=m: compare(ar, conserved_items(  # noqa: E731
+                    lambda x: fn(ar, x, run.e), lazy_orbit(run.map(m), run.x0, K)))
+            run.add(f"integral {name} conserved by Phi_{m}", statement, evaluate)
         _perturbed_point_control(run, name, fn)
         if fn.depends_on_eps:
             _eps_zero_control(run, name, fn)
 
 
 def _perturbed_point_control(run, name, fn):
+    if run.paper:  # the family's own perturbed-point control replaces it (run.control)
+        return
     ar, e, pts = run.ar, run.e, run.pts
     grad = []
     try:
@@ -154,10 +223,10 @@ def _eps_zero_control(run, name, fn):
     if limit is None:
         return
     zero = ar.zero
-    run.add(f"control: {name} at eps = 0 conserved", f"[control, must fail] the eps -> 0 limit of {name} "
-            f"(the continuous-time quantity) is conserved along the Phi_f orbit",
-            lambda: compare(ar, conserved_items(lambda x: limit(ar, x, zero), pts)), expected=False,
-            degenerate=lambda: f"the eps -> 0 limit of {name} is a constant" if _constant(limit) else None)
+    run.control(f"control: {name} at eps = 0 conserved", f"[control, must fail] the eps -> 0 limit of {name} "
+                f"(the continuous-time quantity) is conserved along the Phi_f orbit",
+                lambda: compare(ar, conserved_items(lambda x: limit(ar, x, zero), pts)), expected=False,
+                degenerate=lambda: f"the eps -> 0 limit of {name} is a constant" if _constant(limit) else None)
 
 
 def _constant(fn) -> bool:
@@ -167,12 +236,37 @@ def _constant(fn) -> bool:
 
 
 def declared_controls(run):
-    """The system's own controls: functions claimed not conserved (checked with every claim list)."""
-    ar, e, pts = run.ar, run.e, run.pts
+    """The system's own controls (checked with every claim list): the functions it claims not
+    conserved, then its :class:`~exact_khk.systems.base.Control` s, each with its own degeneracy
+    rules (:meth:`~exact_khk.systems.base.System.negative_controls`)."""
+    ar, e, pts, K = run.ar, run.e, run.pts, run.steps
     for name, fn in run.system.controls().items():
         run.add(f"control: {name} conserved by Phi_f",
                 f"[control, must fail] {name} = {fn.text} is conserved along the Phi_f orbit",
                 lambda fn=fn: compare(ar, conserved_items(lambda x: fn(ar, x, e), pts)), expected=False)
+    for c in run.system.negative_controls(run.x0, run.eps):
+        fn, statement = c.function, c.statement
+        if c.kind == "commutes":
+            evaluate = lambda c=c: compare(ar, commute_points_items(  # noqa: E731
+                run.phi, KahanMap(c.field, run.eps, ar), pts))
+        elif c.kind == "conserved":
+            evaluate = lambda c=c, fn=fn: compare(ar, conserved_items(  # noqa: E731
+                lambda x: fn(ar, x, e), lazy_orbit(KahanMap(c.field, run.eps, ar), run.x0, K)))
+        else:  # "perturbed": the last coordinate of x0 moved
+            rel = ar.convert(PERTURBATION if ar.exact else Fraction(2, 2 ** ar.prec))
+            last = pts[0][-1]
+            moved = tuple(pts[0][:-1]) + (rel if ar.is_zero(last) is True else last + last * rel,)
+            at_end = (lambda fn=fn: run.value(fn.name, "f", K)) if fn.name in run.integrals else \
+                (lambda fn=fn: fn(ar, pts[K], e))
+            evaluate = lambda fn=fn, moved=moved, at_end=at_end: compare(  # noqa: E731
+                ar, [(0, lambda: (fn(ar, moved, e), at_end()))])
+            statement = statement.format(how="2^-60 relative" if ar.exact else "one ulp", K=K)
+        if run.progress is not None:
+            run.progress(c.name)
+        check = run_check(c.name, statement, ar, evaluate, False,
+                          degenerate=(lambda c=c: c.degenerate(ar, pts)) if c.degenerate else None)
+        why = c.moot() if c.moot is not None and check.applicable else None
+        run.checks.append(inapplicable(check, why) if why else check)
 
 
 # --- Poisson tensor -----------------------------------------------------------------
@@ -180,11 +274,25 @@ def declared_controls(run):
 
 @claim("poisson", lambda system: system.poisson() is not None)
 def poisson(run):
-    ar, e, K, pts, N = run.ar, run.e, run.steps, run.pts, run.system.dim
+    ar, e, K, pts, N, fast = run.ar, run.e, run.steps, run.pts, run.system.dim, run.fast
     P = run.system.poisson()
+    if hasattr(P, "formula"):
+        run.add(f"Poisson tensor {P.name} formula",
+                orbit_statement(run, f"{P.name} = {P.text} equals {P.formula_text}"),
+                at_points(run, lambda k: fast.Pi_sides(pts[k]) if fast is not None
+                          else (run.tensor("f", k), P.formula(ar, pts[k], e))))
+    jacobi = (lambda k: fast.jacobiator(pts[k])) if fast is not None else (lambda k: P.jacobiator(ar, pts[k], e))
+    if run.paper:
+        subset = "every point" if len(run.ks) == K else f"{len(run.ks)} of the {K} points (k = {run.ks})"
+        run.add(f"Poisson tensor {P.name} Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at {subset} "
+                f"of the Phi_f orbit", at_points(run, lambda k: (jacobi(k), None), run.ks))
+        for m in run.field_names:
+            run.add(f"Poisson map Phi_{m}",
+                    f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) for Phi_{m} at {subset} of its orbit",
+                    lambda m=m: compare(ar, poisson_map_sides(run, m)))
+        return
     run.add("Poisson tensor Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} "
-            f"orbit points", lambda: compare(ar, ((k, lambda k=k: (P.jacobiator(ar, pts[k], e), None))
-                                                for k in range(K + 1))))
+            f"orbit points", at_points(run, lambda k: (jacobi(k), None)))
     run.add("Poisson map Phi_f", f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) at the {K} orbit points",
             lambda: compare(ar, poisson_map_items(run.phi, lambda k: P.matrix(ar, pts[k], e), pts, range(K))))
     run.add("control: Jacobi identity of Pi + W", "[control, must fail] Pi + W, W = e_0^e_1 + x_1 e_1^e_2, "
@@ -198,6 +306,28 @@ def poisson(run):
     run.add(f"control: (1 + x_{j}) Pi preserved", f"[control, must fail] the Kahan map preserves (1 + x_{j}) Pi "
             f"(it would make 1 + x_{j} an integral)",
             lambda: compare(ar, poisson_map_items(run.phi, scaled, pts, range(K))), expected=False)
+
+
+def poisson_map_sides(run, m):
+    """(k, dΦ Π(x_k) dΦᵀ vs Π(x_{k+1})) along the orbit of the map of ``m`` at the points ``run.ks``;
+    with fast forms decided multiplied out by I − εf'(x) (no solve: equivalent where the step is
+    defined), a failure reporting the residual of dΦ Π dΦᵀ − Π∘Φ itself."""
+    phi, pts, fast = run.map(m), run.orbit(m), run.fast
+    if fast is None:
+        return poisson_map_items(phi, lambda k: run.tensor(m, k), pts, run.ks)
+    Pz = lambda k: run.memo((m, "Pi_int", k), lambda: fast.Pi_int(pts[k]))  # noqa: E731
+    Pb = lambda k: run.memo((m, "Pi_blocks", k), lambda: fast.Pi_blocks(pts[k]))  # noqa: E731
+
+    def sides(k):
+        x, y = pts[k], pts[k + 1]
+        holds = fast.poisson_map_blocks(phi, x, y, Pb(k), Pb(k + 1))  # None: no block structure
+        if holds is None:
+            holds = fast.poisson_map_cleared(phi, x, y, Pz(k), Pz(k + 1))
+        if holds:
+            return (), ()
+        D = fast.dPhi(phi, x, y)
+        return (D * run.tensor(m, k) * D.transpose()).entries(), run.tensor(m, k + 1).entries()
+    return ((k, lambda k=k: sides(k)) for k in run.ks)
 
 
 def _plus_w(ar, P, e):
@@ -219,10 +349,91 @@ def commutation(run):
     ar, pts = run.ar, run.pts
     for g in run.system.field_names()[1:]:
         run.add(*commuting(ar, g, run.phi, run.map(g), pts))
-        phi_2g = KahanMap(run.system.field(g), 2 * run.eps, ar)
-        run.add(f"control: commutation with Phi_{g} at 2 eps",
-                f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
-                lambda phi_2g=phi_2g: compare(ar, commute_items(run.phi, phi_2g, pts)), expected=False)
+        phi_2g = KahanMap(run.map(g).field, 2 * run.eps, ar)
+        run.control(f"control: commutation with Phi_{g} at 2 eps",
+                    f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
+                    lambda phi_2g=phi_2g: compare(ar, commute_items(run.phi, phi_2g, pts)), expected=False)
+
+
+# --- involution -----------------------------------------------------------------------
+
+
+@claim("involution", lambda system: system.poisson() is not None and any(
+    getattr(fn, "base", None) for fn in system.integrals().values()), files=False)
+def involution(run):
+    """{I, I_B}_J = {I, I_B}_Π = 0 and ∇I_B = B ∇I for every integral I_B declared as the
+    image of I under an involution B (J the ε → 0 limit of Π); first the identity of the
+    gradients of the coefficients of Π's second form, where the tensor declares one."""
+    ar, pts, fast = run.ar, run.pts, run.fast
+    P = run.system.poisson()
+    if hasattr(P, "coefficient_sides"):
+        grads = (lambda k: fast.q_gradients(pts[k])) if fast is not None else \
+            (lambda k: P.coefficient_gradients(ar, pts[k]))
+        run.add("gradients of q_l: grad q_l = A^l grad q_0",
+                P.coefficient_statement("closed form" if fast is not None else "dual numbers", len(pts)),
+                at_points(run, lambda k: P.coefficient_sides(grads(k))))
+    if fast is not None:
+        J = lambda k: fast.J_int(pts[k])  # noqa: E731
+        Pi = lambda k: run.memo(("f", "Pi_int", k), lambda: fast.Pi_int(pts[k]))  # noqa: E731
+        brk, times = fast.bracket, lambda B, g: (B * column(g)).entries()
+    else:
+        J, Pi = (lambda k: P.at_eps_zero(ar, pts[k])), (lambda k: run.tensor("f", k))
+        brk, times = bracket, matvec
+    for name, fn in run.integrals.items():
+        if getattr(fn, "base", None) is None:
+            continue
+        B = [[ar.convert(t) for t in row] for row in run.system.involution(fn.signs, cyclotomic=True)]
+        B = B if fast is None else fmpq_mat(B)
+        base, s = fn.base, fn.signs
+        run.add(f"integral gradients grad {name} = B grad {base}",
+                orbit_statement(run, f"grad {name} = B grad {base} (exact gradients)"),
+                at_points(run, lambda k, name=name, B=B, base=base: (run.gradient(name, k),
+                                                                     times(B, run.gradient(base, k)))))
+        for Q, T in ((P.limit_name, J), (P.name, Pi)):
+            run.add(f"involution {{{base},{name}}}_{Q}", orbit_statement(run, f"grad {base}^T {Q} grad {name} = 0"),
+                    at_points(run, lambda k, name=name, base=base, T=T: (
+                        brk(run.gradient(base, k), T(k), run.gradient(name, k)), None)))
+
+
+# --- rank of the gradients ----------------------------------------------------------
+
+
+@claim("rank", lambda system: bool(system.integrals()) and bool(system.gradient_ranks(get_arith("fraction"))),
+       files=False)
+def rank_of_gradients(run):
+    """Functional independence: the gradients the system declares (``gradient_ranks``) have
+    their rank r at some orbit point.  A generic statement: full rank at one point proves it,
+    and the rank drops on critical sets of the integrals (an equilibrium: all gradients vanish).
+    So: True with rank r somewhere, None (undecided) if nowhere, False only for a rank above r
+    (impossible if the declared relations hold)."""
+    ar, npts = run.ar, len(run.pts)
+    rank_of = flint_rank if run.fast is not None else (lambda rows: rank(ar, rows))
+    for name, statement, rows, expected in run.system.gradient_ranks(ar):
+        def evaluate(rows=rows, expected=expected):
+            if not getattr(ar, "decides", ar.exact):
+                return None, "n/a", "rank not decidable in this arithmetic"
+            ranks, poles = {}, []
+            for k in range(npts):
+                try:
+                    r = rank_of(rows(lambda name, k=k: run.gradient(name, k)))
+                except PoleError:
+                    poles.append(k)
+                    continue
+                if r is None:
+                    return None, "n/a", f"rank not decidable at step {k}"
+                ranks[k] = r
+            high = [k for k, r in ranks.items() if r > expected]
+            if high:
+                return False, f"rank {ranks[high[0]]}", f"rank {ranks[high[0]]} > {expected} at step {high[0]}"
+            full = [k for k, r in ranks.items() if r == expected]
+            low = [k for k, r in ranks.items() if r < expected]
+            notes = (f"; rank below {expected} at k = {low[:8]} (critical points of the integrals)" if low else "") \
+                + (f"; gradients undefined (pole) at k = {poles[:8]}" if poles else "")
+            if not full:
+                return None, f"rank {max(ranks.values(), default=0)}", \
+                    f"rank {expected} at no orbit point (a degenerate orbit, e.g. an equilibrium){notes}"
+            return True, f"rank {expected}", f"rank {expected} at {len(full)} of {npts} points{notes}"
+        run.add(name, statement, evaluate)
 
 
 # --- the Jacobian of the step -------------------------------------------------------
@@ -320,5 +531,5 @@ def measure(run):
             if hasattr(m, "partials") and _constant(m) else None)
 
 
-#: the claims a system can declare, in the order they are checked
-CLAIMS = tuple(REGISTRY)
+#: the claims a system file can declare, in the order they are checked
+CLAIMS = tuple(name for name, c in REGISTRY.items() if c.files)

@@ -290,10 +290,10 @@ def liouville_at_points(system, x0, eps, arith="cyclo:3", steps=2, patterns=None
 
 
 def _judged(system, x0, eps, recs):
-    """The records at orbit points judged by certify's rule (:class:`~exact_khk.certification.
-    controls.ControlDegeneracy`): a control that held where it cannot fail is inapplicable,
+    """The records at orbit points judged by certify's rule (:class:`~exact_khk.systems.
+    lie_poisson.controls.ControlDegeneracy`): a control that held where it cannot fail is inapplicable,
     and a rank below n at a degenerate x0 (J(x0) singular, an equilibrium) undecided."""
-    from exact_khk.certification.controls import ControlDegeneracy
+    from exact_khk.systems.lie_poisson.controls import ControlDegeneracy
 
     degenerate = ControlDegeneracy(system, x0, eps)
     why = {"control:commutation": degenerate.commutation, "control:conservation": degenerate.control_conserves}

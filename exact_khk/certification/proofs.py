@@ -232,7 +232,7 @@ def _record(name, claim, holds, residual, ar, t0, expected=True):
 def _control(record, system):
     """A control record that did not fail, recorded as inapplicable where the control cannot
     fail for this system (as certify's controls 1 and 2, at every point: ``everywhere``)."""
-    from exact_khk.certification.controls import ControlDegeneracy
+    from exact_khk.systems.lie_poisson.controls import ControlDegeneracy
 
     return inapplicable_if(record, lambda: ControlDegeneracy(system).everywhere())
 

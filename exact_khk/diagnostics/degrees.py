@@ -241,7 +241,7 @@ def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
     from values); ``progress(k)`` after step k.
 
     By polynomial arithmetic (:func:`polynomial_line_degrees`) below dimension
-    :data:`~exact_khk.linalg.paths.DEGREES_BY_VALUES_MIN_DIM` or for p below
+    :data:`~exact_khk.systems.lie_poisson.paths.DEGREES_BY_VALUES_MIN_DIM` or for p below
     :data:`VALUES_MIN_PRIME`, else from values at points of the line
     (:func:`valued_line_degrees`) unless the degrees grow geometrically
     (:func:`line_run`)."""
@@ -250,7 +250,7 @@ def line_degrees(fld, eps, p, steps, rng, max_degree=None, progress=None):
 
 def line_route(dim: int, p: int) -> str:
     """Where :func:`line_run` starts for dimension ``dim`` over F_p: ``'values'`` or
-    ``'polynomials'`` (the rule of :mod:`exact_khk.linalg.paths`)."""
+    ``'polynomials'`` (the rule of :mod:`exact_khk.systems.lie_poisson.paths`)."""
     from exact_khk.systems.lie_poisson.paths import DEGREES_BY_VALUES_MIN_DIM
 
     return "values" if dim >= DEGREES_BY_VALUES_MIN_DIM and p >= VALUES_MIN_PRIME else "polynomials"
@@ -260,7 +260,7 @@ def line_run(fld, eps, p, steps, rng, max_degree=None, progress=None) -> tuple:
     """``(degrees, route)`` of :func:`line_degrees`: from values where :func:`line_route`
     says so, handing over to polynomial arithmetic on a new line from the start once the
     degrees grow geometrically (:func:`_geometric`) below dimension
-    :data:`~exact_khk.linalg.paths.DEGREES_HAND_OVER_BELOW_DIM` (there the values' new
+    :data:`~exact_khk.systems.lie_poisson.paths.DEGREES_HAND_OVER_BELOW_DIM` (there the values' new
     points, each iterated from the line, and a last step that must fail at
     D = ``max_degree`` make that route about 1.6× slower, docs/benchmarks.md)."""
     from exact_khk.systems.lie_poisson.paths import DEGREES_HAND_OVER_BELOW_DIM

@@ -13,7 +13,9 @@ a system; it never tests which family a system belongs to.
 * :meth:`poisson` — a Poisson tensor Π(x, ε) claimed to satisfy the Jacobi
   identity and to be preserved, dΦ(x) Π(x) dΦ(x)ᵀ = Π(Φ(x)), or None;
 * :meth:`controls` — functions claimed **not** conserved (user-declared
-  negative controls, on top of the automatic ones);
+  negative controls, on top of the automatic ones); :meth:`negative_controls` — controls
+  of other kinds (:class:`Control`: a field that must not commute, a map that must not
+  conserve a function, a perturbed point), with their own degeneracy rules;
 * :meth:`hamiltonian_form` — (K, H) when f = K∇H with K constant skew and H
   cubic (Celledoni–McLachlan–Owren–Quispel: modified energy and invariant
   measure), else None;
@@ -80,6 +82,24 @@ class Tensor:
         raise NotImplementedError
 
 
+class Control:
+    """A negative control a system declares: a statement that must FAIL on the orbit (the engine
+    evaluates it, :func:`~exact_khk.certification.claims.declared_controls`).  ``kind``:
+
+    * ``"commutes"`` — Φ_f∘Φ_g = Φ_g∘Φ_f at the points of the Φ_f orbit, g = ``field``;
+    * ``"conserved"`` — ``function`` is conserved along the orbit of x0 under the map of ``field``;
+    * ``"perturbed"`` — ``function`` at x0 with its last coordinate moved by 2^-60 (relative; one
+      ulp in floating arithmetic) equals its value at x_K (``statement`` names ``{how}`` and ``{K}``).
+
+    ``degenerate(ar, pts)`` (pts: the Φ_f orbit): why it cannot fail on this orbit, or None (then a
+    control that did not fail is inapplicable); ``moot()``: why it shows nothing even when it fails.
+    These rules are the control's own (the engine adds no rule of its own on top)."""
+
+    def __init__(self, kind, name, statement, field=None, function=None, degenerate=None, moot=None):
+        self.kind, self.name, self.statement = kind, name, statement
+        self.field, self.function, self.degenerate, self.moot = field, function, degenerate, moot
+
+
 class System:
     """Base class of systems (see the module docstring).  Defaults: nothing is
     known beyond the field."""
@@ -140,6 +160,27 @@ class System:
 
     def hamiltonian_form(self):
         return None
+
+    def negative_controls(self, x0, eps) -> list:
+        """The :class:`Control` s of a certificate at x0 and ε (after every claim); none by default."""
+        return []
+
+    #: the order in which the certificate checks the claims (None: the registry's,
+    #: :data:`~exact_khk.certification.claims.CLAIMS`)
+    claim_order = None
+
+    def fast_forms(self, ar, eps):
+        """An evaluator of the claims' quantities by closed forms of this system in ``ar`` at the
+        step ``eps`` (an element of ``ar``): the same values as the generic route, faster; None:
+        the generic route (the protocol is that of
+        :class:`~exact_khk.systems.lie_poisson.flint_forms.FlintForms`)."""
+        return None
+
+    def gradient_ranks(self, ar) -> list:
+        """Ranks claimed of gradients of the integrals, as (name, statement, rows, rank) with
+        ``rows(grad)`` the rows at a point from ``grad(name)`` (the gradient of the integral
+        ``name`` there); functional independence where full rank holds at one point."""
+        return []
 
     def measure(self):
         """A density m(x, ε) (a :class:`Function`) claimed invariant: m(Φ(x)) det dΦ(x) = m(x); or None."""

@@ -364,20 +364,49 @@ def grad_Htilde_dual(field, x, eps, arith=None):
 # --- the family's integrals and Poisson tensor as the System interface asks them -------------
 
 
+def htilde_definition(field, x, y, eps, arith=None):
+    """The integral by its definition: h(x, y) = (2ε)^{-1} xᵀ J((x+y)/2)^{-1} y, y = Φ(x, ε) the
+    Kahan step of ``field`` (for y = Φ(x) it equals H̃(x)).
+
+    Raises :class:`PoleError` where J((x+y)/2) is singular (for instance on every orbit with
+    Σ u_i = 0, an invariant hyperplane of the Kahan map, where J is singular)."""
+    ar = get_arith(arith)
+    e = _eps(ar, eps)
+    x, y = list(as_point(ar, x, field.dim)), list(as_point(ar, y, field.dim, "x_next"))
+    half = ar.one / ar.convert(2)
+    m = [(a + b) * half for a, b in zip(x, y)]
+    with ar.local():
+        try:
+            z, _ = solve(ar, field.system.J(m), [[t] for t in y])
+        except SingularMatrix:
+            raise PoleError("h(x, x~) is undefined: J((x+x~)/2) is singular at x = ("
+                            + ", ".join(ar.format(t) for t in x) + ")") from None
+    return sum((a * r[0] for a, r in zip(x, z)), ar.zero) / (e + e)
+
+
 class HtildeIntegral:
     """H̃ of a Lie–Poisson field as a :class:`~exact_khk.systems.base.Function`
-    (``I(ar, x, eps)``, exact gradient by :func:`grad_Htilde`); ``H~`` for f, ``K~[s]`` for g[s]."""
+    (``I(ar, x, eps)``, exact gradient by :func:`grad_Htilde`); ``H~`` for f, ``K~[s]`` for g[s].
+
+    What the certificate's claims read besides: ``fld`` (the field whose Kahan map has the
+    discrete Lagrangian h, :meth:`definition`), and for K̃[s] ``base`` = ``"H~"`` and ``signs``
+    (∇K̃ = B ∇H̃ with B = B[signs]: ``involution(cyclotomic=True)`` of the system)."""
 
     depends_on_eps = True
+    definition_text = "by (tH 4) equals h(x, {map}(x)) = (2 eps)^-1 x^T J((x+x~)/2)^-1 x~"
 
-    def __init__(self, name, fld, text):
-        self.name, self.fld, self.text = name, fld, text
+    def __init__(self, name, fld, text, base=None, signs=None):
+        self.name, self.fld, self.text, self.base, self.signs = name, fld, text, base, signs
 
     def __call__(self, ar, x, eps):
         return Htilde(self.fld, x, eps, ar)
 
     def gradient(self, ar, x, eps):
         return grad_Htilde(self.fld, x, eps, ar)
+
+    def definition(self, ar, x, y, eps):
+        """h(x, y) (:func:`htilde_definition`): equals H̃(x) for y = Φ(x)."""
+        return htilde_definition(self.fld, x, y, eps, ar)
 
     def at_eps_zero(self):
         """The ε → 0 limit is 2H = xᵀ M x, which the certificate's own controls cover: None."""
@@ -388,9 +417,13 @@ class HtildeIntegral:
 
 
 class PiTensor:
-    """Π(x, ε) = J − ε² J Hs J Hs J as a :class:`~exact_khk.systems.base.Tensor`."""
+    """Π(x, ε) = J − ε² J Hs J Hs J as a :class:`~exact_khk.systems.base.Tensor`; besides,
+    its second form (:meth:`formula`, the paper's), its ε → 0 limit J(x) (:meth:`at_eps_zero`)
+    and the identity ∇q_l = A^l ∇q_0 of the coefficients of that form (:meth:`coefficient_sides`)."""
 
     name, text, depends_on_eps = "Pi", "J - eps^2 J Hs J Hs J", True
+    formula_text = "(1 - eps^2 q_0) J - eps^2 sum_(l>=1) q_l A^l J"
+    limit_name = "J"
 
     def __init__(self, system):
         self.system = system
@@ -398,7 +431,28 @@ class PiTensor:
     def matrix(self, ar, x, eps):
         return Pi(self.system, x, eps, ar)
 
+    def formula(self, ar, x, eps):
+        return Pi_from_q(self.system, x, eps, ar)
+
+    def at_eps_zero(self, ar, x):
+        return self.system.J(list(x))
+
     def jacobiator(self, ar, x, eps):
         from exact_khk.linalg.dual import jacobiator
 
         return jacobiator(ar, lambda d, xd: Pi(self.system, xd, d.convert(eps), d), x)
+
+    def coefficient_statement(self, how, npts):
+        return (f"the exact gradients ({how}) of q_l = tr((A^T)^l (J Hs)^2)/(2n) satisfy grad q_l = "
+                f"A^l grad q_0 at the {npts} points of the Phi_f orbit")
+
+    def coefficient_sides(self, grads):
+        """([∇q_1, …], [A ∇q_0, A² ∇q_0, …]) from ``grads`` = [∇q_0, …, ∇q_{n−1}]."""
+        n = self.system.n
+        return grads[1:], [[grads[0][i] for i in shift_index(n, l)] for l in range(1, n)]
+
+    def coefficient_gradients(self, ar, x):
+        """[∇q_0, …, ∇q_{n−1}] at x by dual numbers."""
+        from exact_khk.linalg.dual import jacobian
+
+        return jacobian(ar, lambda d, xd: q_coefficients(self.system, xd, d), x)[1]

@@ -29,6 +29,7 @@ exact_khk.errors.NotRationalError: signs '+-++' split the class {j : gcd(j, 4) =
 
 from __future__ import annotations
 
+import dataclasses
 import random
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -242,6 +243,8 @@ class LiePoissonSystem(System):
     b: tuple
     c: tuple
     _fields: dict = field(default_factory=dict, repr=False, compare=False)
+    #: the involutions of the associated fields (None: :func:`default_involutions`), see :meth:`with_involutions`
+    chosen: tuple = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         n = len(self.a)
@@ -337,11 +340,16 @@ class LiePoissonSystem(System):
         return f"n = {self.n}"
 
     def involutions(self, arith=None) -> list:
-        """The involutions certified by default (:func:`default_involutions`)."""
-        return default_involutions(self.n, arith)
+        """The involutions certified (:meth:`with_involutions`; default :func:`default_involutions`)."""
+        return list(self.chosen) if self.chosen is not None else default_involutions(self.n, arith)
+
+    def with_involutions(self, signs) -> "LiePoissonSystem":
+        """The same system whose fields, integrals and claims are those of the involutions ``signs``
+        (patterns as :func:`~exact_khk.parsing.format_signs` writes them; non-rational ones over Q(ω))."""
+        return dataclasses.replace(self, chosen=tuple(signs))
 
     def field_names(self) -> tuple:
-        """f and the associated g[s] of every rational involution of :meth:`involutions`."""
+        """f and the associated g[s] of every involution of :meth:`involutions`."""
         return ("f",) + tuple(f"g[{s}]" for s in self.involutions())
 
     def integrals(self) -> dict:
@@ -350,8 +358,46 @@ class LiePoissonSystem(System):
 
         out = {"H~": HtildeIntegral("H~", self.field("f"), "x^T (I - eps^2 (Hs J(x))^2)^-1 Hs x")}
         for s in self.involutions():
-            out[f"K~[{s}]"] = HtildeIntegral(f"K~[{s}]", self.field("g", s), f"as H~ with B Hs, B = B[{s}]")
+            out[f"K~[{s}]"] = HtildeIntegral(f"K~[{s}]", self.field("g", s, cyclotomic=True),
+                                             f"as H~ with B Hs, B = B[{s}]", base="H~", signs=s)
         return out
+
+    #: the order of the paper's claims in its certificate (the engine's registry, :mod:`exact_khk.certification.claims`)
+    claim_order = ("definition", "integrals", "commutation", "reversibility", "poisson", "involution", "rank")
+
+    def fast_forms(self, ar, eps):
+        """The closed forms of :class:`~.flint_forms.FlintForms` (python-flint matrices, the same
+        rationals as the generic route) when ``ar`` is the ``flint`` arithmetic, else None."""
+        from exact_khk.linalg.flintmat import uses_flint
+
+        if not uses_flint(ar):
+            return None
+        from exact_khk.systems.lie_poisson.flint_forms import FlintForms
+
+        return FlintForms(self, eps)
+
+    def gradient_ranks(self, ar) -> list:
+        """The ranks claimed of gradients of the integrals, as (name, statement, rows, rank):
+        ``rows(grad)`` the rows at a point from ``grad(name)``, the gradient of an integral there.
+        All of :meth:`integrals` span the dimension of the span of I and the involutions (the
+        rank of their sign vectors); the n integrals H̃_i of A^i Hs, ∇H̃_i = A^i ∇H̃, rank n."""
+        from exact_khk.linalg.flintmat import rank
+        from exact_khk.systems.lie_poisson.invariants import shift_index
+
+        n, names = self.n, list(self.integrals())
+        r = rank([[1] * n] + [list(parse_signs(s, n)) for s in self.involutions()])
+        n_rational = len(divisor_classes(n))
+        over = (f"all n = {n} integrals are expressible in {ar.name}" if expresses_omega(ar, n) or n_rational == n
+                else f"over Q only {n_rational} of the n = {n} integrals are expressible (the others need Q(omega))")
+        return [(f"rank of integral gradients ({', '.join(names)})",
+                 f"the gradients of the {len(names)} integrals expressible here have rank {r} "
+                 f"(the dimension of their span: functional independence, proved by one orbit point of full rank; "
+                 f"the rank may drop at critical points) on the Phi_f orbit; {over}",
+                 lambda grad: [grad(name) for name in names], r),
+                ("rank of integral gradients A^i grad H~ (i < n)",
+                 f"the gradients A^i grad H~ (i = 0..{n - 1}) of the n integrals H~_i have full rank n = {n} "
+                 f"(functional independence, proved by one orbit point of full rank) on the Phi_f orbit",
+                 lambda grad: [[grad("H~")[s] for s in shift_index(n, i)] for i in range(n)], n)]
 
     def tracked(self) -> tuple:
         """(integrals, commuting fields) a study follows along an orbit: H̃, and K̃ and g of
@@ -368,10 +414,15 @@ class LiePoissonSystem(System):
 
         return PiTensor(self)
 
-    def controls(self) -> dict:
-        """Functions claimed not conserved: the Hamiltonian H = xᵀ Hs x / 2 of the field
-        (2H is the ε → 0 limit of H̃; the Kahan map conserves H̃, not H)."""
-        return {"H": _Hamiltonian(self)}
+    def negative_controls(self, x0, eps) -> list:
+        """The four controls of the paper's certificate (:func:`~.controls.negative_controls`)."""
+        from exact_khk.systems.lie_poisson.controls import negative_controls
+
+        return negative_controls(self, x0, eps)
+
+    def singular_J(self, x) -> bool:
+        """Whether J(x) is singular (:func:`hankel_singular` of u)."""
+        return hankel_singular(list(x)[:self.n])
 
     def random_point(self, seed: int, bound: int = 3, eps=None) -> tuple:
         """A point off the degenerate sets of every map the certificate steps (:func:`random_point`)."""
@@ -679,22 +730,6 @@ def _degenerate_for(system, x, eps) -> bool:
     except (PoleError, SingularMatrix):
         return True
     return False
-
-
-class _Hamiltonian:
-    """H(x) = xᵀ Hs x / 2 as a :class:`~exact_khk.systems.base.Function` (the continuous-time
-    energy; a control: Kahan's map conserves H̃, not H)."""
-
-    name, text, depends_on_eps = "H", "x^T Hs x / 2", False
-
-    def __init__(self, system):
-        self.system = system
-
-    def __call__(self, ar, x, eps):
-        return self.system.hamiltonian(ar, x)
-
-    def gradient(self, ar, x, eps):
-        return [sum((ar.convert(h) * t for h, t in zip(row, x)), ar.zero) for row in self.system.hessian]
 
 
 def b0_signs(n: int) -> str:

@@ -2,8 +2,8 @@
 (the ``flint`` arithmetic only): whole products and solves in C, derivatives by
 closed forms instead of dual numbers.
 
-:func:`~exact_khk.certification.lie_poisson.certify` uses :class:`FlintForms`
-when the arithmetic's elements are ``fmpq``; every other arithmetic (``fraction``,
+The certificate's claims (:mod:`exact_khk.certification.claims`) use :class:`FlintForms`
+(:meth:`LiePoissonSystem.fast_forms`) when the arithmetic's elements are ``fmpq``; every other arithmetic (``fraction``,
 ``gmpy2``, cyclotomic, finite fields, floating, balls) keeps the generic
 list-of-rows code and the dual-number derivatives.  Each quantity is the same
 rational matrix as its generic counterpart (tests compare them with ``==``);
@@ -26,7 +26,7 @@ only the route differs.  With x = (u, v), E_m = J(e_m) (m < n) and M = Hs:
   K̃_B(x) = xᵀ (I − ε²(Hs J)²)^{-1} B Hs x = xᵀ B z with z = R^{-1} Hs x, R the
   matrix of H̃.  :meth:`FlintForms.share_integrals` verifies these hypotheses
   exactly, once per involution (not assumed); z comes from the structured solve
-  of :mod:`exact_khk.linalg.circulant`.  For the same reason R_{B Hs} = R, so the
+  of :mod:`exact_khk.systems.lie_poisson.circulant`.  For the same reason R_{B Hs} = R, so the
   gradients of all the integrals share w = R^{-T} x (one dense solve per point),
   while each z_B = R^{-1} B Hs x is solved on its own (from B Hs, not as B z: the
   claim ∇K̃ = B ∇H̃ is then not built into the computation).
@@ -48,12 +48,12 @@ from __future__ import annotations
 
 import flint
 
-from exact_khk.errors import SingularStepError
+from exact_khk.errors import NotRationalError, SingularStepError
 from exact_khk.systems.lie_poisson import circulant
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.systems.lie_poisson.dihedral import BlockMatrix, Mixed
 from exact_khk.linalg.flintmat import column, fmpq_mat, fmpz_mat, mat, signed_columns, signed_rows
-from exact_khk.systems.lie_poisson.invariants import shift_index
+from exact_khk.systems.lie_poisson.invariants import _pole, shift_index
 
 
 class FlintForms:
@@ -383,7 +383,7 @@ class FlintForms:
     # --- the integrals: one solve per point -------------------------------------------
 
     def _ring(self, purpose):
-        """A :class:`~exact_khk.linalg.circulant.CirculantRing` of its own for each kind of
+        """A :class:`~exact_khk.systems.lie_poisson.circulant.CirculantRing` of its own for each kind of
         solve: the ring adapts the first precision of its fixed-point division to the last
         answer's height, and the H̃ solves, the J((x+x~)/2) solves and the Kahan steps
         (which use the shared ring) have answers of different heights."""
@@ -392,7 +392,22 @@ class FlintForms:
             rings[purpose] = circulant.CirculantRing(self.n)
         return rings[purpose]
 
-    def share_integrals(self, involutions):
+    def share_integrals(self, integrals):
+        """``integrals``: {name: :class:`~exact_khk.systems.lie_poisson.invariants.HtildeIntegral`}
+        (H̃ itself, ``signs`` None, and K̃[signs]).  Returns the names of those that
+        :meth:`share_matrices` shares (non-rational patterns are not: their B is not rational);
+        ``base`` is the name of H̃."""
+        pairs = {}
+        for name, fn in integrals.items():
+            try:
+                pairs[name] = (fn.fld, None if fn.signs is None else self.system.involution(fn.signs))
+            except NotRationalError:
+                continue
+        self.base = next((name for name, fn in integrals.items() if fn.signs is None), None)
+        shared = self.share_matrices(pairs)
+        return shared if self.base in shared else set()
+
+    def share_matrices(self, involutions):
         """``involutions``: {key: (field, B as rows or None for H~ itself)}.  Returns the
         keys whose integral is xᵀ B z (see the module docstring), after checking exactly
         that M_key = B Hs, B² = I and B Hs E_m = Hs E_m B for m < n."""
@@ -407,11 +422,15 @@ class FlintForms:
         self._structure = circulant.circulant_structure(self.system.field("f"))
         return set(shared)
 
+    def pole(self, ar, x):
+        """The PoleError of H̃ at x (a singular solve of the shared integrals)."""
+        return _pole(ar, list(x), self.eps)
+
     def htilde_solution(self, x, field=None):
         """z = R^{-1} M x (R = I − ε²(M J(x))², M the Hessian of ``field``, default f's)
         by the 2×2 solve over Q[t]/(tⁿ − 1), so that H̃_M(x) = xᵀ z; raises
         :class:`SingularMatrix` at a pole.  The steps of
-        :func:`exact_khk.linalg.circulant.exact_htilde`, keeping the vector."""
+        :func:`exact_khk.systems.lie_poisson.circulant.exact_htilde`, keeping the vector."""
         st = self._structure if field is None else circulant.circulant_structure(field)
         return self._solutions(x, st, [st])[0]
 
@@ -422,7 +441,7 @@ class FlintForms:
 
     def _solutions(self, x, st, rhs_structures):
         """z_i = R_st^{-1} M_i x (M_i the Hessian of ``rhs_structures[i]``) by
-        :func:`~exact_khk.linalg.circulant.htilde_solve` in a ring of this purpose's own."""
+        :func:`~exact_khk.systems.lie_poisson.circulant.htilde_solve` in a ring of this purpose's own."""
         R = self._ring("htilde")
         W, delta = circulant.htilde_solve(R, st, rhs_structures, *circulant.point_polys(list(x)), self.eps)
         dens = [R.integer_hankel(sti, reflected=True)[1] for sti in rhs_structures]
