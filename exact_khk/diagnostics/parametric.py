@@ -1,0 +1,510 @@
+"""Parametric integrals: :func:`find_integrals` at many values of ε (and of named parameters),
+reconstructed as rational functions of them, then proven as identities.
+
+**Samples.**  The search (:func:`~exact_khk.diagnostics.integrals.find_integrals`, unchanged)
+runs at ``s = (ε, a, …)`` drawn at random (small-height nonzero rationals; the parameters not
+named keep the system's values).  Each verified integral N/D it returns is the canonical pair
+of :func:`~exact_khk.diagnostics.pencils.canonical_pair` (echelon basis of span(N, D) over the
+sorted monomials, so its coefficients are rational functions of s); it is scaled so that the
+first nonzero coefficient of N and of D (sorted monomials) is 1.  A sample's *shape* is the list
+of the supports of the N and D found; the integrals are ordered by shape.  The most frequent
+shape is kept; samples of another shape (special values where a coefficient vanishes) are
+dropped and counted, and a shape held by fewer than :data:`MIN_SHARE` of the samples is refused.
+
+**Reconstruction** (a dense ansatz, solved exactly): each coefficient c(s) is written as P/Q
+with P, Q of total degree ≤ t in the k symbols, t = 0, 1, …; the linear system
+P(s_i) − c_i Q(s_i) = 0 over the samples but the last ``confirm`` is solved over Q
+(``fmpz_mat.nullspace``), P/Q reduced by its gcd, and accepted only when it reproduces every
+sample, the ``confirm`` unused ones included.  t needs 2·C(k + t, t) − 1 + ``confirm`` samples;
+beyond ``max_degree`` or :data:`MAX_SAMPLES` samples the search stops with an InputError.  For one
+symbol this is rational interpolation: the reconstruction is unique once it exists.  The
+reconstructed N and D are multiplied by the lcm of their coefficients' denominators and divided
+by their content, so the reported integral is N/D up to a factor that depends only on s.
+
+**Proof** (a route other than the fit): with M = I − ε f′(x) and r = M x + 2ε f(x), the Kahan map
+is x̃ = (y_1, …, y_N)/q with q = det M, y = q M⁻¹ r (fraction-free Bareiss over
+Q[x, symbols], :func:`~exact_khk.diagnostics.degrees.bareiss`), f read from the system file
+with the named parameters as symbols.  N(x̃)/D(x̃) = N(x)/D(x) holds as rational functions iff
+N^h(y, q) q^{deg D} D(x) − D^h(y, q) q^{deg N} N(x) = 0 (N^h the homogenisation in x), which is
+expanded exactly (python-flint ``fmpq_mpoly``): a proof for all x, ε and parameter values where
+both sides are defined — no probability.  The proof is skipped (reported "not proven") when
+the expanded identity would exceed :data:`MAX_PROOF_TERMS` terms.
+
+>>> from exact_khk.systems.catalogue import load
+>>> res = symbolic_integrals(load("euler-top"), ["eps", "a1", "a2"], degree=2)   # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from collections import Counter
+from dataclasses import dataclass, field as dc_field
+from fractions import Fraction
+from math import comb
+
+import flint
+
+from exact_khk.diagnostics.kernels import monomials, poly_text
+from exact_khk.errors import InputError, PoleError, SingularStepError
+
+EPS = "eps"
+#: the highest total degree t of a coefficient's numerator and denominator in the symbols
+MAX_DEGREE = 12
+#: the most searches (samples) one reconstruction may run
+MAX_SAMPLES = 400
+#: the least share of the samples that must agree on the integrals' shape
+MIN_SHARE = Fraction(2, 3)
+#: samples beyond those of the linear solve that must agree with a reconstruction
+CONFIRM = 3
+#: the proof is not expanded beyond this many terms of q^deg (a bound on its size)
+MAX_PROOF_TERMS = 2_000_000
+
+
+@dataclass(frozen=True)
+class ParametricIntegral:
+    """An integral N/D whose coefficients are polynomials in the symbols; ``proven`` says whether
+    the identity N(Φ(x))/D(Φ(x)) = N(x)/D(x) was proven (``proof`` says how, or why not)."""
+
+    numerator: str
+    denominator: str
+    degree: int          # the largest total degree t of a reconstructed coefficient
+    proven: bool
+    proof: str
+
+    def to_json(self) -> dict:
+        return {"numerator": self.numerator, "denominator": self.denominator, "coefficient_degree": self.degree,
+                "proven": self.proven, "proof": self.proof}
+
+
+@dataclass(frozen=True)
+class ParametricSearch:
+    """What :func:`symbolic_integrals` found (module docstring)."""
+
+    label: str
+    symbols: tuple
+    fixed: tuple             # ((name, value), ...) of the parameters and ε not symbolic
+    integrals: tuple
+    samples: int             # searches used
+    dropped: int             # samples of another shape, or singular
+    degree: int              # the ansatz degree t reached
+    notes: tuple
+    seconds: float
+    sample_summary: str = ""  # find_integrals' headline at the first sample kept
+
+    def to_json(self) -> dict:
+        return {"field": self.label, "symbols": list(self.symbols), "fixed": {k: str(v) for k, v in self.fixed},
+                "integrals": [f.to_json() for f in self.integrals], "samples": self.samples,
+                "dropped_samples": self.dropped, "ansatz_degree": self.degree, "notes": list(self.notes),
+                "sample_search": self.sample_summary, "seconds": self.seconds}
+
+    def summary(self) -> str:
+        fixed = ", ".join(f"{k} = {v}" for k, v in self.fixed)
+        out = [f"parametric integrals of {self.label} in {', '.join(self.symbols)}"
+               + (f" ({fixed})" if fixed else ""),
+               f"  {self.samples} searches at random values ({self.dropped} dropped: another shape or singular); "
+               f"at one sample: {self.sample_summary}",
+               f"  coefficients reconstructed as P/Q of total degree <= {self.degree} in "
+               f"{', '.join(self.symbols)}, each confirmed at {CONFIRM} samples not used to solve (conjecture "
+               f"until proven)"]
+        for i, f in enumerate(self.integrals, 1):
+            out.append(f"  I{i} = ({f.numerator})/({f.denominator})")
+            out.append(f"       {'PROVEN' if f.proven else 'NOT proven'}: {f.proof}")
+        if not self.integrals:
+            out.append("  no verified integral at the samples: nothing to reconstruct")
+        out += [f"  note: {n}" for n in self.notes]
+        out.append(f"  {sum(f.proven for f in self.integrals)} of {len(self.integrals)} proven; "
+                   f"time {self.seconds:.2f} s")
+        return "\n".join(out)
+
+
+# --- the system at given values ---------------------------------------------------------------
+
+
+def _check_symbols(system, symbols) -> tuple:
+    """The symbols as a tuple (ε first), each ε or a parameter of ``system`` (InputError otherwise)."""
+    if isinstance(symbols, str):
+        symbols = symbols.split(",")
+    names = [s.strip() for s in symbols if s and s.strip()]
+    if not names:
+        raise InputError("symbolic: name eps or parameters of the system")
+    params = dict(getattr(system, "parameters", None) or {})
+    for s in names:
+        if names.count(s) > 1:
+            raise InputError(f"symbolic: {s!r} named twice")
+        if s != EPS and s not in params:
+            have = ", ".join(params) or "none"
+            raise InputError(f"symbolic: {s!r} is not a parameter of {getattr(system, 'name', 'the system')} "
+                             f"(its parameters: {have}; and eps)")
+    if any(s != EPS for s in names) and getattr(system, "kind", None) != "expressions":
+        raise InputError("symbolic: parameters can be symbolic only for a system file or catalogue entry")
+    return tuple(sorted(names, key=lambda s: (s != EPS, names.index(s))))
+
+
+def _at_values(system, values: dict):
+    """``system`` with the parameters in ``values`` replaced (a new ExpressionSystem)."""
+    params = {k: v for k, v in values.items() if k != EPS}
+    if not params:
+        return system
+    from exact_khk.systems.expressions import ExpressionSystem
+
+    spec = system.to_json()
+    spec["parameters"] = {**spec.get("parameters", {}), **{k: str(v) for k, v in params.items()}}
+    spec.pop("defaults", None)  # the file's point may be singular at other parameter values
+    return ExpressionSystem.from_json(spec)
+
+
+def _draw(rng, name, taken) -> Fraction:
+    """A small-height nonzero rational, ε in (0, 1), not drawn before for ``name``."""
+    while True:
+        v = Fraction(rng.randint(1, 60), rng.randint(61, 400)) if name == EPS else \
+            Fraction(rng.choice([-1, 1]) * rng.randint(1, 40), rng.randint(1, 12))
+        if v not in taken:
+            taken.add(v)
+            return v
+
+
+# --- one sample ------------------------------------------------------------------------------
+
+
+def _normalised(f) -> tuple:
+    """(shape, {('n'|'d', exponent): coefficient}) of a verified integral, each of N and D
+    scaled so that its first coefficient (sorted monomials) is 1."""
+    num, den = f.polynomials()
+    out = {}
+    for tag, poly in (("n", num), ("d", den)):
+        poly = {e: Fraction(c) for e, c in poly.items() if c}
+        lead = poly[min(poly)]
+        out.update(((tag, e), c / lead) for e, c in poly.items())
+    shape = (tuple(sorted(e for e in num if num[e])), tuple(sorted(e for e in den if den[e])))
+    return shape, out
+
+
+def _sample(system, values, eps_fixed, kw):
+    """(shape, [coefficient dicts], headline) of the verified integrals at ``values``, or None."""
+    from exact_khk.diagnostics.integrals import find_integrals
+
+    try:
+        res = find_integrals(_at_values(system, values), eps=values.get(EPS, eps_fixed), **kw)
+    except (SingularStepError, PoleError, ZeroDivisionError):
+        return None
+    pairs = sorted((_normalised(f) for f in res.integrals if f.verified), key=lambda t: t[0])
+    return tuple(p[0] for p in pairs), [p[1] for p in pairs], res.headline()
+
+
+# --- reconstruction --------------------------------------------------------------------------
+
+
+def _value(exps, coeffs, point) -> Fraction:
+    return sum((c * math.prod(p ** k for p, k in zip(point, e)) for e, c in zip(exps, coeffs)), Fraction(0))
+
+
+def reconstruct(points, values, t, confirm=CONFIRM):
+    """(P, Q) as {exponent: Fraction} with deg P, deg Q ≤ t (total, in len(points[0]) symbols),
+    P(s_i) = c_i Q(s_i) and Q(s_i) ≠ 0 at every sample, solved from all but the last
+    ``confirm`` samples; None if there is none (or too few samples).
+
+    >>> from fractions import Fraction as F
+    >>> pts = [(F(k, 7),) for k in range(1, 9)]
+    >>> P, Q = reconstruct(pts, [1 / (1 - 2 * e ** 2) for (e,) in pts], 2)
+    >>> P, Q
+    ({(0,): Fraction(1, 1)}, {(0,): Fraction(1, 1), (2,): Fraction(-2, 1)})
+    """
+    k = len(points[0])
+    exps = monomials(k, t)
+    m = len(exps)
+    n_solve = len(points) - confirm
+    if n_solve < 2 * m - 1:
+        return None
+    rows = []
+    for s, c in zip(points[:n_solve], values[:n_solve]):
+        mono = [math.prod(p ** a for p, a in zip(s, e)) for e in exps]
+        row = mono + [-c * v for v in mono]
+        den = math.lcm(*(q.denominator for q in row))
+        rows.append([int(q * den) for q in row])
+    null, nullity = flint.fmpz_mat(rows).nullspace()
+    for j in range(nullity):
+        vec = [Fraction(int(null[i, j])) for i in range(2 * m)]
+        P, Q = vec[:m], vec[m:]
+        if not any(Q):
+            continue
+        P, Q = _reduced(exps, P, Q, k)
+        if all((q := _value(*Q, s)) != 0 and _value(*P, s) == c * q for s, c in zip(points, values)):
+            return dict(zip(*P)), dict(zip(*Q))
+    return None
+
+
+def _reduced(exps, P, Q, k):
+    """P/Q divided by gcd(P, Q), Q's first coefficient 1: ((exps, coeffs), (exps, coeffs))."""
+    ctx = flint.fmpq_mpoly_ctx.get(tuple(f"s{i}" for i in range(k)), "degrevlex")
+    p = ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in zip(exps, P) if c})
+    q = ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in zip(exps, Q) if c})
+    g = p.gcd(q) if not p.is_zero() else q
+    p, q = p / g, q / g
+    lead = q.to_dict()[min(q.to_dict())]
+    p, q = p / lead, q / lead
+
+    def split(r):
+        d = r.to_dict()
+        return [tuple(int(a) for a in e) for e in d], [Fraction(int(c.p), int(c.q)) for c in d.values()]
+    return split(p), split(q)
+
+
+# --- the proof -------------------------------------------------------------------------------
+
+
+def _field_polys(system, fld, field, R, variables, symbols, fixed):
+    """The field's components as elements of R = Q[variables, symbols]."""
+    gens = R.gens()
+    names = dict(zip(list(variables) + list(symbols), gens))
+    spec = system.to_json() if getattr(system, "kind", None) == "expressions" else None
+    comps = None
+    if spec is not None:
+        comps = spec.get("field") if field == "f" else spec.get("fields", {}).get(field)
+    if comps is None:
+        if len(symbols) > (EPS in symbols):
+            raise InputError(f"symbolic: the field {field!r} is not written in the system file")
+        return _numeric_field(fld, gens)
+    from exact_khk.systems.expression_parser import Parser
+
+    for k, v in fixed:
+        if k != EPS:
+            names[k] = R.constant(flint.fmpq(v.numerator, v.denominator))
+    out = []
+    for v in variables:
+        num, den = Parser(comps[v], f"field {v}", R, names, {}, "variables and parameters").value
+        out.append(num / den)
+    return out
+
+
+def _numeric_field(fld, gens):
+    N = fld.dim
+    out = []
+    for k in range(N):
+        s = gens[0] * 0
+        for (i, j), c in fld.terms()[k]:
+            s += gens[i] * gens[j] * flint.fmpq(*_pq(c))
+        for j, c in fld.linear[k]:
+            s += gens[j] * flint.fmpq(*_pq(c))
+        if fld.const[k]:
+            s += flint.fmpq(*_pq(fld.const[k]))
+        out.append(s)
+    return out
+
+
+def _pq(c):
+    q = Fraction(str(c))
+    return q.numerator, q.denominator
+
+
+def kahan_image(f, R, N, eps):
+    """(y, q): the Kahan map is x̃ = y/q, polynomials of R (module docstring)."""
+    from exact_khk.diagnostics.degrees import bareiss
+
+    x = R.gens()[:N]
+    M = [[(R.constant(1) if i == j else R.constant(0)) - eps * f[i].derivative(j) for j in range(N)]
+         for i in range(N)]
+    r = [sum((M[i][j] * x[j] for j in range(N)), R.constant(0)) + 2 * eps * f[i] for i in range(N)]
+    q, y = bareiss(M, r, lambda a, b: a / b)
+    return y, q
+
+
+def _homogeneous_at(P, y, q, N):
+    """P^h(y, q) for P in R (homogenised in the first N generators)."""
+    terms = P.to_dict()
+    deg = max(sum(e[:N]) for e in terms)
+    R = P.context()
+    powers_q = [R.constant(1)]
+    for _ in range(deg):
+        powers_q.append(powers_q[-1] * q)
+    cache = {}
+
+    def ypow(i, k):
+        if (i, k) not in cache:
+            cache[i, k] = R.constant(1) if k == 0 else ypow(i, k - 1) * y[i]
+        return cache[i, k]
+    total = R.constant(0)
+    for e, c in terms.items():
+        rest = R.from_dict({(0,) * N + tuple(e[N:]): c})
+        mono = rest * powers_q[deg - sum(e[:N])]
+        for i in range(N):
+            if e[i]:
+                mono *= ypow(i, e[i])
+        total += mono
+    return total, deg
+
+
+def prove_identity(num, den, y, q, N) -> bool:
+    """num(x̃)/den(x̃) == num(x)/den(x) as rational functions (x̃ = y/q), by expansion."""
+    a, dn = _homogeneous_at(num, y, q, N)
+    b, dd = _homogeneous_at(den, y, q, N)
+    return (a * q ** dd * den - b * q ** dn * num).is_zero()
+
+
+# --- the driver ------------------------------------------------------------------------------
+
+
+def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None, field="f", eps=None,
+                       max_degree=MAX_DEGREE, confirm=CONFIRM, seed=0, progress=None, perturb=None, **find_kw):
+    """Integrals of the Kahan map as rational functions of the ``symbols`` (ε and/or parameters of
+    the system), reconstructed from :func:`find_integrals` at random values and proven (module
+    docstring).  ``degree``/``monomials_list`` and ``find_kw`` go to :func:`find_integrals`; ``eps``
+    is the step when ε is not a symbol; ``perturb`` (a negative control) adds this rational to the
+    first coefficient of the first reconstructed numerator before the proof."""
+    from exact_khk.diagnostics.degrees import eps_of, resolve_field
+
+    t0 = time.perf_counter()
+    stage = progress or (lambda name: None)
+    sysobj, fld = resolve_field(system, field)
+    if sysobj is None:
+        raise InputError("symbolic: needs a system (a catalogue name or a system file), not a bare field")
+    symbols = _check_symbols(sysobj, symbols)
+    if not 0 <= max_degree <= MAX_DEGREE:
+        raise InputError(f"max_degree: expected 0..{MAX_DEGREE}, got {max_degree}")
+    fixed_eps = None if EPS in symbols else eps_of(sysobj, eps)
+    params = dict(getattr(sysobj, "parameters", None) or {})
+    fixed = tuple(([(EPS, fixed_eps)] if fixed_eps is not None else [])
+                  + [(k, v) for k, v in params.items() if k not in symbols])
+    kw = dict(degree=degree, monomials_list=monomials_list, field=field, seed=seed, **find_kw)
+    if degree is None and monomials_list is None:
+        kw["degree"] = 2
+    rng = random.Random(f"symbolic-{seed}")
+    taken = {s: set() for s in symbols}
+    samples, shapes, dropped, headline = [], [], 0, ""
+    k = len(symbols)
+    notes = []
+
+    def need(t):
+        return 2 * comb(k + t, t) - 1 + confirm
+
+    def grow(n):
+        nonlocal dropped, headline
+        while len(samples) < n:
+            if len(samples) + dropped > MAX_SAMPLES:
+                raise InputError(f"symbolic: more than {MAX_SAMPLES} searches (MAX_SAMPLES) needed; name fewer "
+                                 f"symbols or lower the degree")
+            values = {s: _draw(rng, s, taken[s]) for s in symbols}
+            out = _sample(sysobj, values, fixed_eps, kw)
+            if out is None:
+                dropped += 1
+                continue
+            samples.append((tuple(values[s] for s in symbols), out[1]))
+            shapes.append(out[0])
+            headline = headline or out[2]
+            stage(f"search {len(samples)} of {n}")
+
+    # the shape: the majority over the first samples, then only samples of that shape are kept
+    grow(need(0))
+    shape, count = Counter(shapes).most_common(1)[0]
+    if Fraction(count, len(shapes)) < MIN_SHARE:
+        raise InputError(f"symbolic: the integrals found differ between the samples ({len(set(shapes))} shapes "
+                         f"in {len(shapes)} searches): no common normal form to reconstruct")
+    if not shape:
+        return ParametricSearch(_label(sysobj, fld), symbols, fixed, (), len(samples), dropped, 0,
+                                ("no verified integral at the samples (find-integrals finds none)",),
+                                time.perf_counter() - t0, headline)
+
+    def keep():
+        nonlocal dropped
+        kept = [(s, c) for s, c, sh in zip([p[0] for p in samples], [p[1] for p in samples], shapes) if sh == shape]
+        dropped += len(samples) - len(kept)
+        samples[:] = kept
+        shapes[:] = [shape] * len(kept)
+
+    keep()
+    keys = [sorted(c) for c in samples[0][1]]
+    done = [dict() for _ in keys]  # per integral: key -> (P, Q, t)
+    t = 0
+    while True:
+        grow(need(t))
+        keep()
+        while len(samples) < need(t):
+            grow(need(t))
+            keep()
+        pts = [s for s, _ in samples]
+        for j, ks in enumerate(keys):
+            for key in ks:
+                if key not in done[j]:
+                    out = reconstruct(pts, [c[j][key] for _, c in samples], t, confirm)
+                    if out is not None:
+                        done[j][key] = (*out, t)
+        if all(len(d) == len(ks) for d, ks in zip(done, keys)):
+            break
+        t += 1
+        if t > max_degree:
+            raise InputError(f"symbolic: a coefficient is not a rational function of total degree <= {max_degree} "
+                             f"in {', '.join(symbols)} (the degree limit)")
+        if need(t) + dropped > MAX_SAMPLES:
+            raise InputError(f"symbolic: degree {t} in {k} symbol(s) needs {need(t)} searches, beyond "
+                             f"MAX_SAMPLES = {MAX_SAMPLES}: name fewer symbols")
+    if dropped:
+        notes.append(f"{dropped} sample(s) dropped (another shape of the integrals found, or a singular search)")
+
+    stage("proof")
+    variables = _variables(sysobj, fld)
+    N = fld.dim
+    R = flint.fmpq_mpoly_ctx.get(tuple(variables) + symbols, "degrevlex")
+    f = _field_polys(sysobj, fld, field, R, variables, symbols, fixed)
+    eps_el = R.gens()[N + symbols.index(EPS)] if EPS in symbols else R.constant(flint.fmpq(*_pq(fixed_eps)))
+    y, q = kahan_image(f, R, N, eps_el)
+    out = []
+    for j, d in enumerate(done):
+        num, den = _assemble(d, "n", R, N, k), _assemble(d, "d", R, N, k)
+        if perturb is not None and j == 0:
+            num = num + R.constant(flint.fmpq(*_pq(perturb))) * R.gens()[0] ** 2
+        deg = max(tt for _, _, tt in d.values())
+        if len(q.to_dict()) ** max(_xdeg(num, N), _xdeg(den, N)) > MAX_PROOF_TERMS:
+            holds, how = False, f"not attempted: the expanded identity would exceed {MAX_PROOF_TERMS} terms"
+        else:
+            holds = prove_identity(num, den, y, q, N)
+            how = ("identity I(Phi(x)) = I(x) proven exactly in Q(" + ", ".join(list(variables) + list(symbols))
+                   + ") (python-flint fmpq_mpoly expansion, Kahan map by fraction-free elimination)"
+                   if holds else "the identity I(Phi(x)) = I(x) FAILS as rational functions: the "
+                                 "reconstruction is wrong (raise the samples or the degree)")
+        names = list(variables) + list(symbols)
+        out.append(ParametricIntegral(_text(num, names), _text(den, names), deg, holds, how))
+    return ParametricSearch(_label(sysobj, fld), symbols, fixed, tuple(out), len(samples), dropped, t,
+                            tuple(notes), time.perf_counter() - t0, headline)
+
+
+def _xdeg(P, N):
+    return max((sum(e[:N]) for e in P.to_dict()), default=0)
+
+
+def _variables(sysobj, fld):
+    names = list(sysobj.coordinate_names()) if hasattr(sysobj, "coordinate_names") else []
+    return names if len(names) == fld.dim else [f"x{i}" for i in range(fld.dim)]
+
+
+def _label(sysobj, fld):
+    return f"{getattr(sysobj, 'name', 'field')} {fld.label}"
+
+
+def _assemble(done, tag, R, N, k):
+    """Σ_e c_e(s) x^e with c_e = P_e/Q_e, times the lcm of the Q_e, divided by its content."""
+    S = flint.fmpq_mpoly_ctx.get(tuple(f"s{i}" for i in range(k)), "degrevlex")
+
+    def poly(d):
+        return S.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in d.items()})
+    parts = {key[1]: (poly(P), poly(Q)) for key, (P, Q, _) in done.items() if key[0] == tag}
+    lcm = S.constant(1)
+    for _, Q in parts.values():
+        lcm = lcm * Q / lcm.gcd(Q)
+    coeffs = {e: P * (lcm / Q) for e, (P, Q) in parts.items()}
+    content = None
+    for c in coeffs.values():
+        content = c if content is None else content.gcd(c)
+    terms = {}
+    for e, c in coeffs.items():
+        for se, v in (c / content).to_dict().items():
+            terms[tuple(e) + tuple(se)] = v
+    P = R.from_dict(terms)
+    d = P.to_dict()
+    scale = math.lcm(*(int(c.q) for c in d.values())) / flint.fmpq(math.gcd(*(int(c.p) for c in d.values())))
+    return P * (scale if d[max(d)] > 0 else -scale)  # integer-primitive, the last monomial's sign +
+
+
+def _text(P, names) -> str:
+    """P in system-file syntax (``**``)."""
+    return poly_text({tuple(e): Fraction(int(c.p), int(c.q)) for e, c in P.to_dict().items()}, names)
