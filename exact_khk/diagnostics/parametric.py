@@ -92,6 +92,7 @@ class ParametricSearch:
     notes: tuple
     seconds: float
     sample_summary: str = ""  # find_integrals' headline at the first sample kept
+    field: str = "f"
 
     def to_json(self) -> dict:
         return {"field": self.label, "symbols": list(self.symbols), "fixed": {k: str(v) for k, v in self.fixed},
@@ -465,7 +466,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
         names = list(variables) + list(symbols)
         out.append(ParametricIntegral(_text(num, names), _text(den, names), deg, holds, how))
     return ParametricSearch(_label(sysobj, fld), symbols, fixed, tuple(out), len(samples), dropped, t,
-                            tuple(notes), time.perf_counter() - t0, headline)
+                            tuple(notes), time.perf_counter() - t0, headline, field)
 
 
 def _xdeg(P, N):
@@ -508,3 +509,25 @@ def _assemble(done, tag, R, N, k):
 def _text(P, names) -> str:
     """P in system-file syntax (``**``)."""
     return poly_text({tuple(e): Fraction(int(c.p), int(c.q)) for e, c in P.to_dict().items()}, names)
+
+
+def system_file(system, result: ParametricSearch) -> str:
+    """The system's own file (TOML) with the proven integrals of ``result`` added to
+    ``[integrals]`` as symbolic_I1, … (parameters keep the file's values there; ``[defaults] eps``
+    is set when ε was not a symbol), ready for ``exact-khk certify --system``."""
+    from exact_khk.diagnostics.integrals import toml_text
+    from exact_khk.systems.catalogue import resolve
+
+    sysobj = resolve(system)
+    if getattr(sysobj, "kind", None) != "expressions" or result.field != "f":
+        raise InputError("toml: with --symbolic, only for a system file or catalogue entry and the field f")
+    spec = sysobj.to_json()
+    found = {f"symbolic_I{i}": f"({f.numerator})/({f.denominator})"
+             for i, f in enumerate(result.integrals, 1) if f.proven}
+    spec["integrals"] = {**spec.get("integrals", {}), **found}
+    claims = list(spec.get("claims", ["reversibility", "integrals"]))
+    spec["claims"] = claims + (["integrals"] if "integrals" not in claims else [])
+    fixed = dict(result.fixed)
+    if EPS in fixed:
+        spec["defaults"] = {**spec.get("defaults", {}), "eps": str(fixed[EPS])}
+    return toml_text(spec)
