@@ -1,0 +1,138 @@
+"""find-integrals --symbolic: integrals as rational functions of eps and parameters, compared
+with the Hirota-Kimura closed forms typed in from the literature (SymPy, not the code under test):
+each reconstructed integral must be a function of the published ones (the Jacobian of it together
+with two published integrals has determinant 0 in Q(x, eps, a)), and the reconstructed ones must be
+independent."""
+
+from __future__ import annotations
+
+import json
+from fractions import Fraction
+
+import pytest
+import sympy as sp
+
+from exact_khk.cli.main import main
+from exact_khk.diagnostics.parametric import EPS, prove_identity, kahan_image, reconstruct, symbolic_integrals
+from exact_khk.errors import InputError
+from exact_khk.systems.catalogue import load
+
+X = sp.symbols("x1 x2 x3")
+EPS_S, A1, A2, A3 = sp.symbols("eps a1 a2 a3")
+NAMES = {"x1": X[0], "x2": X[1], "x3": X[2], "eps": EPS_S, "a1": A1, "a2": A2, "a3": A3}
+
+
+def published(a1=A1, a2=A2, a3=A3):
+    """Hirota-Kimura (J. Phys. Soc. Japan 69, 2000; Petrera-Pfadler-Suris 2011): the Euler top's
+    Kahan map (h = 2 eps) conserves H_ij = (a_j x_i^2 - a_i x_j^2)/(1 - eps^2 a_i a_j x_k^2)."""
+    x1, x2, x3 = X
+    return [(a2 * x1**2 - a1 * x2**2) / (1 - EPS_S**2 * a1 * a2 * x3**2),
+            (a3 * x2**2 - a2 * x3**2) / (1 - EPS_S**2 * a2 * a3 * x1**2)]
+
+
+def as_sympy(f):
+    return sp.sympify(f.numerator, locals=NAMES) / sp.sympify(f.denominator, locals=NAMES)
+
+
+#: rational points where the Jacobian determinants are evaluated, eps (and parameters left) symbolic
+POINTS = [dict(zip(X + (A1, A2, A3), map(sp.Rational, v)))
+          for v in (("1/2", "-3", "5/7", "5/3", "-2/7", "4"), ("-4/3", "2/9", "11/5", "7/2", "3", "-1/6"))]
+
+
+def jacobian_det(fs):
+    """det d(f1, f2, f3)/dx at POINTS (x and the parameters left symbolic), as rational functions
+    of eps (a determinant that vanishes identically vanishes there; one that does not, almost never)."""
+    J = sp.Matrix([[sp.diff(f, x) for x in X] for f in fs])
+    return [sp.cancel(sp.together(J.subs(pt)).det()) for pt in POINTS]
+
+
+def check_against_literature(res, **values):
+    H = published(**values)
+    assert len(res.integrals) == 2 and all(f.proven for f in res.integrals)
+    Is = [as_sympy(f).subs(values_symbols(values)) for f in res.integrals]
+    for I in Is:
+        assert jacobian_det([I] + H) == [0, 0]         # a function of the published integrals
+    assert 0 not in jacobian_det(Is + [X[0]])         # and the two are independent
+
+
+def values_symbols(values):
+    return {NAMES[k]: v for k, v in values.items()}
+
+
+def test_euler_top_eps_symbolic_matches_hirota_kimura():
+    res = symbolic_integrals(load("euler-top"), ["eps"], degree=2)
+    assert res.symbols == ("eps",) and dict(res.fixed) == {"a1": 1, "a2": -2, "a3": 3}
+    assert any("eps" in f.numerator + f.denominator for f in res.integrals)
+    check_against_literature(res, a1=1, a2=-2, a3=3)
+    assert "proven exactly" in res.integrals[0].proof and "PROVEN" in res.summary()
+
+
+def test_euler_top_eps_and_a1_symbolic():
+    res = symbolic_integrals(load("euler-top"), "eps,a1", degree=2)
+    check_against_literature(res, a2=-2, a3=3)
+
+
+@pytest.mark.slow
+def test_euler_top_all_parameters_symbolic():
+    res = symbolic_integrals(load("euler-top"), ["a1", "a2", "a3", "eps"], degree=2)
+    assert res.symbols == ("eps", "a1", "a2", "a3") and res.fixed == ()
+    check_against_literature(res)
+
+
+def test_negative_controls():
+    # a perturbed coefficient fails the proof
+    res = symbolic_integrals(load("euler-top"), ["eps"], degree=2, perturb=Fraction(1, 7))
+    assert not res.integrals[0].proven and "FAILS" in res.integrals[0].proof and res.integrals[1].proven
+    # a degree bound too low: no reconstruction, refused
+    with pytest.raises(InputError, match="degree <= 1"):
+        symbolic_integrals(load("euler-top"), ["eps"], degree=2, max_degree=1)
+    # the proof itself fails on a function that is not an integral: x1^2 + x2^2 + x3^2
+    import flint
+    R = flint.fmpq_mpoly_ctx.get(("x1", "x2", "x3", "eps"), "degrevlex")
+    x1, x2, x3, e = R.gens()
+    f = [x2 * x3, -2 * x3 * x1, 3 * x1 * x2]
+    y, q = kahan_image(f, R, 3, e)
+    assert not prove_identity(x1**2 + x2**2 + x3**2, R.constant(1), y, q, 3)
+    assert prove_identity(3 * x1**2 - x3**2, 2 * x1**2 + x2**2, y, q, 3)   # (a3 x1^2 - a1 x3^2)/(-(a2 x1^2 - a1 x2^2))
+
+
+def test_reconstruct_against_fractions():
+    import random
+    rng = random.Random(1)
+    pts = [(Fraction(rng.randint(-50, 50), rng.randint(1, 9)), Fraction(rng.randint(-50, 50), rng.randint(1, 9)))
+           for _ in range(40)]
+    c = [(1 + s * t) / (s - 2 * t * t) for s, t in pts]
+    P, Q = reconstruct(pts, c, 2)
+    for s, t in [(Fraction(5, 3), Fraction(-7, 2)), (Fraction(1, 9), Fraction(4))]:
+        val = sum(v * s**e[0] * t**e[1] for e, v in P.items()) / sum(v * s**e[0] * t**e[1] for e, v in Q.items())
+        assert val == (1 + s * t) / (s - 2 * t * t)
+    assert reconstruct(pts, c, 1) is None          # degree 1 cannot fit: the confirming samples refuse it
+
+
+def test_bad_input():
+    with pytest.raises(InputError, match="not a parameter"):
+        symbolic_integrals(load("euler-top"), ["b7"], degree=2)
+    with pytest.raises(InputError, match="named twice"):
+        symbolic_integrals(load("euler-top"), ["eps", "eps"], degree=2)
+    with pytest.raises(InputError, match="not a parameter"):
+        symbolic_integrals("lotka-volterra", ["a1"], degree=2)
+    assert EPS == "eps"
+
+
+def test_cli(tmp_path, capsys):
+    out = tmp_path / "e.toml"
+    assert main(["find-integrals", "--system", "euler-top", "--symbolic", "eps", "--toml", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "PROVEN" in text and "**" in text and "^" not in text.split("I1 =")[1].split("\n")[0]
+    assert main(["certify", "--system", str(out), "--quiet"]) == 0         # pasted back: VALID
+    js = tmp_path / "e.json"
+    assert main(["find-integrals", "--system", "euler-top", "--symbolic", "eps", "--symbolic", "a1",
+                 "--json", str(js)]) == 0
+    data = json.loads(js.read_text())
+    assert data["symbols"] == ["eps", "a1"] and all(f["proven"] for f in data["integrals"])
+    capsys.readouterr()
+    for argv in (["--symbolic", "b7"], ["--symbolic", "eps", "--symbolic-degree", "1"],
+                 ["--symbolic", "eps", "--symbolic-degree", "99"], ["--symbolic-degree", "2"]):
+        assert main(["find-integrals", "--system", "euler-top", *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--symbolic" in err and "Traceback" not in err
