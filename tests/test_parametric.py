@@ -83,6 +83,10 @@ def test_negative_controls():
     # a perturbed coefficient fails the proof
     res = symbolic_integrals(load("euler-top"), ["eps"], degree=2, perturb=Fraction(1, 7))
     assert not res.integrals[0].proven and "FAILS" in res.integrals[0].proof and res.integrals[1].proven
+    # the same over F_p (Schwartz-Zippel), with its failure bound stated
+    res = symbolic_integrals(load("euler-top"), ["eps"], degree=2, perturb=Fraction(1, 7), proof="sz")
+    assert not res.integrals[0].proven and "FAILS at a point of F_" in res.integrals[0].proof
+    assert res.integrals[1].proven and "failure probability <= " in res.integrals[1].proof
     # a degree bound too low: no reconstruction, refused
     with pytest.raises(InputError, match="degree <= 1"):
         symbolic_integrals(load("euler-top"), ["eps"], degree=2, max_degree=1)
