@@ -100,16 +100,18 @@ class ParametricSearch:
     seconds: float
     sample_summary: str = ""  # find_integrals' headline at the first sample kept
     field: str = "f"
+    kind: str = "integrals"  # or "measure": densities m of invariant measures m(x) dx
 
     def to_json(self) -> dict:
-        return {"field": self.label, "symbols": list(self.symbols), "fixed": {k: str(v) for k, v in self.fixed},
+        return {"field": self.label, "kind": self.kind, "symbols": list(self.symbols), "fixed": {k: str(v) for k, v in self.fixed},
                 "integrals": [f.to_json() for f in self.integrals], "samples": self.samples,
                 "dropped_samples": self.dropped, "ansatz_degree": self.degree, "notes": list(self.notes),
                 "sample_search": self.sample_summary, "seconds": self.seconds}
 
     def summary(self) -> str:
         fixed = ", ".join(f"{k} = {v}" for k, v in self.fixed)
-        out = [f"parametric integrals of {self.label} in {', '.join(self.symbols)}"
+        what, name = ("measure densities", "m") if self.kind == "measure" else ("integrals", "I")
+        out = [f"parametric {what} of {self.label} in {', '.join(self.symbols)}"
                + (f" ({fixed})" if fixed else ""),
                f"  {self.samples} searches at random values ({self.dropped} dropped: another shape or singular); "
                f"at one sample: {self.sample_summary}",
@@ -117,10 +119,10 @@ class ParametricSearch:
                f"{', '.join(self.symbols)}, each confirmed at {CONFIRM} samples not used to solve (conjecture "
                f"until proven)"]
         for i, f in enumerate(self.integrals, 1):
-            out.append(f"  I{i} = ({f.numerator})/({f.denominator})")
+            out.append(f"  {name}{i} = ({f.numerator})/({f.denominator})")
             out.append(f"       {'PROVEN' if f.proven else 'NOT proven'}: {f.proof}")
         if not self.integrals:
-            out.append("  no verified integral at the samples: nothing to reconstruct")
+            out.append(f"  nothing verified at the samples: nothing to reconstruct")
         out += [f"  note: {n}" for n in self.notes]
         out.append(f"  {sum(f.proven for f in self.integrals)} of {len(self.integrals)} proven; "
                    f"time {self.seconds:.2f} s")
@@ -176,10 +178,9 @@ def _draw(rng, name, taken) -> Fraction:
 # --- one sample ------------------------------------------------------------------------------
 
 
-def _normalised(f) -> tuple:
-    """(shape, {('n'|'d', exponent): coefficient}) of a verified integral, each of N and D
+def _normalised(num, den) -> tuple:
+    """(shape, {('n'|'d', exponent): coefficient}) of a verified N/D (dicts), each of N and D
     scaled so that its first coefficient (sorted monomials) is 1."""
-    num, den = f.polynomials()
     out = {}
     for tag, poly in (("n", num), ("d", den)):
         poly = {e: Fraction(c) for e, c in poly.items() if c}
@@ -189,16 +190,27 @@ def _normalised(f) -> tuple:
     return shape, out
 
 
-def _sample(system, values, eps_fixed, kw):
-    """(shape, [coefficient dicts], headline) of the verified integrals at ``values``, or None."""
-    from exact_khk.diagnostics.integrals import find_integrals
-
+def _sample(system, values, eps_fixed, kw, kind="integrals"):
+    """(shape, [coefficient dicts], headline) of the verified integrals (or measure densities) at
+    ``values``, or None where the search meets a singular step."""
+    sysobj, eps = _at_values(system, values), values.get(EPS, eps_fixed)
     try:
-        res = find_integrals(_at_values(system, values), eps=values.get(EPS, eps_fixed), **kw)
+        if kind == "measure":
+            from exact_khk.diagnostics.measures import find_measure
+
+            res = find_measure(sysobj, eps=eps, **kw)
+            found = [(dict(d.num), dict(d.den)) for d in res.densities if d.verified]
+            headline = f"{len(found)} verified densit{'y' if len(found) == 1 else 'ies'}"
+        else:
+            from exact_khk.diagnostics.integrals import find_integrals
+
+            res = find_integrals(sysobj, eps=eps, **kw)
+            found = [f.polynomials() for f in res.integrals if f.verified]
+            headline = res.headline()
     except (SingularStepError, PoleError, ZeroDivisionError):
         return None
-    pairs = sorted((_normalised(f) for f in res.integrals if f.verified), key=lambda t: t[0])
-    return tuple(p[0] for p in pairs), [p[1] for p in pairs], res.headline()
+    pairs = sorted((_normalised(*pair) for pair in found), key=lambda t: t[0])
+    return tuple(p[0] for p in pairs), [p[1] for p in pairs], headline
 
 
 # --- reconstruction --------------------------------------------------------------------------
@@ -327,7 +339,7 @@ def _mod(v, p):
     return int(v.p) * pow(int(v.q), -1, p) % p
 
 
-def sz_bound(num, den, M, r, N, p, trials):
+def sz_bound(num, den, M, r, N, p, trials, kind="integrals"):
     """(d, D1, bound): d bounds the total degree (in x and the symbols) of the cleared identity
     A = N^h(y, q) q^{deg D} D(x) − D^h(y, q) q^{deg N} N(x), D1 that of G = q D(x) D^h(y, q) (a
     draw with G = 0 is redrawn), so a false identity passes ``trials`` random points with
@@ -341,14 +353,19 @@ def sz_bound(num, den, M, r, N, p, trials):
         d = P.to_dict()
         return (max(sum(map(int, e[:N])) for e in d), max(sum(map(int, e[N:])) for e in d), int(P.total_degree()))
     (dn, sn, tn), (dd, sd, td) = degs(num), degs(den)
-    d = max(dn * Y + sn + dd * N * delta + td, dd * Y + sd + dn * N * delta + tn)
+    if kind == "measure":  # P^h(y,q) q^dQ det K^h(y,q) Q(x) - Q^h(y,q) q^(dP+N+1) P(x), deg K^h <= Y + δ
+        d = max(dn * Y + sn + dd * N * delta + N * (Y + delta) + td, dd * Y + sd + (dn + N + 1) * N * delta + tn)
+    else:
+        d = max(dn * Y + sn + dd * N * delta + td, dd * Y + sd + dn * N * delta + tn)
     d1 = N * delta + td + dd * Y + sd
     return d, d1, min(1.0, d / (p - d1)) ** trials if p > d1 else 1.0
 
 
-def prove_sz(num, den, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0):
-    """(holds, evidence): N(x̃) D(x) = D(x̃) N(x) at ``trials`` random points (x, symbols) of
+def prove_sz(num, den, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0, K=None):
+    """(holds, evidence): N(x̃) D(x) = D(x̃) N(x) (with ``K`` = :func:`step_jacobian`: the measure
+    identity N(x̃) det K(x̃) D(x) = D(x̃) det M(x) N(x)) at ``trials`` random points (x, symbols) of
     F_p^(N+k) where q, D(x), D(x̃) ≠ 0, and the failure bound of :func:`sz_bound`."""
+    what = "I(Phi(x)) = I(x)" if K is None else "m(Phi(x)) det dPhi(x) = m(x)"
     rng = random.Random(f"sz-{seed}")
     nvars = len(num.context().gens())
     done = draws = 0
@@ -365,21 +382,28 @@ def prove_sz(num, den, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0):
         dx, dxt = _mod(den(*pt), p), _mod(den(*xt), p)
         if dx == 0 or dxt == 0:
             continue
-        if _mod(num(*xt), p) * dx % p != _mod(num(*pt), p) * dxt % p:
-            return False, (f"the identity I(Phi(x)) = I(x) FAILS at a point of F_{p}^{nvars}: the reconstruction "
+        lhs, rhs = _mod(num(*xt), p) * dx % p, _mod(num(*pt), p) * dxt % p
+        if K is not None:
+            lhs = lhs * int(flint.nmod_mat(N, N, [_mod(e(*xt), p) for row in K for e in row], p).det()) % p
+            rhs = rhs * int(Mp.det()) % p
+        if lhs != rhs:
+            return False, (f"the identity {what} FAILS at a point of F_{p}^{nvars}: the reconstruction "
                            f"is wrong (raise the samples or the degree)")
         done += 1
-    d, d1, bound = sz_bound(num, den, M, r, N, p, trials)
-    return True, (f"identity I(Phi(x)) = I(x) over F_{p} at {trials} random points (x, symbols) "
+    d, d1, bound = sz_bound(num, den, M, r, N, p, trials, "integrals" if K is None else "measure")
+    return True, (f"identity {what} over F_{p} at {trials} random points (x, symbols) "
                   f"(Schwartz-Zippel), failure probability <= {bound:.3g} = (d/(p - D1))^{trials}, cleared identity "
                   f"of degree d <= {d}, draws redrawn where a denominator of degree <= {d1} vanishes")
 
 
-def _homogeneous_at(P, y, q, N):
-    """P^h(y, q) for P in R (homogenised in the first N generators)."""
+def _homogeneous_at(P, y, q, N, deg=None):
+    """(P^h(y, q), deg) for P in R homogenised in the first N generators (to degree ``deg``,
+    default P's degree in them)."""
     terms = P.to_dict()
-    deg = max(sum(e[:N]) for e in terms)
     R = P.context()
+    if not terms:
+        return R.constant(0), deg or 0
+    deg = max(sum(map(int, e[:N])) for e in terms) if deg is None else deg
     powers_q = [R.constant(1)]
     for _ in range(deg):
         powers_q.append(powers_q[-1] * q)
@@ -392,7 +416,7 @@ def _homogeneous_at(P, y, q, N):
     total = R.constant(0)
     for e, c in terms.items():
         rest = R.from_dict({(0,) * N + tuple(e[N:]): c})
-        mono = rest * powers_q[deg - sum(e[:N])]
+        mono = rest * powers_q[deg - sum(map(int, e[:N]))]
         for i in range(N):
             if e[i]:
                 mono *= ypow(i, e[i])
@@ -407,12 +431,38 @@ def prove_identity(num, den, y, q, N) -> bool:
     return (a * q ** dd * den - b * q ** dn * num).is_zero()
 
 
+def step_jacobian(f, R, N, eps):
+    """K(x) = I + ε f′(x): dΦ(x) = M(x)⁻¹ K(Φ(x))."""
+    return [[(R.constant(1) if i == j else R.constant(0)) + eps * f[i].derivative(j) for j in range(N)]
+            for i in range(N)]
+
+
+def prove_measure_identity(num, den, K, y, q, N) -> bool:
+    """m(x̃) det dΦ(x) == m(x) for m = num/den as rational functions: det dΦ = det K^h(y, q)/q^(N+1)
+    with K^h the entries of K homogenised to degree 1."""
+    from exact_khk.diagnostics.degrees import bareiss
+
+    Kh = [[_homogeneous_at(e, y, q, N, 1)[0] for e in row] for row in K]
+    det, _ = bareiss(Kh, [num.context().constant(0)] * N, lambda a, b: a / b)
+    a, dn = _homogeneous_at(num, y, q, N)
+    b, dd = _homogeneous_at(den, y, q, N)
+    return (a * q ** dd * det * den - b * q ** (dn + N + 1) * num).is_zero()
+
+
 # --- the driver ------------------------------------------------------------------------------
+
+
+def symbolic_measures(system, symbols=(EPS,), degree=2, field="f", eps=None, seed=0, **kw):
+    """Invariant measure densities m of :func:`~exact_khk.diagnostics.measures.find_measure` as
+    rational functions of the ``symbols``, reconstructed like :func:`symbolic_integrals` (a density
+    is scaled by a function of the symbols, which keeps it invariant) and proven as the identity
+    m(Φ(x)) det dΦ(x) = m(x)."""
+    return symbolic_integrals(system, symbols, degree=degree, field=field, eps=eps, seed=seed, kind="measure", **kw)
 
 
 def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None, field="f", eps=None,
                        max_degree=MAX_DEGREE, confirm=CONFIRM, seed=0, progress=None, perturb=None, proof="auto",
-                       **find_kw):
+                       kind="integrals", **find_kw):
     """Integrals of the Kahan map as rational functions of the ``symbols`` (ε and/or parameters of
     the system), reconstructed from :func:`find_integrals` at random values and proven (module
     docstring).  ``degree``/``monomials_list`` and ``find_kw`` go to :func:`find_integrals`; ``eps``
@@ -435,9 +485,12 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     params = dict(getattr(sysobj, "parameters", None) or {})
     fixed = tuple(([(EPS, fixed_eps)] if fixed_eps is not None else [])
                   + [(k, v) for k, v in params.items() if k not in symbols])
-    kw = dict(degree=degree, monomials_list=monomials_list, field=field, seed=seed, **find_kw)
-    if degree is None and monomials_list is None:
-        kw["degree"] = 2
+    if kind == "measure":
+        kw = dict(degree=degree, field=field, seed=seed, **find_kw)
+    else:
+        kw = dict(degree=degree, monomials_list=monomials_list, field=field, seed=seed, **find_kw)
+        if degree is None and monomials_list is None:
+            kw["degree"] = 2
     rng = random.Random(f"symbolic-{seed}")
     taken = {s: set() for s in symbols}
     samples, shapes, dropped, headline = [], [], 0, ""
@@ -454,7 +507,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                 raise InputError(f"symbolic: more than {MAX_SAMPLES} searches (MAX_SAMPLES) needed; name fewer "
                                  f"symbols or lower the degree")
             values = {s: _draw(rng, s, taken[s]) for s in symbols}
-            out = _sample(sysobj, values, fixed_eps, kw)
+            out = _sample(sysobj, values, fixed_eps, kw, kind)
             if out is None:
                 dropped += 1
                 continue
@@ -471,8 +524,8 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                          f"in {len(shapes)} searches): no common normal form to reconstruct")
     if not shape:
         return ParametricSearch(_label(sysobj, fld), symbols, fixed, (), len(samples), dropped, 0,
-                                ("no verified integral at the samples (find-integrals finds none)",),
-                                time.perf_counter() - t0, headline)
+                                (f"no verified {'density' if kind == 'measure' else 'integral'} at the samples",),
+                                time.perf_counter() - t0, headline, field, kind)
 
     def keep():
         nonlocal dropped
@@ -508,7 +561,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
             raise InputError(f"symbolic: degree {t} in {k} symbol(s) needs {need(t)} searches, beyond "
                              f"MAX_SAMPLES = {MAX_SAMPLES}: name fewer symbols")
     if dropped:
-        notes.append(f"{dropped} sample(s) dropped (another shape of the integrals found, or a singular search)")
+        notes.append(f"{dropped} sample(s) dropped (another shape of what was found, or a singular search)")
 
     stage("proof")
     variables = _variables(sysobj, fld)
@@ -518,6 +571,8 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     eps_el = R.gens()[N + symbols.index(EPS)] if EPS in symbols else R.constant(flint.fmpq(*_pq(fixed_eps)))
     M, r = kahan_system(f, R, N, eps_el)
     exact = proof == "exact" or (proof == "auto" and N <= EXACT_MAX_DIM)
+    K = step_jacobian(f, R, N, eps_el) if kind == "measure" else None
+    what = "I(Phi(x)) = I(x)" if K is None else "m(Phi(x)) det dPhi(x) = m(x)"
     if exact:
         y, q = kahan_image(f, R, N, eps_el)
     out = []
@@ -527,17 +582,17 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
             num = num + R.constant(flint.fmpq(*_pq(perturb))) * R.gens()[0] ** 2
         deg = max(tt for _, _, tt in d.values())
         if exact:
-            holds = prove_identity(num, den, y, q, N)
-            how = ("identity I(Phi(x)) = I(x) proven exactly in Q(" + ", ".join(list(variables) + list(symbols))
+            holds = prove_identity(num, den, y, q, N) if K is None else prove_measure_identity(num, den, K, y, q, N)
+            how = (f"identity {what} proven exactly in Q(" + ", ".join(list(variables) + list(symbols))
                    + ") (python-flint fmpq_mpoly expansion, Kahan map by fraction-free elimination)"
-                   if holds else "the identity I(Phi(x)) = I(x) FAILS as rational functions: the "
+                   if holds else f"the identity {what} FAILS as rational functions: the "
                                  "reconstruction is wrong (raise the samples or the degree)")
         else:
-            holds, how = prove_sz(num, den, M, r, N, seed=seed)
+            holds, how = prove_sz(num, den, M, r, N, seed=seed, K=K)
         names = list(variables) + list(symbols)
         out.append(ParametricIntegral(_text(num, names), _text(den, names), deg, holds, how))
     return ParametricSearch(_label(sysobj, fld), symbols, fixed, tuple(out), len(samples), dropped, t,
-                            tuple(notes), time.perf_counter() - t0, headline, field)
+                            tuple(notes), time.perf_counter() - t0, headline, field, kind)
 
 
 def _variables(sysobj, fld):
