@@ -33,6 +33,12 @@ def register(sub):
                        "(docs/diagnostics.md).")
     _common(p)
     p.add_argument("--degree", type=int, default=2, help="degree bound of the Darboux polynomials (default 2)")
+    p.add_argument("--symbolic", action="append", metavar="NAMES",
+                   help="reconstruct the densities as rational functions of eps and/or parameters of the system "
+                   "(comma-separated or repeated) from searches at random values, and prove m(Phi) det dPhi = m")
+    p.add_argument("--symbolic-degree", type=int, default=None, metavar="T",
+                   help="with --symbolic: the total degree bound of each coefficient's numerator and denominator "
+                   "in the symbols (default and limit 12)")
     p.set_defaults(func=cmd_find_measure)
     q = sub.add_parser("find-poisson", help=POISSON_HELP,
                        description="Bivectors pi with polynomial entries with dPhi pi dPhi^T = pi o Phi, the Jacobi "
@@ -59,7 +65,8 @@ def _system(args):
 
 def _rename(exc):
     msg = str(exc)
-    for name, option in (("degree", "--degree"), ("casimir_degree", "--casimir-degree"), ("verify_steps", "--steps")):
+    for name, option in (("degree", "--degree"), ("casimir_degree", "--casimir-degree"), ("verify_steps", "--steps"),
+                         ("symbolic", "--symbolic"), ("max_degree", "--symbolic-degree")):
         if msg.startswith(name + ":"):
             return InputError(option + msg[len(name):])
     return exc
@@ -84,6 +91,10 @@ def cmd_find_measure(args):
     system, eps, x0 = _system(args)
     try:
         with Progress(args, None, "find-measure", unit="stage") as progress:
+            if args.symbolic:
+                return _symbolic(args, system, eps, x0, progress)
+            if args.symbolic_degree is not None:
+                raise InputError("--symbolic-degree applies only with --symbolic")
             res = find_measure(system, degree=args.degree, field=field_name(system, args), eps=eps,
                                seed=args.line_seed, verify_steps=args.steps, x0=x0, progress=progress)
     except InputError as exc:
@@ -104,3 +115,27 @@ def cmd_find_poisson(args):
     except InputError as exc:
         raise _rename(exc) from None
     return _show(args, system, eps, res)
+
+
+def _symbolic(args, system, eps, x0, progress):
+    """``find-measure --symbolic``: :func:`~exact_khk.diagnostics.parametric.symbolic_measures`;
+    exit 4 when a density is not proven."""
+    from exact_khk.diagnostics.parametric import MAX_DEGREE, symbolic_measures
+
+    names = [t for a in args.symbolic for t in a.split(",")]
+    res = symbolic_measures(system, names, degree=args.degree, field=field_name(system, args), eps=eps,
+                            seed=args.line_seed, verify_steps=args.steps, x0=x0, progress=progress,
+                            max_degree=MAX_DEGREE if args.symbolic_degree is None else args.symbolic_degree)
+    proven = [d for d in res.integrals if d.proven]
+    if args.json is not None:
+        write_json({"system": system.to_json(), **res.to_json()}, args.json)
+        if args.json == "-":
+            return 0 if len(proven) == len(res.integrals) else 4
+    if args.toml:
+        print(f'[measure]\n# found by exact-khk find-measure --symbolic {",".join(res.symbols)}\n'
+              f'density = "({proven[0].numerator})/({proven[0].denominator})"' if proven else
+              "# no proven density")
+    else:
+        print(system.describe())
+        print(res.summary())
+    return 0 if len(proven) == len(res.integrals) else 4
