@@ -79,8 +79,12 @@ class ParametricIntegral:
     degree: int          # the largest total degree t of a reconstructed coefficient
     proven: bool
     proof: str
+    entries: tuple = ()  # a Poisson tensor: its N x N entries (numerator, denominator unused)
 
     def to_json(self) -> dict:
+        if self.entries:
+            return {"matrix": [list(r) for r in self.entries], "coefficient_degree": self.degree,
+                    "proven": self.proven, "proof": self.proof}
         return {"numerator": self.numerator, "denominator": self.denominator, "coefficient_degree": self.degree,
                 "proven": self.proven, "proof": self.proof}
 
@@ -110,19 +114,23 @@ class ParametricSearch:
 
     def summary(self) -> str:
         fixed = ", ".join(f"{k} = {v}" for k, v in self.fixed)
-        what, name = ("measure densities", "m") if self.kind == "measure" else ("integrals", "I")
+        what, name = {"measure": ("measure densities", "m"), "poisson": ("Poisson tensors", "pi")}.get(
+            self.kind, ("integrals", "I"))
         out = [f"parametric {what} of {self.label} in {', '.join(self.symbols)}"
                + (f" ({fixed})" if fixed else ""),
                f"  {self.samples} searches at random values ({self.dropped} dropped: another shape or singular); "
-               f"at one sample: {self.sample_summary}",
-               f"  coefficients reconstructed as P/Q of total degree <= {self.degree} in "
-               f"{', '.join(self.symbols)}, each confirmed at {CONFIRM} samples not used to solve (conjecture "
-               f"until proven)"]
+               f"at one sample: {self.sample_summary}"]
+        if self.integrals:
+            out.append(f"  coefficients reconstructed as P/Q of total degree <= {self.degree} in "
+                       f"{', '.join(self.symbols)}, each confirmed at {CONFIRM} samples not used to solve "
+                       f"(conjecture until proven)")
         for i, f in enumerate(self.integrals, 1):
-            out.append(f"  {name}{i} = ({f.numerator})/({f.denominator})")
+            if f.entries:
+                out.append(f"  {name}{i} = [" + ",\n          ".join(
+                    "[" + ", ".join(f'"{e}"' for e in row) + "]" for row in f.entries) + "]")
+            else:
+                out.append(f"  {name}{i} = ({f.numerator})/({f.denominator})")
             out.append(f"       {'PROVEN' if f.proven else 'NOT proven'}: {f.proof}")
-        if not self.integrals:
-            out.append(f"  nothing verified at the samples: nothing to reconstruct")
         out += [f"  note: {n}" for n in self.notes]
         out.append(f"  {sum(f.proven for f in self.integrals)} of {len(self.integrals)} proven; "
                    f"time {self.seconds:.2f} s")
@@ -195,6 +203,14 @@ def _sample(system, values, eps_fixed, kw, kind="integrals"):
     ``values``, or None where the search meets a singular step."""
     sysobj, eps = _at_values(system, values), values.get(EPS, eps_fixed)
     try:
+        if kind == "poisson":
+            from exact_khk.diagnostics.poisson import find_poisson
+
+            res = find_poisson(sysobj, eps=eps, **kw)
+            tensors = [t for t in res.tensors if t.verified]
+            headline = f"{len(tensors)} verified tensor{'' if len(tensors) == 1 else 's'}"
+            pairs = sorted((_normalised_tensor(t.polys) for t in tensors), key=lambda t: t[0])
+            return tuple(p[0] for p in pairs), [p[1] for p in pairs], headline
         if kind == "measure":
             from exact_khk.diagnostics.measures import find_measure
 
@@ -211,6 +227,14 @@ def _sample(system, values, eps_fixed, kw, kind="integrals"):
         return None
     pairs = sorted((_normalised(*pair) for pair in found), key=lambda t: t[0])
     return tuple(p[0] for p in pairs), [p[1] for p in pairs], headline
+
+
+def _normalised_tensor(polys) -> tuple:
+    """(shape, {((a, b), exponent): coefficient}) of a tensor's entries a < b, all scaled by one
+    factor so that the first coefficient (sorted keys) is 1."""
+    out = {(ab, e): Fraction(c) for ab, terms in polys for e, c in terms if c}
+    lead = out[min(out)]
+    return tuple(sorted(out)), {key: c / lead for key, c in out.items()}
 
 
 # --- reconstruction --------------------------------------------------------------------------
@@ -449,6 +473,80 @@ def prove_measure_identity(num, den, K, y, q, N) -> bool:
     return (a * q ** dd * det * den - b * q ** (dn + N + 1) * num).is_zero()
 
 
+def jacobi_holds(pi, N) -> bool:
+    """The Jacobi identity of the bivector ``pi`` (N x N polynomials), exactly."""
+    for i in range(N):
+        for j in range(i + 1, N):
+            for k in range(j + 1, N):
+                total = pi[0][0] * 0
+                for l in range(N):
+                    total += (pi[i][l] * pi[j][k].derivative(l) + pi[j][l] * pi[k][i].derivative(l)
+                              + pi[k][l] * pi[i][j].derivative(l))
+                if not total.is_zero():
+                    return False
+    return True
+
+
+def _matmul(A, B):
+    n, m, r = len(A), len(B), len(B[0])
+    return [[sum((A[i][l] * B[l][j] for l in range(m)), A[0][0] * 0) for j in range(r)] for i in range(n)]
+
+
+def _transpose(A):
+    return [list(col) for col in zip(*A)]
+
+
+def prove_tensor_identity(pi, K, M, y, q, N) -> bool:
+    """dΦ π dΦᵀ = π∘Φ as rational functions: K^h(y, q) π(x) K^h(y, q)ᵀ q^d = M π^h(y, q) Mᵀ q² (d the
+    entries' degree, dΦ = M⁻¹ K(x̃), K^h and π^h homogenised)."""
+    d = max((sum(map(int, e[:N])) for row in pi for P in row for e in P.to_dict()), default=0)
+    Kh = [[_homogeneous_at(e, y, q, N, 1)[0] for e in row] for row in K]
+    pih = [[_homogeneous_at(e, y, q, N, d)[0] for e in row] for row in pi]
+    lhs = _matmul(_matmul(Kh, pi), _transpose(Kh))
+    rhs = _matmul(_matmul(M, pih), _transpose(M))
+    qd, q2 = q ** d, q * q
+    return all((lhs[i][j] * qd - rhs[i][j] * q2).is_zero() for i in range(N) for j in range(N))
+
+
+def prove_tensor_sz(pi, K, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0):
+    """(holds, evidence): K(x̃) π(x) K(x̃)ᵀ = M π(x̃) Mᵀ at ``trials`` random points of F_p where
+    det M ≠ 0; failure bound (d/(p − Nδ))^trials, d bounding the degree of the cleared identity
+    max(2(Y + δ) + t + dπ·Nδ, 2δ + dπ·Y + s + 2Nδ) (notation of :func:`sz_bound`; t, s the total and
+    symbol degrees of π's entries, dπ their degree in x)."""
+    rng = random.Random(f"sz-{seed}")
+    nvars = len(pi[0][0].context().gens())
+    done = draws = 0
+    while done < trials:
+        draws += 1
+        if draws > 20 * trials:
+            return False, f"no regular point in {draws - 1} draws over F_{p}: not proven"
+        pt = [rng.randrange(p) for _ in range(nvars)]
+        Mp = flint.nmod_mat(N, N, [_mod(e(*pt), p) for row in M for e in row], p)
+        if Mp.det() == 0:
+            continue
+        rp = flint.nmod_mat(N, 1, [_mod(e(*pt), p) for e in r], p)
+        xt = [int(v) for v in Mp.solve(rp).entries()] + pt[N:]
+
+        def at(A, v):
+            return flint.nmod_mat(N, N, [_mod(e(*v), p) for row in A for e in row], p)
+        Kt = at(K, xt)
+        if Kt * at(pi, pt) * Kt.transpose() != Mp * at(pi, xt) * Mp.transpose():
+            return False, f"dPhi pi dPhi^T = pi o Phi FAILS at a point of F_{p}^{nvars}: the reconstruction is wrong"
+        done += 1
+    delta = max(int(e.total_degree()) for row in M for e in row)
+    rho = max(int(e.total_degree()) for e in r)
+    Y = max(N * delta, (N - 1) * delta + rho)
+    terms = [e for row in pi for P in row for e in P.to_dict()]
+    dp = max((sum(map(int, e[:N])) for e in terms), default=0)
+    sp_ = max((sum(map(int, e[N:])) for e in terms), default=0)
+    tp = max((sum(map(int, e)) for e in terms), default=0)
+    d = max(2 * (Y + delta) + tp + dp * N * delta, 2 * delta + dp * Y + sp_ + 2 * N * delta)
+    bound = min(1.0, d / (p - N * delta)) ** trials
+    return True, (f"dPhi pi dPhi^T = pi o Phi over F_{p} at {trials} random points (x, symbols) (Schwartz-Zippel), "
+                  f"failure probability <= {bound:.3g} = (d/(p - D1))^{trials}, cleared identity of degree "
+                  f"d <= {d}, D1 = {N * delta}")
+
+
 # --- the driver ------------------------------------------------------------------------------
 
 
@@ -458,6 +556,39 @@ def symbolic_measures(system, symbols=(EPS,), degree=2, field="f", eps=None, see
     is scaled by a function of the symbols, which keeps it invariant) and proven as the identity
     m(Φ(x)) det dΦ(x) = m(x)."""
     return symbolic_integrals(system, symbols, degree=degree, field=field, eps=eps, seed=seed, kind="measure", **kw)
+
+
+def symbolic_tensors(system, symbols=(EPS,), degree=2, field="f", eps=None, seed=0, **kw):
+    """Preserved Poisson tensors of :func:`~exact_khk.diagnostics.poisson.find_poisson` as
+    polynomial matrices in x and the ``symbols`` (all entries scaled by one function of the
+    symbols), proven as dΦ π dΦᵀ = π∘Φ (exactly, or over F_p beyond EXACT_MAX_DIM) and the Jacobi
+    identity (exactly)."""
+    return symbolic_integrals(system, symbols, degree=degree, field=field, eps=eps, seed=seed, kind="poisson", **kw)
+
+
+def _tensor(d, R, N, k, K, M, r, exact, names, seed, perturb):
+    """One reconstructed tensor, assembled (one scale for all entries) and proven."""
+    tags = sorted({key[0] for key in d})
+    polys = _assemble_all(d, tags, R, N, k)
+    zero = R.constant(0)
+    pi = [[zero] * N for _ in range(N)]
+    for (a, b), P in polys.items():
+        pi[a][b], pi[b][a] = P, -P
+    if perturb is not None:
+        a, b = tags[0]
+        pi[a][b] = pi[a][b] + R.constant(flint.fmpq(*_pq(perturb))) * R.gens()[0] ** 2
+        pi[b][a] = -pi[a][b]
+    if exact:
+        holds = prove_tensor_identity(pi, K, M, *exact, N)
+        how = ("dPhi pi dPhi^T = pi o Phi proven exactly in Q(" + ", ".join(names) + ") (python-flint fmpq_mpoly)"
+               if holds else "dPhi pi dPhi^T = pi o Phi FAILS as rational functions: the reconstruction is wrong")
+    else:
+        holds, how = prove_tensor_sz(pi, K, M, r, N, seed=seed)
+    jac = jacobi_holds(pi, N)
+    how += "; Jacobi identity " + ("proven exactly (polynomial)" if jac else "FAILS")
+    deg = max(tt for _, _, tt in d.values())
+    entries = tuple(tuple(_text(P, names) for P in row) for row in pi)
+    return ParametricIntegral("", "", deg, holds and jac, how, entries)
 
 
 def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None, field="f", eps=None,
@@ -485,7 +616,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     params = dict(getattr(sysobj, "parameters", None) or {})
     fixed = tuple(([(EPS, fixed_eps)] if fixed_eps is not None else [])
                   + [(k, v) for k, v in params.items() if k not in symbols])
-    if kind == "measure":
+    if kind in ("measure", "poisson"):
         kw = dict(degree=degree, field=field, seed=seed, **find_kw)
     else:
         kw = dict(degree=degree, monomials_list=monomials_list, field=field, seed=seed, **find_kw)
@@ -524,7 +655,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                          f"in {len(shapes)} searches): no common normal form to reconstruct")
     if not shape:
         return ParametricSearch(_label(sysobj, fld), symbols, fixed, (), len(samples), dropped, 0,
-                                (f"no verified {'density' if kind == 'measure' else 'integral'} at the samples",),
+                                (f"nothing verified at the samples: nothing to reconstruct",),
                                 time.perf_counter() - t0, headline, field, kind)
 
     def keep():
@@ -571,12 +702,16 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     eps_el = R.gens()[N + symbols.index(EPS)] if EPS in symbols else R.constant(flint.fmpq(*_pq(fixed_eps)))
     M, r = kahan_system(f, R, N, eps_el)
     exact = proof == "exact" or (proof == "auto" and N <= EXACT_MAX_DIM)
-    K = step_jacobian(f, R, N, eps_el) if kind == "measure" else None
+    K = step_jacobian(f, R, N, eps_el) if kind in ("measure", "poisson") else None
     what = "I(Phi(x)) = I(x)" if K is None else "m(Phi(x)) det dPhi(x) = m(x)"
     if exact:
         y, q = kahan_image(f, R, N, eps_el)
     out = []
+    names = list(variables) + list(symbols)
     for j, d in enumerate(done):
+        if kind == "poisson":
+            out.append(_tensor(d, R, N, k, K, M, r, exact and (y, q), names, seed, perturb if j == 0 else None))
+            continue
         num, den = _assemble(d, "n", R, N, k), _assemble(d, "d", R, N, k)
         if perturb is not None and j == 0:
             num = num + R.constant(flint.fmpq(*_pq(perturb))) * R.gens()[0] ** 2
@@ -589,7 +724,6 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                                  "reconstruction is wrong (raise the samples or the degree)")
         else:
             holds, how = prove_sz(num, den, M, r, N, seed=seed, K=K)
-        names = list(variables) + list(symbols)
         out.append(ParametricIntegral(_text(num, names), _text(den, names), deg, holds, how))
     return ParametricSearch(_label(sysobj, fld), symbols, fixed, tuple(out), len(samples), dropped, t,
                             tuple(notes), time.perf_counter() - t0, headline, field, kind)
@@ -605,27 +739,35 @@ def _label(sysobj, fld):
 
 
 def _assemble(done, tag, R, N, k):
-    """Σ_e c_e(s) x^e with c_e = P_e/Q_e, times the lcm of the Q_e, divided by its content."""
+    """Σ_e c_e(s) x^e over the keys (tag, e) with c_e = P_e/Q_e, times the lcm of the Q_e, divided
+    by its content; integer-primitive, the sign of its last monomial +."""
+    return _assemble_all(done, [tag], R, N, k)[tag]
+
+
+def _assemble_all(done, tags, R, N, k):
+    """{tag: polynomial} as :func:`_assemble`, all scaled by one factor (a tensor's entries)."""
     S = flint.fmpq_mpoly_ctx.get(tuple(f"s{i}" for i in range(k)), "degrevlex")
 
     def poly(d):
         return S.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in d.items()})
-    parts = {key[1]: (poly(P), poly(Q)) for key, (P, Q, _) in done.items() if key[0] == tag}
+    parts = {key: (poly(P), poly(Q)) for key, (P, Q, _) in done.items() if key[0] in tags}
     lcm = S.constant(1)
     for _, Q in parts.values():
         lcm = lcm * Q / lcm.gcd(Q)
-    coeffs = {e: P * (lcm / Q) for e, (P, Q) in parts.items()}
+    coeffs = {key: P * (lcm / Q) for key, (P, Q) in parts.items()}
     content = None
     for c in coeffs.values():
         content = c if content is None else content.gcd(c)
-    terms = {}
-    for e, c in coeffs.items():
+    terms = {tag: {} for tag in tags}
+    for (tag, e), c in coeffs.items():
         for se, v in (c / content).to_dict().items():
-            terms[tuple(e) + tuple(se)] = v
-    P = R.from_dict(terms)
-    d = P.to_dict()
-    scale = math.lcm(*(int(c.q) for c in d.values())) / flint.fmpq(math.gcd(*(int(c.p) for c in d.values())))
-    return P * (scale if d[max(d)] > 0 else -scale)  # integer-primitive, the last monomial's sign +
+            terms[tag][tuple(e) + tuple(se)] = v
+    polys = {tag: R.from_dict(t) for tag, t in terms.items()}
+    values = [c for t in terms.values() for c in t.values()]
+    scale = math.lcm(*(int(c.q) for c in values)) / flint.fmpq(math.gcd(*(int(c.p) for c in values)))
+    first = next(P.to_dict() for P in polys.values() if not P.is_zero())
+    scale = scale if first[max(first)] > 0 else -scale
+    return {tag: P * scale for tag, P in polys.items()}
 
 
 def _text(P, names) -> str:
