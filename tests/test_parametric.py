@@ -176,3 +176,38 @@ def test_cli_measure(capsys):
     assert block.startswith("[measure]") and "eps**2" in block
     assert main(["find-measure", "euler-top", "--symbolic", "zz"]) == 2
     assert "--symbolic" in capsys.readouterr().err
+
+
+def test_euler_top_poisson_tensors_preserved_and_casimir():
+    """Each tensor reconstructed in eps is preserved at a rational eps and x (SymPy builds the Kahan map
+    and dPhi by differentiation, tests/test_discover.py), and one has the Hirota-Kimura integral
+    (1 - eps^2 a2 a3 x1^2)/(1 - eps^2 a3 a1 x2^2) as a Casimir (the issue's target)."""
+    from exact_khk.diagnostics.parametric import symbolic_tensors
+    from tests.test_discover import EULER, kahan_sympy
+
+    res = symbolic_tensors(load("euler-top"), ["eps"], degree=3)
+    assert res.kind == "poisson" and res.integrals and all(t.proven for t in res.integrals)
+    pis = [sp.Matrix([[sp.sympify(e, locals=NAMES) for e in row] for row in t.entries]) for t in res.integrals]
+    for eps in ("-2/7",):
+        xs, xt, D = kahan_sympy(*EULER, eps)
+        at = {EPS_S: sp.Rational(eps)}
+        for pt in POINTS[:1]:
+            subs = {x: pt[x] for x in X}
+            xt_pt, D_pt = xt.subs(subs), D.subs(subs)
+            for pi in pis:
+                lhs = D_pt * pi.subs(at).subs(subs) * D_pt.T
+                rhs = pi.subs(at).subs(dict(zip(X, xt_pt)), simultaneous=True)
+                assert (lhs - rhs).applyfunc(sp.cancel) == sp.zeros(3, 3)
+    C = (1 - EPS_S**2 * A2 * A3 * X[0]**2) / (1 - EPS_S**2 * A3 * A1 * X[1]**2)
+    grad = sp.Matrix([sp.diff(C.subs({A1: 1, A2: -2, A3: 3}), x) for x in X])
+    assert any((pi * grad).applyfunc(sp.cancel) == sp.zeros(3, 1) for pi in pis)
+    # negative control: a perturbed tensor fails (preservation and Jacobi)
+    bad = symbolic_tensors(load("euler-top"), ["eps"], degree=3, perturb=Fraction(1, 3), proof="sz")
+    assert not bad.integrals[0].proven and "FAILS" in bad.integrals[0].proof
+
+
+def test_cli_poisson(capsys):
+    assert main(["find-poisson", "lotka-volterra", "--symbolic", "eps,a", "--toml"]) == 0
+    assert capsys.readouterr().out.startswith("[poisson]")
+    assert main(["find-poisson", "euler-top", "--symbolic", "eps", "--symbolic-degree", "99"]) == 2
+    assert "--symbolic-degree" in capsys.readouterr().err
