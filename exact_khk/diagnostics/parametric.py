@@ -31,6 +31,13 @@ both sides are defined — no probability.  Beyond dimension :data:`EXACT_MAX_DI
 ``proof="sz"``) the identity is checked instead at :data:`SZ_TRIALS` random points over F_p
 (x̃ by a linear solve mod p), with the failure bound of :func:`sz_bound` stated.
 
+**Measures and tensors** go the same way: :func:`symbolic_measures` reconstructs the densities of
+:func:`~exact_khk.diagnostics.measures.find_measure` (N/D scaled like an integral) and proves
+m(x̃) det dΦ(x) = m(x), det dΦ = det K(x̃)/det M with K = I + ε f′;
+:func:`symbolic_tensors` those of :func:`~exact_khk.diagnostics.poisson.find_poisson` (all
+entries scaled by one factor) and proves K(x̃) π(x) K(x̃)ᵀ = M π(x̃) Mᵀ (that is dΦ π dΦᵀ = π∘Φ)
+and the Jacobi identity (exactly; polynomial).
+
 >>> from exact_khk.systems.catalogue import load
 >>> res = symbolic_integrals(load("euler-top"), ["eps"], degree=2)
 >>> res.symbols, [f.proven for f in res.integrals]
@@ -43,7 +50,7 @@ import math
 import random
 import time
 from collections import Counter
-from dataclasses import dataclass, field as dc_field
+from dataclasses import dataclass
 from fractions import Fraction
 from math import comb
 
@@ -96,7 +103,7 @@ class ParametricSearch:
     label: str
     symbols: tuple
     fixed: tuple             # ((name, value), ...) of the parameters and ε not symbolic
-    integrals: tuple
+    integrals: tuple         # ParametricIntegral: the integrals, densities or tensors
     samples: int             # searches used
     dropped: int             # samples of another shape, or singular
     degree: int              # the ansatz degree t reached
@@ -104,11 +111,13 @@ class ParametricSearch:
     seconds: float
     sample_summary: str = ""  # find_integrals' headline at the first sample kept
     field: str = "f"
-    kind: str = "integrals"  # or "measure": densities m of invariant measures m(x) dx
+    kind: str = "integrals"  # "measure": densities m of invariant measures m(x) dx; "poisson": tensors
 
     def to_json(self) -> dict:
-        return {"field": self.label, "kind": self.kind, "symbols": list(self.symbols), "fixed": {k: str(v) for k, v in self.fixed},
-                "integrals": [f.to_json() for f in self.integrals], "samples": self.samples,
+        key = {"measure": "densities", "poisson": "tensors"}.get(self.kind, "integrals")
+        return {"field": self.label, "kind": self.kind, "symbols": list(self.symbols),
+                "fixed": {k: str(v) for k, v in self.fixed},
+                key: [f.to_json() for f in self.integrals], "samples": self.samples,
                 "dropped_samples": self.dropped, "ansatz_degree": self.degree, "notes": list(self.notes),
                 "sample_search": self.sample_summary, "seconds": self.seconds}
 
@@ -655,7 +664,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                          f"in {len(shapes)} searches): no common normal form to reconstruct")
     if not shape:
         return ParametricSearch(_label(sysobj, fld), symbols, fixed, (), len(samples), dropped, 0,
-                                (f"nothing verified at the samples: nothing to reconstruct",),
+                                ("nothing verified at the samples: nothing to reconstruct",),
                                 time.perf_counter() - t0, headline, field, kind)
 
     def keep():
