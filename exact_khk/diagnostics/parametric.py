@@ -647,7 +647,12 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                 raise InputError(f"symbolic: more than {MAX_SAMPLES} searches (MAX_SAMPLES) needed; name fewer "
                                  f"symbols or lower the degree")
             values = {s: _draw(rng, s, taken[s]) for s in symbols}
-            out = _sample(sysobj, values, fixed_eps, kw, kind)
+            try:
+                out = _sample(sysobj, values, fixed_eps, kw, kind)
+            except InputError:
+                if not samples:  # the options themselves (or the system at its first values)
+                    raise
+                out = None   # the system at special values (a field that vanishes, ...)
             if out is None:
                 dropped += 1
                 continue
