@@ -120,7 +120,11 @@ def test_bad_input():
         symbolic_integrals(load("euler-top"), ["eps", "eps"], degree=2)
     with pytest.raises(InputError, match="not a parameter"):
         symbolic_integrals("lotka-volterra", ["a1"], degree=2)
-    assert EPS == "eps"
+    for bad in (123, [1, 2], None):
+        with pytest.raises(InputError, match="symbolic"):
+            symbolic_integrals(load("euler-top"), bad, degree=2)
+    with pytest.raises(InputError, match="proof"):
+        symbolic_integrals(load("euler-top"), EPS, degree=2, proof="maybe")
 
 
 def test_cli(tmp_path, capsys):

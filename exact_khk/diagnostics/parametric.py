@@ -153,6 +153,8 @@ def _check_symbols(system, symbols) -> tuple:
     """The symbols as a tuple (ε first), each ε or a parameter of ``system`` (InputError otherwise)."""
     if isinstance(symbols, str):
         symbols = symbols.split(",")
+    if not isinstance(symbols, (list, tuple)) or not all(isinstance(s, str) for s in symbols):
+        raise InputError(f"symbolic: expected names (strings), got {symbols!r}"[:200])
     names = [s.strip() for s in symbols if s and s.strip()]
     if not names:
         raise InputError("symbolic: name eps or parameters of the system")
