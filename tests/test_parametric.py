@@ -215,3 +215,25 @@ def test_cli_poisson(capsys):
     assert capsys.readouterr().out.startswith("[poisson]")
     assert main(["find-poisson", "euler-top", "--symbolic", "eps", "--symbolic-degree", "99"]) == 2
     assert "--symbolic-degree" in capsys.readouterr().err
+
+
+def test_samples_of_another_shape_are_dropped_or_refused(monkeypatch):
+    """The normal form must be the same at every sample: a minority of samples whose search finds
+    something else is dropped (and said), a split is refused."""
+    import exact_khk.diagnostics.parametric as par
+
+    real, calls = par._sample, []
+
+    def odd_one_out(every):
+        def sample(*args, **kw):
+            calls.append(1)
+            shape, coeffs, head = real(*args, **kw)
+            return (shape[:1], coeffs[:1], head) if len(calls) % every == 0 else (shape, coeffs, head)
+        return sample
+    monkeypatch.setattr(par, "_sample", odd_one_out(5))
+    res = symbolic_integrals(load("euler-top"), ["eps"], degree=2)
+    assert res.dropped >= 1 and any("dropped" in n for n in res.notes) and all(f.proven for f in res.integrals)
+    calls.clear()
+    monkeypatch.setattr(par, "_sample", odd_one_out(2))
+    with pytest.raises(InputError, match="differ between the samples"):
+        symbolic_integrals(load("euler-top"), ["eps"], degree=2)
