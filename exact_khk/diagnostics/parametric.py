@@ -12,11 +12,13 @@ shape is kept; samples of another shape (special values where a coefficient vani
 dropped and counted, and a shape held by fewer than :data:`MIN_SHARE` of the samples is refused.
 
 **Reconstruction** (a dense ansatz, solved exactly): each coefficient c(s) is written as P/Q
-with P, Q of total degree ≤ t in the k symbols, t = 0, 1, …; the linear system
+with P, Q of total degrees ≤ (a, b) in the k symbols, the bounds tried fewest unknowns
+C(k + a, k) + C(k + b, k) − 1 first (:func:`levels`); the linear system
 P(s_i) − c_i Q(s_i) = 0 over the samples but the last ``confirm`` is solved over Q
 (``fmpz_mat.nullspace``), P/Q reduced by its gcd, and accepted only when it reproduces every
-sample, the ``confirm`` unused ones included.  t needs 2·C(k + t, t) − 1 + ``confirm`` samples;
-beyond ``max_degree`` or :data:`MAX_SAMPLES` samples the search stops with an InputError.  For one
+sample, the ``confirm`` unused ones included.  (a, b) needs that many unknowns + ``confirm``
+samples; beyond a, b ≤ ``max_degree`` or :data:`MAX_SAMPLES` samples the search stops with an
+InputError.  For one
 symbol this is rational interpolation: the reconstruction is unique once it exists.  The
 reconstructed N and D are multiplied by the lcm of their coefficients' denominators and divided
 by their content, so the reported integral is N/D up to a factor that depends only on s.
@@ -130,7 +132,7 @@ class ParametricSearch:
                f"  {self.samples} searches at random values ({self.dropped} dropped: another shape or singular); "
                f"at one sample: {self.sample_summary}"]
         if self.integrals:
-            out.append(f"  coefficients reconstructed as P/Q of total degree <= {self.degree} in "
+            out.append(f"  coefficients reconstructed as P/Q, deg P and deg Q <= {self.degree} in "
                        f"{', '.join(self.symbols)}, each confirmed at {CONFIRM} samples not used to solve "
                        f"(conjecture until proven)")
         for i, f in enumerate(self.integrals, 1):
@@ -255,10 +257,10 @@ def _value(exps, coeffs, point) -> Fraction:
     return sum((c * math.prod(p ** k for p, k in zip(point, e)) for e, c in zip(exps, coeffs)), Fraction(0))
 
 
-def reconstruct(points, values, t, confirm=CONFIRM):
-    """(P, Q) as {exponent: Fraction} with deg P, deg Q ≤ t (total, in len(points[0]) symbols),
-    P(s_i) = c_i Q(s_i) and Q(s_i) ≠ 0 at every sample, solved from all but the last
-    ``confirm`` samples; None if there is none (or too few samples).
+def reconstruct(points, values, t, confirm=CONFIRM, b=None):
+    """(P, Q) as {exponent: Fraction} with deg P ≤ t, deg Q ≤ b (default t; total degrees in the
+    len(points[0]) symbols), P(s_i) = c_i Q(s_i) and Q(s_i) ≠ 0 at every sample, solved from all
+    but the last ``confirm`` samples; None if there is none (or too few samples).
 
     >>> from fractions import Fraction as F
     >>> pts = [(F(k, 7),) for k in range(1, 9)]
@@ -267,34 +269,40 @@ def reconstruct(points, values, t, confirm=CONFIRM):
     ({(0,): Fraction(1, 1)}, [((0,), Fraction(1, 1)), ((2,), Fraction(-2, 1))])
     """
     k = len(points[0])
-    exps = monomials(k, t)
-    m = len(exps)
+    num_exps, den_exps = monomials(k, t), monomials(k, t if b is None else b)
+    m = len(num_exps)
     n_solve = len(points) - confirm
-    if n_solve < 2 * m - 1:
+    if n_solve < m + len(den_exps) - 1:
         return None
     rows = []
     for s, c in zip(points[:n_solve], values[:n_solve]):
-        mono = [math.prod(p ** a for p, a in zip(s, e)) for e in exps]
-        row = mono + [-c * v for v in mono]
+        row = [math.prod(p ** a for p, a in zip(s, e)) for e in num_exps] + \
+              [-c * math.prod(p ** a for p, a in zip(s, e)) for e in den_exps]
         den = math.lcm(*(q.denominator for q in row))
         rows.append([int(q * den) for q in row])
     null, nullity = flint.fmpz_mat(rows).nullspace()
     for j in range(nullity):
-        vec = [Fraction(int(null[i, j])) for i in range(2 * m)]
+        vec = [Fraction(int(null[i, j])) for i in range(len(rows[0]))]
         P, Q = vec[:m], vec[m:]
         if not any(Q):
             continue
-        P, Q = _reduced(exps, P, Q, k)
+        P, Q = _reduced(num_exps, P, den_exps, Q, k)
         if all((q := _value(*Q, s)) != 0 and _value(*P, s) == c * q for s, c in zip(points, values)):
             return dict(zip(*P)), dict(zip(*Q))
     return None
 
 
-def _reduced(exps, P, Q, k):
+def levels(k, max_degree) -> list:
+    """The (deg P, deg Q) bounds tried, fewest unknowns C(k+a, a) + C(k+b, b) − 1 first."""
+    return sorted(((a, b) for a in range(max_degree + 1) for b in range(max_degree + 1)),
+                  key=lambda ab: (comb(k + ab[0], k) + comb(k + ab[1], k), sum(ab), ab[1]))
+
+
+def _reduced(num_exps, P, den_exps, Q, k):
     """P/Q divided by gcd(P, Q), Q's first coefficient 1: ((exps, coeffs), (exps, coeffs))."""
     ctx = flint.fmpq_mpoly_ctx.get(tuple(f"s{i}" for i in range(k)), "degrevlex")
-    p = ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in zip(exps, P) if c})
-    q = ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in zip(exps, Q) if c})
+    p = ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in zip(num_exps, P) if c})
+    q = ctx.from_dict({e: flint.fmpq(c.numerator, c.denominator) for e, c in zip(den_exps, Q) if c})
     g = p.gcd(q) if not p.is_zero() else q
     p, q = p / g, q / g
     lead = q.to_dict()[min(q.to_dict())]
@@ -639,8 +647,8 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     k = len(symbols)
     notes = []
 
-    def need(t):
-        return 2 * comb(k + t, t) - 1 + confirm
+    def need(a, b):
+        return comb(k + a, a) + comb(k + b, b) - 1 + confirm
 
     def grow(n):
         nonlocal dropped, headline
@@ -664,7 +672,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
             stage(f"search {len(samples)} of {n}")
 
     # the shape: the majority over the first samples, then only samples of that shape are kept
-    grow(need(0))
+    grow(need(0, 0))
     shape, count = Counter(shapes).most_common(1)[0]
     if Fraction(count, len(shapes)) < MIN_SHARE:
         raise InputError(f"symbolic: the integrals found differ between the samples ({len(set(shapes))} shapes "
@@ -683,30 +691,27 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
 
     keep()
     keys = [sorted(c) for c in samples[0][1]]
-    done = [dict() for _ in keys]  # per integral: key -> (P, Q, t)
-    t = 0
-    while True:
-        grow(need(t))
-        keep()
-        while len(samples) < need(t):
-            grow(need(t))
+    done = [dict() for _ in keys]  # per integral: key -> (P, Q, max(deg P, deg Q))
+    for a, b in levels(k, max_degree):
+        if need(a, b) + dropped > MAX_SAMPLES:
+            raise InputError(f"symbolic: numerator and denominator degrees ({a}, {b}) in {k} symbol(s) need "
+                             f"{need(a, b)} searches, beyond MAX_SAMPLES = {MAX_SAMPLES}: name fewer symbols")
+        while len(samples) < need(a, b):
+            grow(need(a, b))
             keep()
         pts = [s for s, _ in samples]
         for j, ks in enumerate(keys):
             for key in ks:
                 if key not in done[j]:
-                    out = reconstruct(pts, [c[j][key] for _, c in samples], t, confirm)
+                    out = reconstruct(pts, [c[j][key] for _, c in samples], a, confirm, b)
                     if out is not None:
-                        done[j][key] = (*out, t)
+                        done[j][key] = (*out, max(a, b))
         if all(len(d) == len(ks) for d, ks in zip(done, keys)):
             break
-        t += 1
-        if t > max_degree:
-            raise InputError(f"symbolic: a coefficient is not a rational function of total degree <= {max_degree} "
-                             f"in {', '.join(symbols)} (the degree limit)")
-        if need(t) + dropped > MAX_SAMPLES:
-            raise InputError(f"symbolic: degree {t} in {k} symbol(s) needs {need(t)} searches, beyond "
-                             f"MAX_SAMPLES = {MAX_SAMPLES}: name fewer symbols")
+    else:
+        raise InputError(f"symbolic: a coefficient is not a rational function with numerator and denominator of "
+                         f"total degree <= {max_degree} in {', '.join(symbols)} (the degree limit)")
+    t = max(tt for d in done for _, _, tt in d.values())
     if dropped:
         notes.append(f"{dropped} sample(s) dropped (another shape of what was found, or a singular search)")
 
