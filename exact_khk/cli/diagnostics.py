@@ -133,7 +133,7 @@ def cmd_find_integrals(args):
     except InputError as exc:
         msg = str(exc)
         for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0", "fit_degree",
-                     "symbolic", "max_degree"):
+                     "symbolic", "max_degree", "toml"):
             if msg.startswith(name + ":"):
                 msg = "--" + {"max_degree": "symbolic-degree"}.get(name, name.replace("_", "-")) + msg[len(name):]
                 break
@@ -161,6 +161,8 @@ def _symbolic(args, system, kw, progress):
     from exact_khk.diagnostics.parametric import MAX_DEGREE, symbolic_integrals, system_file
 
     names = [t for a in args.symbolic for t in a.split(",")]
+    if args.toml and (getattr(system, "kind", None) != "expressions" or kw["field"] != "f"):
+        raise InputError("--toml: with --symbolic, only for a system file or catalogue entry and the field f")
     res = symbolic_integrals(system, names, progress=progress, max_degree=MAX_DEGREE if args.symbolic_degree is None
                              else args.symbolic_degree, **kw)
     if args.toml:
