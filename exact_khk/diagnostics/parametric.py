@@ -48,6 +48,7 @@ and the Jacobi identity (exactly; polynomial).
 
 from __future__ import annotations
 
+import itertools
 import math
 import random
 import time
@@ -69,6 +70,8 @@ MAX_DEGREE = 12
 MAX_SAMPLES = 400
 #: the least share of the samples that must agree on the integrals' shape
 MIN_SHARE = Fraction(2, 3)
+#: with several symbols, total-degree ansätze are tried up to this many searches, then degrees per symbol
+DENSE_FIRST = 40
 #: samples beyond those of the linear solve that must agree with a reconstruction
 CONFIRM = 3
 #: the exact proof (expansion) is used up to this dimension, Schwartz–Zippel over F_p beyond (the
@@ -269,7 +272,12 @@ def reconstruct(points, values, t, confirm=CONFIRM, b=None):
     ({(0,): Fraction(1, 1)}, [((0,), Fraction(1, 1)), ((2,), Fraction(-2, 1))])
     """
     k = len(points[0])
-    num_exps, den_exps = monomials(k, t), monomials(k, t if b is None else b)
+    return reconstruct_in(points, values, monomials(k, t), monomials(k, t if b is None else b), confirm)
+
+
+def reconstruct_in(points, values, num_exps, den_exps, confirm=CONFIRM):
+    """:func:`reconstruct` with P and Q in the spans of the monomials ``num_exps``, ``den_exps``."""
+    k = len(points[0])
     m = len(num_exps)
     n_solve = len(points) - confirm
     if n_solve < m + len(den_exps) - 1:
@@ -290,6 +298,47 @@ def reconstruct(points, values, t, confirm=CONFIRM, b=None):
         if all((q := _value(*Q, s)) != 0 and _value(*P, s) == c * q for s, c in zip(points, values)):
             return dict(zip(*P)), dict(zip(*Q))
     return None
+
+
+def _boxes(k, keys, done, on_line, samples, fill, max_degree, confirm, budget) -> bool:
+    """The coefficients not in ``done`` (``keys`` per object) in the box of their degrees per
+    symbol: searches along one symbol at a time (the others fixed) give deg_i P and deg_i Q by
+    univariate reconstruction, then P and Q are solved in the spans of the monomials with every
+    exponent ≤ those (fewer unknowns than a total-degree ansatz when the degrees concentrate on
+    few symbols).  ``budget()``: the searches still allowed.  True when every coefficient is then
+    reconstructed."""
+    todo = [(j, key) for j, ks in enumerate(keys) for key in ks if key not in done[j]]
+    degs = {jk: ([0] * k, [0] * k) for jk in todo}
+    for i in range(k):
+        line, more = on_line(i)
+        left = set(todo)
+        for a, b in levels(1, max_degree):
+            if a + b + 1 + confirm - len(line) > budget():
+                return False
+            more(a + b + 1 + confirm)
+            pts = [p for p, _ in line]
+            for j, key in sorted(left):
+                out = reconstruct(pts, [c[j][key] for _, c in line], a, confirm, b)
+                if out is not None:
+                    degs[j, key][0][i] = max((e[0] for e in out[0]), default=0)
+                    degs[j, key][1][i] = max((e[0] for e in out[1]), default=0)
+                    left.discard((j, key))
+            if not left:
+                break
+        if left:
+            return False
+    boxes = {jk: tuple([tuple(e) for e in itertools.product(*(range(d + 1) for d in ds))] for ds in pair)
+             for jk, pair in degs.items()}
+    n = max(len(ne) + len(de) - 1 for ne, de in boxes.values()) + confirm
+    if n - len(samples) > budget():
+        return False
+    fill(n)
+    pts = [p for p, _ in samples]
+    for (j, key), (ne, de) in boxes.items():
+        out = reconstruct_in(pts, [c[j][key] for _, c in samples], ne, de, confirm)
+        if out is not None:
+            done[j][key] = (*out, max(sum(e) for e in list(out[0]) + list(out[1])))
+    return all(len(d) == len(ks) for d, ks in zip(done, keys))
 
 
 def levels(k, max_degree) -> list:
@@ -643,33 +692,39 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
             kw["degree"] = 2
     rng = random.Random(f"symbolic-{seed}")
     taken = {s: set() for s in symbols}
-    samples, shapes, dropped, headline = [], [], 0, ""
+    samples, shapes, dropped, headline, searches = [], [], 0, "", 0
     k = len(symbols)
     notes = []
 
     def need(a, b):
         return comb(k + a, a) + comb(k + b, b) - 1 + confirm
 
+    def search(values):
+        """(point, coefficients, shape) at ``values``, or None (counted as dropped)."""
+        nonlocal dropped, headline, searches
+        if searches >= MAX_SAMPLES:
+            raise InputError(f"symbolic: more than {MAX_SAMPLES} searches (MAX_SAMPLES) needed; name fewer "
+                             f"symbols or lower the degree")
+        searches += 1
+        try:
+            out = _sample(sysobj, values, fixed_eps, kw, kind)
+        except InputError:
+            if not samples:  # the options themselves (or the system at its first values)
+                raise
+            out = None   # the system at special values (a field that vanishes, ...)
+        if out is None:
+            dropped += 1
+            return None
+        headline = headline or out[2]
+        stage(f"search {searches}")
+        return tuple(values[s] for s in symbols), out[1], out[0]
+
     def grow(n):
-        nonlocal dropped, headline
         while len(samples) < n:
-            if len(samples) + dropped > MAX_SAMPLES:
-                raise InputError(f"symbolic: more than {MAX_SAMPLES} searches (MAX_SAMPLES) needed; name fewer "
-                                 f"symbols or lower the degree")
-            values = {s: _draw(rng, s, taken[s]) for s in symbols}
-            try:
-                out = _sample(sysobj, values, fixed_eps, kw, kind)
-            except InputError:
-                if not samples:  # the options themselves (or the system at its first values)
-                    raise
-                out = None   # the system at special values (a field that vanishes, ...)
-            if out is None:
-                dropped += 1
-                continue
-            samples.append((tuple(values[s] for s in symbols), out[1]))
-            shapes.append(out[0])
-            headline = headline or out[2]
-            stage(f"search {len(samples)} of {n}")
+            got = search({s: _draw(rng, s, taken[s]) for s in symbols})
+            if got is not None:
+                samples.append(got[:2])
+                shapes.append(got[2])
 
     # the shape: the majority over the first samples, then only samples of that shape are kept
     grow(need(0, 0))
@@ -692,13 +747,14 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     keep()
     keys = [sorted(c) for c in samples[0][1]]
     done = [dict() for _ in keys]  # per integral: key -> (P, Q, max(deg P, deg Q))
-    for a, b in levels(k, max_degree):
-        if need(a, b) + dropped > MAX_SAMPLES:
-            raise InputError(f"symbolic: numerator and denominator degrees ({a}, {b}) in {k} symbol(s) need "
-                             f"{need(a, b)} searches, beyond MAX_SAMPLES = {MAX_SAMPLES}: name fewer symbols")
-        while len(samples) < need(a, b):
-            grow(need(a, b))
+
+    def fill(n):
+        while len(samples) < n:
+            grow(n)
             keep()
+
+    def dense(a, b):
+        fill(need(a, b))
         pts = [s for s, _ in samples]
         for j, ks in enumerate(keys):
             for key in ks:
@@ -706,11 +762,43 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
                     out = reconstruct(pts, [c[j][key] for _, c in samples], a, confirm, b)
                     if out is not None:
                         done[j][key] = (*out, max(a, b))
-        if all(len(d) == len(ks) for d, ks in zip(done, keys)):
+        return all(len(d) == len(ks) for d, ks in zip(done, keys))
+
+    def on_line(i):
+        """Searches along symbol i (the others fixed at random values): [(value, coefficients)]."""
+        base = {s: _draw(rng, s, taken[s]) for s in symbols}
+        line = []
+
+        def more(n):
+            nonlocal dropped
+            while len(line) < n:
+                got = search({**base, symbols[i]: _draw(rng, symbols[i], taken[symbols[i]])})
+                if got is not None and got[2] == shape:
+                    line.append((got[0][i:i + 1], got[1]))
+                elif got is not None:
+                    dropped += 1
+        return line, more
+
+    finished = False
+    for a, b in levels(k, max_degree):
+        if k >= 2 and need(a, b) > DENSE_FIRST:
             break
-    else:
-        raise InputError(f"symbolic: a coefficient is not a rational function with numerator and denominator of "
-                         f"total degree <= {max_degree} in {', '.join(symbols)} (the degree limit)")
+        if dense(a, b):
+            finished = True
+            break
+    if not finished and k >= 2:
+        stage("degrees per symbol")
+        finished = _boxes(k, keys, done, on_line, samples, fill, max_degree, confirm, lambda: MAX_SAMPLES - searches)
+    if not finished:
+        for a, b in levels(k, max_degree):
+            if need(a, b) + dropped > MAX_SAMPLES:
+                raise InputError(f"symbolic: numerator and denominator degrees ({a}, {b}) in {k} symbol(s) need "
+                                 f"{need(a, b)} searches, beyond MAX_SAMPLES = {MAX_SAMPLES}: name fewer symbols")
+            if dense(a, b):
+                break
+        else:
+            raise InputError(f"symbolic: a coefficient is not a rational function with numerator and denominator "
+                             f"of total degree <= {max_degree} in {', '.join(symbols)} (the degree limit)")
     t = max(tt for d in done for _, _, tt in d.values())
     if dropped:
         notes.append(f"{dropped} sample(s) dropped (another shape of what was found, or a singular search)")
@@ -746,7 +834,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
         else:
             holds, how = prove_sz(num, den, M, r, N, seed=seed, K=K)
         out.append(ParametricIntegral(_text(num, names), _text(den, names), deg, holds, how))
-    return ParametricSearch(_label(sysobj, fld), symbols, fixed, tuple(out), len(samples), dropped, t,
+    return ParametricSearch(_label(sysobj, fld), symbols, fixed, tuple(out), searches - dropped, dropped, t,
                             tuple(notes), time.perf_counter() - t0, headline, field, kind)
 
 
