@@ -164,6 +164,11 @@ def test_euler_top_measure_in_eps_and_a1():
     check_measure("eps,a1", {A2: -2, A3: 3})
 
 
+@pytest.mark.slow
+def test_euler_top_measure_all_symbolic():
+    check_measure("eps,a1,a2,a3", {})
+
+
 def test_euler_top_measure_matches_the_published_density():
     from exact_khk.diagnostics.parametric import symbolic_measures
 

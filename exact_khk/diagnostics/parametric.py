@@ -18,7 +18,9 @@ P(s_i) − c_i Q(s_i) = 0 over the samples but the last ``confirm`` is solved ov
 (``fmpz_mat.nullspace``), P/Q reduced by its gcd, and accepted only when it reproduces every
 sample, the ``confirm`` unused ones included.  (a, b) needs that many unknowns + ``confirm``
 samples; beyond a, b ≤ ``max_degree`` or :data:`MAX_SAMPLES` samples the search stops with an
-InputError.  For one
+InputError.  With several symbols, past :data:`DENSE_FIRST` samples the degrees per symbol are
+read first from searches along one symbol at a time and P, Q solved in the box of those
+degrees (:func:`_boxes`), the total-degree ansatz remaining the fallback.  For one
 symbol this is rational interpolation: the reconstruction is unique once it exists.  The
 reconstructed N and D are multiplied by the lcm of their coefficients' denominators and divided
 by their content, so the reported integral is N/D up to a factor that depends only on s.
