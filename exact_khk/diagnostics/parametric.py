@@ -64,6 +64,7 @@ import flint
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
 from exact_khk.diagnostics.kernels import monomials, poly_text
 from exact_khk.errors import InputError, PoleError, SingularStepError
+from exact_khk.parsing import check_count
 
 EPS = "eps"
 #: the highest total degree t of a coefficient's numerator and denominator in the symbols
@@ -680,8 +681,10 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     symbols = _check_symbols(sysobj, symbols)
     if proof not in ("auto", "exact", "sz"):
         raise InputError(f"proof: expected auto, exact or sz, got {proof!r}")
-    if not 0 <= max_degree <= MAX_DEGREE:
-        raise InputError(f"max_degree: expected 0..{MAX_DEGREE}, got {max_degree}")
+    if kind not in ("integrals", "measure", "poisson"):
+        raise InputError(f"kind: expected integrals, measure or poisson, got {kind!r}")
+    check_count(max_degree, "max_degree", 0, MAX_DEGREE)
+    check_count(confirm, "confirm", 1, 50)
     fixed_eps = None if EPS in symbols else eps_of(sysobj, eps)
     params = dict(getattr(sysobj, "parameters", None) or {})
     fixed = tuple(([(EPS, fixed_eps)] if fixed_eps is not None else [])
