@@ -187,6 +187,7 @@ def test_cli_measure(capsys):
     assert "--symbolic" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_euler_top_poisson_tensors_preserved_and_casimir():
     """Each tensor reconstructed in eps is preserved at a rational eps and x (SymPy builds the Kahan map
     and dPhi by differentiation, tests/test_discover.py), and one has the Hirota-Kimura integral
@@ -212,6 +213,18 @@ def test_euler_top_poisson_tensors_preserved_and_casimir():
     assert any((pi * grad).applyfunc(sp.cancel) == sp.zeros(3, 1) for pi in pis)
     # negative control: a perturbed tensor fails (preservation and Jacobi)
     bad = symbolic_tensors(load("euler-top"), ["eps"], degree=3, perturb=Fraction(1, 3), proof="sz")
+    assert not bad.integrals[0].proven and "FAILS" in bad.integrals[0].proof
+
+
+def test_lotka_volterra_tensor_with_parameters():
+    """u' = u(a - b v), v' = v(c u - d): the tensor u*v, the same for every eps and a;
+    a perturbed one fails, exactly."""
+    from exact_khk.diagnostics.parametric import symbolic_tensors
+
+    res = symbolic_tensors("lotka-volterra", "eps,a", degree=2, proof="exact")
+    assert [t.entries for t in res.integrals] == [(("0", "u*v"), ("-u*v", "0"))] and res.integrals[0].proven
+    assert "proven exactly" in res.integrals[0].proof and "Jacobi identity proven" in res.integrals[0].proof
+    bad = symbolic_tensors("lotka-volterra", "eps,a", degree=2, proof="exact", perturb=Fraction(1, 2))
     assert not bad.integrals[0].proven and "FAILS" in bad.integrals[0].proof
 
 
