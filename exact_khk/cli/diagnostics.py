@@ -54,7 +54,8 @@ def register(sub):
     q.add_argument("--symbolic", action="append", metavar="NAMES",
                    help="reconstruct the integrals as rational functions of eps and/or parameters of the system "
                    "(comma-separated or repeated: --symbolic eps,a1) from searches at random values, and prove "
-                   "each identity I(Phi(x)) = I(x) exactly")
+                   "I(Phi(x)) = I(x) (exactly; over F_p with a stated bound beyond dimension 4); exit 4 if one is "
+                   "not proven")
     q.add_argument("--symbolic-degree", type=int, default=None, metavar="T",
                    help="with --symbolic: the total degree bound of each coefficient's numerator and denominator "
                    "in the symbols (default and limit 12)")

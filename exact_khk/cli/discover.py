@@ -50,7 +50,8 @@ def register(sub):
 def _symbolic_options(p, what, identity):
     p.add_argument("--symbolic", action="append", metavar="NAMES",
                    help=f"reconstruct {what} as rational functions of eps and/or parameters of the system "
-                   f"(comma-separated or repeated) from searches at random values, and prove {identity}")
+                   f"(comma-separated or repeated) from searches at random values, and prove {identity} (exactly; over "
+                   f"F_p with a stated bound beyond dimension 4); exit 4 if one is not proven")
     p.add_argument("--symbolic-degree", type=int, default=None, metavar="T",
                    help="with --symbolic: the total degree bound of each coefficient's numerator and denominator "
                    "in the symbols (default and limit 12)")
