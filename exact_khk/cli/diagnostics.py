@@ -51,6 +51,14 @@ def register(sub):
                    "degree; 0: no fit)")
     q.add_argument("--toml", metavar="FILE.toml", help="also write a system file with the found integrals in "
                    "[integrals] (and [defaults] eps), ready for `exact-khk certify --system FILE.toml`")
+    q.add_argument("--symbolic", action="append", metavar="NAMES",
+                   help="reconstruct the integrals as rational functions of eps and/or parameters of the system "
+                   "(comma-separated or repeated: --symbolic eps,a1) from searches at random values, and prove "
+                   "I(Phi(x)) = I(x) (exactly; over F_p with a stated bound beyond dimension 4); exit 4 if one is "
+                   "not proven")
+    q.add_argument("--symbolic-degree", type=int, default=None, metavar="T",
+                   help="with --symbolic: the total degree bound of each coefficient's numerator and denominator "
+                   "in the symbols (default and limit 12)")
     add_json_option(q, "the integrals found")
     q.set_defaults(func=cmd_find_integrals)
 
@@ -118,12 +126,17 @@ def cmd_find_integrals(args):
         kw["degree"] = 2 if args.degree is None else args.degree
     try:
         with Progress(args, None, "find-integrals", unit="stage") as progress:
+            if args.symbolic:
+                return _symbolic(args, system, kw, progress)
+            if args.symbolic_degree is not None:
+                raise InputError("--symbolic-degree applies only with --symbolic")
             res = find_integrals(system, **kw, progress=progress)
     except InputError as exc:
         msg = str(exc)
-        for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0", "fit_degree"):
+        for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0", "fit_degree",
+                     "symbolic", "max_degree", "toml"):
             if msg.startswith(name + ":"):
-                msg = "--" + name.replace("_", "-") + msg[len(name):]
+                msg = "--" + {"max_degree": "symbolic-degree"}.get(name, name.replace("_", "-")) + msg[len(name):]
                 break
         raise InputError(msg) from None
     if args.toml:
@@ -141,3 +154,28 @@ def cmd_find_integrals(args):
             print(f"system file with the {len(res.integrals)} integral(s) written to {args.toml} "
                   f"(exact-khk certify --system {args.toml})")
     return 0
+
+
+def _symbolic(args, system, kw, progress):
+    """``--symbolic``: :func:`~exact_khk.diagnostics.parametric.symbolic_integrals`; exit 4 when an
+    integral is not proven."""
+    from exact_khk.diagnostics.parametric import MAX_DEGREE, symbolic_integrals, system_file
+
+    names = [t for a in args.symbolic for t in a.split(",")]
+    if args.toml and (getattr(system, "kind", None) != "expressions" or kw["field"] != "f"):
+        raise InputError("--toml: with --symbolic, only for a system file or catalogue entry and the field f")
+    res = symbolic_integrals(system, names, progress=progress, max_degree=MAX_DEGREE if args.symbolic_degree is None
+                             else args.symbolic_degree, **kw)
+    if args.toml:
+        from exact_khk.studies.output import write_atomic
+
+        write_atomic(args.toml, system_file(system, res), "--toml")
+    if args.json is not None:
+        write_json({"system": system.to_json(), **res.to_json()}, args.json)
+    if args.json != "-":
+        print(system.describe())
+        print(res.summary())
+        if args.toml:
+            print(f"system file with the {sum(f.proven for f in res.integrals)} proven integral(s) written to "
+                  f"{args.toml} (exact-khk certify --system {args.toml})")
+    return 0 if all(f.proven for f in res.integrals) else 4

@@ -33,6 +33,7 @@ def register(sub):
                        "(docs/diagnostics.md).")
     _common(p)
     p.add_argument("--degree", type=int, default=2, help="degree bound of the Darboux polynomials (default 2)")
+    _symbolic_options(p, "the densities", "m(Phi) det dPhi = m")
     p.set_defaults(func=cmd_find_measure)
     q = sub.add_parser("find-poisson", help=POISSON_HELP,
                        description="Bivectors pi with polynomial entries with dPhi pi dPhi^T = pi o Phi, the Jacobi "
@@ -42,7 +43,18 @@ def register(sub):
     q.add_argument("--degree", type=int, default=2, help="degree bound of the entries (default 2)")
     q.add_argument("--casimir-degree", type=int, default=2,
                    help="degree bound of polynomial Casimirs, and of the Darboux denominators tried (default 2)")
+    _symbolic_options(q, "the tensors", "dPhi pi dPhi^T = pi o Phi and the Jacobi identity")
     q.set_defaults(func=cmd_find_poisson)
+
+
+def _symbolic_options(p, what, identity):
+    p.add_argument("--symbolic", action="append", metavar="NAMES",
+                   help=f"reconstruct {what} as rational functions of eps and/or parameters of the system "
+                   f"(comma-separated or repeated) from searches at random values, and prove {identity} (exactly; over "
+                   f"F_p with a stated bound beyond dimension 4); exit 4 if one is not proven")
+    p.add_argument("--symbolic-degree", type=int, default=None, metavar="T",
+                   help="with --symbolic: the total degree bound of each coefficient's numerator and denominator "
+                   "in the symbols (default and limit 12)")
 
 
 def _system(args):
@@ -59,7 +71,8 @@ def _system(args):
 
 def _rename(exc):
     msg = str(exc)
-    for name, option in (("degree", "--degree"), ("casimir_degree", "--casimir-degree"), ("verify_steps", "--steps")):
+    for name, option in (("degree", "--degree"), ("casimir_degree", "--casimir-degree"), ("verify_steps", "--steps"),
+                         ("symbolic", "--symbolic"), ("max_degree", "--symbolic-degree")):
         if msg.startswith(name + ":"):
             return InputError(option + msg[len(name):])
     return exc
@@ -84,6 +97,10 @@ def cmd_find_measure(args):
     system, eps, x0 = _system(args)
     try:
         with Progress(args, None, "find-measure", unit="stage") as progress:
+            if args.symbolic:
+                return _symbolic(args, system, eps, x0, progress)
+            if args.symbolic_degree is not None:
+                raise InputError("--symbolic-degree applies only with --symbolic")
             res = find_measure(system, degree=args.degree, field=field_name(system, args), eps=eps,
                                seed=args.line_seed, verify_steps=args.steps, x0=x0, progress=progress)
     except InputError as exc:
@@ -97,6 +114,11 @@ def cmd_find_poisson(args):
     system, eps, x0 = _system(args)
     try:
         with Progress(args, None, "find-poisson", unit="stage") as progress:
+            if args.symbolic:
+                return _symbolic(args, system, eps, x0, progress, casimir_degree=args.casimir_degree,
+                                 measure_degree=args.casimir_degree)
+            if args.symbolic_degree is not None:
+                raise InputError("--symbolic-degree applies only with --symbolic")
             res = find_poisson(system, degree=args.degree, field=field_name(system, args), eps=eps,
                                seed=args.line_seed, verify_steps=args.steps, x0=x0,
                                casimir_degree=args.casimir_degree, measure_degree=args.casimir_degree,
@@ -104,3 +126,35 @@ def cmd_find_poisson(args):
     except InputError as exc:
         raise _rename(exc) from None
     return _show(args, system, eps, res)
+
+
+def _symbolic(args, system, eps, x0, progress, **kw):
+    """``--symbolic``: :func:`~exact_khk.diagnostics.parametric.symbolic_measures` (find-measure) or
+    :func:`~exact_khk.diagnostics.parametric.symbolic_tensors` (find-poisson); exit 4 when one found
+    is not proven."""
+    from exact_khk.diagnostics.parametric import MAX_DEGREE, symbolic_measures, symbolic_tensors
+
+    names = [t for a in args.symbolic for t in a.split(",")]
+    run = symbolic_tensors if kw else symbolic_measures
+    res = run(system, names, degree=args.degree, field=field_name(system, args), eps=eps, seed=args.line_seed,
+              verify_steps=args.steps, x0=x0, progress=progress,
+              max_degree=MAX_DEGREE if args.symbolic_degree is None else args.symbolic_degree, **kw)
+    proven = [d for d in res.integrals if d.proven]
+    status = 0 if len(proven) == len(res.integrals) else 4
+    if args.json is not None:
+        write_json({"system": system.to_json(), **res.to_json()}, args.json)
+        if args.json == "-":
+            return status
+    if args.toml:
+        head = f"# found by exact-khk {'find-poisson' if kw else 'find-measure'} --symbolic {','.join(res.symbols)}"
+        if not proven:
+            print("# nothing proven")
+        elif kw:
+            rows = ",\n          ".join("[" + ", ".join(f'"{e}"' for e in r) + "]" for r in proven[0].entries)
+            print(f"[poisson]\n{head}\nmatrix = [{rows}]")
+        else:
+            print(f'[measure]\n{head}\ndensity = "({proven[0].numerator})/({proven[0].denominator})"')
+    else:
+        print(system.describe())
+        print(res.summary())
+    return status
