@@ -85,9 +85,9 @@ MAX_FIT_DEGREE = 12
 MORE_ORBITS = 12
 #: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
 MAX_CIRCUITS = 60
-MAX_FITS = 400
+MAX_FITS = 200
 #: level sets L = c of a linear integral L at most, for pencils interpolated in c (Job.level_pencils)
-MAX_LEVELS = 80
+MAX_LEVELS = 40
 #: the degree of a fit's coefficients in the integrals already found (the Lagrange top's integrals
 #: beyond m3 have coefficients of degree 3 in m3)
 MAX_KNOWN_DEGREE = 3
