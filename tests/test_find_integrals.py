@@ -225,10 +225,10 @@ def test_lagrange_top_what_is_extracted_is_right():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 3 of 4. On m3 = c the third pencil "
-                   "pencil_integrals returns has coefficients of 60-90 digits at c = 1, 2, 3 and no rational "
-                   "interpolation in c of degree <= 38 (80 levels); the catalogue's K is not found by the fits "
-                   "(degree <= 4, coefficients of degree <= 3 in the integrals found, <= 1300 unknowns)")
+@pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 3 of 4. On m3 = c the third 'pencil' "
+                   "pencil_integrals separates changes with the four orbits at the same c (coefficients of "
+                   "60-90 digits): the kernel's third direction is no pencil; the catalogue's K is not found by "
+                   "the fits (degree <= 4, coefficients of degree <= 3 in the integrals found, <= 1300 unknowns)")
 def test_lagrange_top_four():
     res = lagrange_top()
     assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4

@@ -598,8 +598,10 @@ class _Job:
         points give kernels of the candidates free of x_j; where they are independent pencils
         (w = 2d, :func:`.pencils.pencil_integrals`) each pencil's echelon basis is recorded, and its
         coefficients, rational functions of c, are reconstructed (:func:`.pencils.interpolated_pencils`)
-        with c replaced by L(x).  (Lagrange top: on m3 = c the kernel of degree ≤ 2 is three
-        independent pencils; their coefficients have degree ≤ 8 in c.)"""
+        with c replaced by L(x).  (Lagrange top: on m3 = c the orbit kernels of degree ≤ 2 have
+        dimension 3 and span 6 over four orbits; two of the pencils separated there, J and the
+        modified energy, are the same for every four orbits on a level and interpolate; the third
+        changes with the orbits at the same c, so it is no pencil and is not interpolated.)"""
         found = self.linear_integral(kept)
         if found is None:
             return []
