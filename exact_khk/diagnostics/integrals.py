@@ -384,9 +384,9 @@ def fit_shapes(N, k, fit_degree) -> list:
     coefficients of degree ≤ J in the integrals I_i, i ∈ T, of the k found (J = 0: T empty).
 
     T is one found integral or all of them: a pair (N, D) with coefficients in I_1 alone is unique
-    modulo the vanishing vectors only where no other I_i may multiply it (the Lagrange top's
-    integrals beyond m3 have coefficients of degree 3 in m3 and no other; with two found they are
-    (δ, J) = (3, 3), 2·84·10 unknowns with both, beyond MAX_FIT_UNKNOWNS, 2·84·4 with m3 alone).
+    modulo the vanishing vectors only where no other I_i may multiply it, and costs fewer unknowns
+    (Lagrange top, m3 and J found: an integral fitted at (δ, J) = (3, 3) in m3 alone, 2·84·4
+    unknowns; in m3 and J, 2·84·10, beyond MAX_FIT_UNKNOWNS).
 
     >>> fit_shapes(2, 1, 1)
     [((), 1, 0), ((0,), 1, 1), ((0,), 1, 2), ((0,), 1, 3)]
@@ -648,7 +648,8 @@ class _Job:
         On an orbit a linear integral L = c fixes one variable x_j as an affine function of the
         others; the candidates free of x_j then hold the remaining integrals with coefficients
         polynomial in c, without the products (L − c)·φ that mix them with L in the full kernel
-        (Lagrange top: m3; on m3 = c the orbit kernels of degree ≤ 2 are 3 independent pencils)."""
+        (Lagrange top: m3; on m3 = c the orbit kernels of degree ≤ 2 have dimension 3, with no
+        products of m3 − c)."""
         elim = []
         for f in kept:
             num, den = f.polynomials()

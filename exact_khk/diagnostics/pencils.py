@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
-from fractions import Fraction as F  # noqa: F401  (doctests)
 
 import flint
 
@@ -295,7 +294,7 @@ def rational_in(values: dict):
     """(a, b) fmpq_poly with a(c)/b(c) = values[c] at every c given, of the lowest degree n = deg a
     = deg b with two values beyond the 2n + 1 that determine it, or None.
 
-    >>> a, b = rational_in({F(c): F(c, c + 1) for c in range(1, 8)})
+    >>> a, b = rational_in({Fraction(c): Fraction(c, c + 1) for c in range(1, 8)})
     >>> a * flint.fmpq_poly([1, 1]) == b * flint.fmpq_poly([0, 1])
     True
     """
