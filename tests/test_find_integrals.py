@@ -6,6 +6,7 @@ at random rational points (not orbit points), and I(x~) == I(x) exactly; functio
 is the rank of the Jacobian computed by SymPy at a rational point.
 """
 
+import functools
 import random
 from fractions import Fraction as F
 
@@ -129,6 +130,7 @@ def test_volterra_chain_linear_and_modified_cubic_never_a_power():
     first = as_sympy(res.integrals[0], (x, y, z))
     assert sympy.simplify(sympy.diff(first, x) - sympy.diff(first, y)) == 0     # a function of x + y + z
     assert any("is a function of the integrals kept" in n for n in res.notes)  # the power, named and dropped
+    assert any("on the level sets x + y + z = c" in n for n in res.notes)       # the cubic: level-set pencil
     # the second is not a function of the linear one, and tends to a function of xyz and x + y + z
     assert sympy.Matrix([[sympy.diff(as_sympy(f, (x, y, z)), v).subs({x: 1, y: 2, z: 5}) for v in (x, y, z)]
                          for f in res.integrals]).rank() == 2
@@ -203,21 +205,32 @@ def test_found_integrals_print_in_system_file_syntax():
                                                  for i, f in enumerate(res.integrals)})
 
 
+@functools.lru_cache(maxsize=None)
+def lagrange_top():
+    return find_integrals("lagrange-top", degree=2)
+
+
 @pytest.mark.slow
 def test_lagrange_top_what_is_extracted_is_right():
-    """The kernel shows 4; m3 and the modified energy (a fit with coefficients in m3) are extracted,
-    both checked independently; the summary says how many are missing."""
-    res = find_integrals("lagrange-top", degree=2)
-    assert res.visible == 4 and len(res.integrals) >= 2
-    assert check_found("lagrange-top", res, "1/10", points=2) == len(res.integrals) == res.independent
-    assert f"extracted {len(res.integrals)}" in res.summary() and "the kernel shows 4" in res.summary()
+    """The kernel at degree <= 2 shows 4.  m3, and then the two pencils of the kernel on the level sets
+    m3 = c (candidates free of m3) interpolated in c: Hirota-Kimura's J and the modified energy.  Each
+    is conserved by SymPy's Kahan step at rational points (not the code under test); the rank of
+    their gradients, by Fractions and SymPy, equals their number."""
+    res = lagrange_top()
+    assert res.visible == 4 and len(res.integrals) == 3 and res.independent == 3
+    assert check_found("lagrange-top", res, "1/10", points=2) == 3
+    assert sum("on the level sets m3 = c" in n for n in res.notes) == 2
+    assert "kernel 10, extracted 3, independent 3 (the kernel shows 4" in res.summary()
+    assert any("the kernel shows 4 independent integrals" in w for w in res.warnings)  # said plainly
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 2 of the 4 integrals the kernel shows are "
-                   "extracted within the fit limits")
+@pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 3 of 4. On m3 = c the third 'pencil' "
+                   "pencil_integrals separates changes with the four orbits at the same c (coefficients of "
+                   "60-90 digits): the kernel's third direction is no pencil; the catalogue's K is not found by "
+                   "the fits (degree <= 4, coefficients of degree <= 3 in the integrals found, <= 1300 unknowns)")
 def test_lagrange_top_four():
-    res = find_integrals("lagrange-top", degree=2)
+    res = lagrange_top()
     assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4
     assert check_found("lagrange-top", res, "1/10", points=2) == 4
 
@@ -227,21 +240,28 @@ CLEBSCH = ExpressionSystem.from_expressions(  # m' = p × Ωp, p' = p × m, Ω =
     field=["3*p2*p3", "-4*p1*p3", "p1*p2", "p2*m3 - p3*m2", "p3*m1 - p1*m3", "p1*m2 - p2*m1"], name="clebsch")
 
 
+@functools.lru_cache(maxsize=None)
+def clebsch():
+    return find_integrals(CLEBSCH, degree=2, eps="1/10")
+
+
 @pytest.mark.slow
 def test_clebsch_what_is_extracted_is_right():
-    res = find_integrals(CLEBSCH, degree=2, eps="1/10")
+    res = clebsch()
     assert res.visible == 4 and len(res.integrals) >= 3
     assert check_found(CLEBSCH, res, "1/10", points=2) == len(res.integrals) == res.independent
 
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 3 of the 4 integrals the kernel shows are "
-                   "extracted within the fit limits")
+                   "extracted. The kernel (dimension 4) spans the 10 monomials 1, p_k^2, m_k p_k, m_k^2 over 4 "
+                   "orbits, not <= 8: not 4 pencils; the first entry of each of the sparse vectors with m_k^2 "
+                   "among the first 30 has numerator and denominator of degree 12-20 along a random line mod p, "
+                   "beyond the fits' limits")
 def test_clebsch_four():
-    s = CLEBSCH
-    res = find_integrals(s, degree=2, eps="1/10")
+    res = clebsch()
     assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4
-    assert check_found(s, res, "1/10", points=2) == 4
+    assert check_found(CLEBSCH, res, "1/10", points=2) == 4
 
 
 def test_memory_is_planned_and_refused_up_front(monkeypatch, capsys):

@@ -30,8 +30,10 @@ polynomial with a non-constant monomial.
 independent set (exact Jacobian rank at a rational point; a power or product of kept ones is
 named in a note), the number the kernel shows is the rank of its entries' Jacobian mod p, and
 entries of sparse kernel vectors that are not functions of those kept are fitted as N/D
-(coefficients may be polynomial in the kept integrals), checked exactly on a fresh orbit and
-kept only if they raise the exact rank (``Job.complete``).
+(coefficients may be polynomial in one kept integral or in all of them), checked exactly on a
+fresh orbit and kept only if they raise the exact rank (``Job.complete``).  With a linear
+integral L found, the sparse vectors of the kernel of the candidates free of one variable of L
+come first: on L = c they hold the other integrals without the products (L − c)·φ.
 
 **Where it cannot conclude** (``warnings`` and ``notes``):
 
@@ -64,11 +66,12 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.fitting import EntryFitter, circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.fitting import MAX_FIT_UNKNOWNS, EntryFitter, circuits, entry_jacobian, rank_mod
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim)
-from exact_khk.diagnostics.pencils import canonical_pair, pencil_integrals, ratio_integrals
+from exact_khk.diagnostics.pencils import (canonical_pair, echelon_pencil, interpolated_pencils,
+                                           pencil_integrals, ratio_integrals)
 from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.parsing import check_count, parse_vector
 
@@ -83,8 +86,11 @@ MORE_ORBITS = 12
 #: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
 MAX_CIRCUITS = 60
 MAX_FITS = 200
-#: the degree of a fit's coefficients in the integrals already found
-MAX_KNOWN_DEGREE = 2
+#: level sets L = c of a linear integral L at most, for pencils interpolated in c (Job.level_pencils)
+MAX_LEVELS = 40
+#: the degree of a fit's coefficients in the integrals already found (the Lagrange top's integrals
+#: beyond m3 have coefficients of degree 3 in m3)
+MAX_KNOWN_DEGREE = 3
 
 
 # --- exact evaluation and verification -------------------------------------------------
@@ -373,6 +379,25 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
 
 
+def fit_shapes(N, k, fit_degree) -> list:
+    """The fits tried for one entry, fewest unknowns first: (T, δ, J) with N/D of degree ≤ δ in x and
+    coefficients of degree ≤ J in the integrals I_i, i ∈ T, of the k found (J = 0: T empty).
+
+    T is one found integral or all of them: a pair (N, D) with coefficients in I_1 alone is unique
+    modulo the vanishing vectors only where no other I_i may multiply it, and costs fewer unknowns
+    (Lagrange top, m3 and J found: an integral fitted at (δ, J) = (3, 3) in m3 alone, 2·84·4
+    unknowns; in m3 and J, 2·84·10, beyond MAX_FIT_UNKNOWNS).
+
+    >>> fit_shapes(2, 1, 1)
+    [((), 1, 0), ((0,), 1, 1), ((0,), 1, 2), ((0,), 1, 3)]
+    """
+    sets = [(i,) for i in range(k)] + ([tuple(range(k))] if k > 1 else [])
+    size = lambda t: 2 * comb(N + t[1], N) * comb(len(t[0]) + t[2], t[2])  # noqa: E731
+    shapes = [((), D, 0) for D in range(1, fit_degree + 1)]
+    shapes += [(T, D, J) for T in sets for D in range(1, fit_degree + 1) for J in range(1, MAX_KNOWN_DEGREE + 1)]
+    return sorted((t for t in shapes if size(t) <= MAX_FIT_UNKNOWNS), key=lambda t: (size(t), t[1], t[2], t[0]))
+
+
 def planned_bytes(m, steps) -> int:
     """The memory of one orbit kernel: (steps + 1) × m values held as Python ints and as an
     ``nmod_mat`` with its echelon copy, KERNEL_BYTES_PER_ENTRY each."""
@@ -504,25 +529,36 @@ class _Job:
         primes = list(plist) + [p for p in random_primes(max_primes + len(plist), seed + 1) if p not in plist]
         vx = _point(random.Random(f"verify-{seed}"), N)
         mod_rows = [g for f in kept for g in _grad_mod(f, ref.x0, p0)]
+        for num, den, text in self.level_pencils(kept, plist, seed, max_primes) if len(kept) < visible else ():
+            f = self.integral(*canonical_pair(num, den), vx, verify_steps)
+            r = jacobian_rows([f.polynomials()], point)
+            if not f.verified or r is None or _rank(rows + r, N) == len(rows):
+                continue
+            kept.append(f)
+            rows += r
+            mod_rows += _grad_mod(f, ref.x0, p0)
+            self.notes.append(f"I{len(kept)} from a pencil of the kernel on the level sets {text} = c (candidates "
+                              f"free of one of its variables), its coefficients interpolated in c")
         budget = MAX_FITS
-        for S in circuits(ref.basis, len(self.exps), p0, seed)[:MAX_CIRCUITS]:
+        subs = self.level_circuits(kept, ref.x0, p0, seed)
+        subs += [[self.exps[c] for c in S] for S in circuits(ref.basis, len(self.exps), p0, seed)]
+        for sub in subs[:MAX_CIRCUITS]:
             if len(kept) >= visible or budget <= 0:
                 break
-            sub = [self.exps[c] for c in S]
             data = entry_jacobian(self.fld, self.eps, ref.x0, sub, self.steps, p0, seed)
             if data is None or len(data[1]) != 1:
                 continue
-            fitter = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
-                                 [f.polynomials() for f in kept])
+            fitters = {}
             # one entry per sparse vector: its entries are functions of the same conserved point
             for key, grad in [kg for kg in sorted(data[3].items())
                               if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
-                # (degree in x, degree in the integrals found), fewest unknowns first
-                shapes = sorted(((D, J) for D in range(1, fit_degree + 1) for J in range(MAX_KNOWN_DEGREE + 1)
-                                 if J == 0 or kept), key=lambda t: (comb(N + t[0], N) * comb(len(kept) + t[1], t[1]), t))
-                for delta, J in shapes:
+                pair = None
+                for T, delta, J in fit_shapes(N, len(kept), fit_degree):
                     budget -= 1
-                    pair = fitter.fit(key, delta, primes, J)
+                    if T not in fitters:
+                        fitters[T] = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
+                                                 [kept[i].polynomials() for i in T])
+                    pair = fitters[T].fit(key, delta, primes, J)
                     if pair is not None:
                         break
                 if pair is None:
@@ -535,7 +571,8 @@ class _Job:
                 rows += r
                 mod_rows += _grad_mod(f, ref.x0, p0)
                 self.notes.append(f"I{len(kept)} fitted (degree <= {delta}"
-                                  + (f", coefficients of degree <= {J} in I1..I{len(kept) - 1}" if J else "")
+                                  + (f", coefficients of degree <= {J} in "
+                                     + ", ".join(f"I{i + 1}" for i in T) if J else "")
                                   + ") from the kernel vector supported on "
                                   f"{', '.join(monomial_text(e, self.variables) for e in sub)}")
         if len(kept) < visible:
@@ -543,6 +580,99 @@ class _Job:
                                  f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "
                                  f"degree <= {fit_degree} (--fit-degree) that the fit found")
         return tuple(kept), len(rows), ((point, len(rows)) if rows else None), visible
+
+    def linear_integral(self, kept):
+        """(j, L, text) for the first linear integral L kept (num or den of degree 1, the other
+        constant) and its variable x_j of highest index, or None."""
+        for f in kept:
+            num, den = f.polynomials()
+            for a, b, text in ((num, den, f.numerator), (den, num, f.denominator)):
+                if max(map(sum, a)) == 1 and max(map(sum, b)) == 0:
+                    j = max(i for e in a for i, k in enumerate(e) if k)
+                    return j, a, text
+        return None
+
+    def level_pencils(self, kept, plist, seed, max_primes) -> list:
+        """Integrals (num, den, text of L) from the pencils of the orbit kernels on the level sets
+        L = c of a linear integral L kept: on L = c (c = 1, 2, ..., MAX_LEVELS) four orbits of rational
+        points give kernels of the candidates free of x_j; where they are independent pencils
+        (w = 2d, :func:`.pencils.pencil_integrals`) each pencil's echelon basis is recorded, and its
+        coefficients, rational functions of c, are reconstructed (:func:`.pencils.interpolated_pencils`)
+        with c replaced by L(x).  (Lagrange top: on m3 = c the orbit kernels of degree ≤ 2 have
+        dimension 3 and span 6 over four orbits; two of the pencils separated there, J and the
+        modified energy, are the same for every four orbits on a level and interpolate; the third
+        changes with the orbits at the same c, so it is no pencil and is not interpolated.)"""
+        found = self.linear_integral(kept)
+        if found is None:
+            return []
+        j, L, text = found
+        N = self.fld.dim
+        sub = [e for e in self.exps if not e[j]]
+        job = _Job(self.fld, self.eps, sub, self.steps, self.margin, self.variables, [], [])
+        rng = random.Random(f"levels-{seed}")
+        zero = (0,) * N
+        by_level = {}
+        for c in range(1, MAX_LEVELS + 1):
+            pts = []
+            for _ in range(4):
+                y = list(_point(rng, N))
+                rest = sum(a * y[i] for e, a in L.items() if e != zero for i, k in enumerate(e) if k and i != j)
+                y[j] = (Fraction(c) - L.get(zero, 0) - rest) / L[tuple(int(i == j) for i in range(N))]
+                pts.append(tuple(y))
+            ks = [job.kernel(x, plist[0]) for x in pts]
+            if any(k is None or not k.stable or k.periodic for k in ks) or len({k.dim for k in ks}) != 1:
+                continue
+            d = ks[0].dim
+            if not d or _rref_rows([v for k in ks[:2] for v in k.basis], len(sub), plist[0])[1] != 2 * d:
+                continue
+            K, _ = job.lifted_kernels(pts, d, plist, seed, max_primes)
+            if K is None:
+                continue
+            level = {}
+            for P, Q in pencil_integrals(K, sub, []):
+                ep = echelon_pencil(P, Q, sub)
+                if ep is not None:
+                    level[(ep[0], tuple(i for i in range(len(sub)) if ep[1][0][i] or ep[1][1][i]))] = ep[1]
+            if not level:
+                continue
+            by_level[Fraction(c)] = level
+            if len(by_level) >= 6 and len(by_level) % 4 == 2:
+                out = interpolated_pencils(by_level, sub, L, N)
+                if len(out) == max(len(v) for v in by_level.values()):
+                    return [(a, b, text) for a, b in out]  # every pencil interpolated
+        return [(a, b, text) for a, b in interpolated_pencils(by_level, sub, L, N)]
+
+    def level_circuits(self, kept, x0, p, seed) -> list:
+        """Sparse kernel vectors on the level set of the linear integrals found (lists of candidates).
+
+        On an orbit a linear integral L = c fixes one variable x_j as an affine function of the
+        others; the candidates free of x_j then hold the remaining integrals with coefficients
+        polynomial in c, without the products (L − c)·φ that mix them with L in the full kernel
+        (Lagrange top: m3; on m3 = c the orbit kernels of degree ≤ 2 have dimension 3, with no
+        products of m3 − c)."""
+        elim = []
+        for f in kept:
+            num, den = f.polynomials()
+            if max(map(sum, num)) <= 1 and max(map(sum, den)) == 0:
+                lin = num
+            elif max(map(sum, den)) <= 1 and max(map(sum, num)) == 0:
+                lin = den
+            else:
+                continue
+            j = next((j for j in reversed(range(self.fld.dim)) if j not in elim and
+                      any(e[j] for e in lin)), None)
+            if j is not None:
+                elim.append(j)
+        sub = [e for e in self.exps if not any(e[j] for j in elim)]
+        if not elim or len(sub) == len(self.exps):
+            return []
+        try:
+            k = orbit_kernel_mod(self.fld, self.eps, x0, sub, self.steps, p, self.margin)
+        except (SingularStepError, ZeroDivisionError, InputError):
+            return []
+        if not k.dim or not k.stable:
+            return []
+        return [[sub[c] for c in S] for S in circuits(k.basis, len(sub), p, seed)]
 
     def rank_point(self, seed):
         rng = random.Random(f"rank-{seed}")

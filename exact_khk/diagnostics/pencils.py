@@ -285,3 +285,97 @@ def _symmetric(P, Q, f, exps):
     for ex, c in det.to_dict().items():
         coeffs[int(ex[-1])][tuple(int(k) for k in ex[:-1])] = _f(c)
     return [(primitive(coeffs[j]), primitive(coeffs[e])) for j in range(e) if coeffs[j]]
+
+
+# --- pencils on the level sets of a linear integral, interpolated in its value ---------
+
+
+def rational_in(values: dict):
+    """(a, b) fmpq_poly with a(c)/b(c) = values[c] at every c given, of the lowest degree n = deg a
+    = deg b with two values beyond the 2n + 1 that determine it, or None.
+
+    >>> a, b = rational_in({Fraction(c): Fraction(c, c + 1) for c in range(1, 8)})
+    >>> a * flint.fmpq_poly([1, 1]) == b * flint.fmpq_poly([0, 1])
+    True
+    """
+    cs = sorted(values)
+    for n in range(0, (len(cs) - 4) // 2 + 1):
+        rows = [[_q(c) ** k for k in range(n + 1)] + [-_q(values[c]) * _q(c) ** k for k in range(n + 1)]
+                for c in cs]
+        R, rank = flint.fmpq_mat(len(rows), 2 * n + 2, [v for r in rows for v in r]).rref()
+        nul = 2 * n + 2 - rank
+        if nul == 1:
+            piv = [next(j for j in range(2 * n + 2) if R[i, j] != 0) for i in range(rank)]
+            free = next(j for j in range(2 * n + 2) if j not in piv)
+            v = [flint.fmpq(0)] * (2 * n + 2)
+            v[free] = flint.fmpq(1)
+            for i, c in enumerate(piv):
+                v[c] = -R[i, free]
+            a, b = flint.fmpq_poly(v[:n + 1]), flint.fmpq_poly(v[n + 1:])
+            if not b.is_zero():
+                return a, b
+        if nul:
+            return None
+    return None
+
+
+def echelon_pencil(P: dict, Q: dict, exps):
+    """(pivot columns, (R_1, R_2) as coefficient lists over ``exps``): the reduced echelon basis of
+    span(P, Q), whose coefficients are rational functions of whatever P/Q depends on rationally."""
+    R, rank = _qmat([[P.get(e, 0) for e in exps], [Q.get(e, 0) for e in exps]]).rref()
+    if rank < 2:
+        return None
+    rows = _rows(R)[:2]
+    return tuple(next(j for j, v in enumerate(r) if v) for r in rows), rows
+
+
+def interpolated_pencils(by_level: dict, exps, linear: dict, N: int) -> list:
+    """Integrals (N, D) from pencils found on the level sets L = c of a linear integral L:
+    ``by_level`` maps c to {key: (R_1, R_2)} (:func:`echelon_pencil` rows, the key naming the same
+    pencil at every level); each coefficient is reconstructed as a rational function of c
+    (:func:`rational_in`), the denominators cleared and c replaced by L(x)."""
+    seen = [k for v in by_level.values() for k in v]
+    keys = {k for k in seen if seen.count(k) >= 6}
+    ctx = flint.fmpq_mpoly_ctx.get(tuple(f"x{i}" for i in range(N)), "degrevlex")
+    L = ctx.from_dict({e: _q(c) for e, c in linear.items()})
+    out = []
+    for key in sorted(keys):
+        fits = []
+        for half in (0, 1):
+            for j in range(len(exps)):
+                vals = {c: v[key][half][j] for c, v in by_level.items() if key in v}
+                if not any(vals.values()):
+                    fits.append(None)
+                    continue
+                ab = rational_in(vals)
+                if ab is None:
+                    break
+                fits.append(ab)
+            else:
+                continue
+            break
+        else:
+            den = flint.fmpq_poly([1])
+            for ab in fits:
+                if ab is not None:
+                    den = den * ab[1] / den.gcd(ab[1])
+            polys = []
+            for half in (0, 1):
+                total = ctx.from_dict({})
+                for j, ab in enumerate(fits[half * len(exps):(half + 1) * len(exps)]):
+                    if ab is None:
+                        continue
+                    coeff = ab[0] * den / ab[1]
+                    value = ctx.from_dict({})
+                    for k, c in enumerate(coeff.coeffs()):
+                        value = value + L ** k * c
+                    total = total + value * ctx.from_dict({exps[j]: 1})
+                polys.append(total)
+            num, den_poly = polys
+            if num.is_zero() or den_poly.is_zero():
+                continue
+            g = num.gcd(den_poly)
+            num, den_poly = num / g, den_poly / g
+            out.append(tuple({tuple(int(t) for t in e): _f(c) for e, c in p.to_dict().items()}
+                             for p in (num, den_poly)))
+    return out
