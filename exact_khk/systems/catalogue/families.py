@@ -212,16 +212,18 @@ def _kirchhoff(b1, b3):
                      "every Kahan map) is declared."}}
 
 
-#: family name -> (generator, {parameter: (lowest, highest)}, listed members, one-line description)
+#: family name -> (generator, {parameter: (lowest, highest)}, listed members, one-line description);
+#: every parameter pattern is listed at a second point too (fixed small values, chosen before any run:
+#: docs/atlas.md classifies both), so that a verdict is seen at more than one parameter point
 FAMILIES = {
-    "volterra-periodic": (lambda N: _volterra(N, True), {"N": (3, MAX_CHAIN)}, [{"N": 5}],
+    "volterra-periodic": (lambda N: _volterra(N, True), {"N": (3, MAX_CHAIN)}, [{"N": 5}, {"N": 4}],
                           "periodic Volterra chain of length N"),
-    "volterra-open": (lambda N: _volterra(N, False), {"N": (2, MAX_CHAIN)}, [{"N": 5}],
+    "volterra-open": (lambda N: _volterra(N, False), {"N": (2, MAX_CHAIN)}, [{"N": 5}, {"N": 4}],
                       "open Volterra (Kac-van Moerbeke) chain of length N"),
-    "kqv-lotka-volterra": (_kqv, {"N": (2, MAX_CHAIN)}, [{"N": 5}],
+    "kqv-lotka-volterra": (_kqv, {"N": (2, MAX_CHAIN)}, [{"N": 5}, {"N": 4}],
                            "Kouloukas-Quispel-Vanhaecke generalized Lotka-Volterra chain of length N"),
     "henon-heiles": (_henon_heiles, {"sigma": (-100, 100)},
-                     [{"sigma": -1}, {"sigma": -6}, {"sigma": -16}, {"sigma": 1}],
+                     [{"sigma": -1}, {"sigma": -6}, {"sigma": -16}, {"sigma": 1}, {"sigma": 2}],
                      "Henon-Heiles with cubic coefficient sigma (integrable ODE for -1, -6, -16)"),
     "planar-cubic": (_planar_cubic, {"g1": (1, 6), "g2": (1, 6), "g3": (1, 6)},
                      [{"g1": 1, "g2": 1, "g3": 1}, {"g1": 1, "g2": 1, "g3": 2}, {"g1": 1, "g2": 2, "g3": 3},
@@ -229,10 +231,12 @@ FAMILIES = {
                      "planar cubic class l1^(1-g1) l2^(1-g2) l3^(1-g3) J grad(l1^g1 l2^g2 l3^g3)"),
     "zhukovsky-volterra": (_zhukovsky_volterra, {"beta1": (-9, 9), "beta2": (-9, 9), "beta3": (-9, 9)},
                            [{"beta1": 1, "beta2": 0, "beta3": 0}, {"beta1": 1, "beta2": 2, "beta3": 0},
-                            {"beta1": 1, "beta2": -1, "beta3": 2}],
+                            {"beta1": 1, "beta2": -1, "beta3": 2},
+                            {"beta1": 0, "beta2": 0, "beta3": 3}, {"beta1": 2, "beta2": -3, "beta3": 0},
+                            {"beta1": 2, "beta2": 1, "beta3": -3}],
                            "Zhukovsky-Volterra gyrostat with gyrostatic momentum beta"),
     "kirchhoff": (_kirchhoff, {"b1": (-9, 9), "b3": (-9, 9)},
-                  [{"b1": 0, "b3": 0}, {"b1": 1, "b3": 1}, {"b1": 1, "b3": 2}],
+                  [{"b1": 0, "b3": 0}, {"b1": 1, "b3": 1}, {"b1": 1, "b3": 2}, {"b1": 2, "b3": 2}, {"b1": 2, "b3": -1}],
                   "Kirchhoff case, B = diag(b1, b1, b3)"),
 }
 
