@@ -151,6 +151,15 @@ def timing_line(timing) -> str:
             "(the machine is shared: other work inflates the wall time).")
 
 
+def _literature_notes(name) -> str:
+    from exact_khk.systems.catalogue import load
+
+    try:
+        return str((getattr(load(name), "literature", None) or {}).get("notes", ""))
+    except Exception:  # a system file, not a catalogue name
+        return ""
+
+
 def write_report(rows, timing, opts, markdown, figure, command, quick=False):
     """Write the Markdown report and the degree figure; returns the findings (list of strings)."""
     from exact_khk.diagnostics.classify import RULES
@@ -181,10 +190,14 @@ def write_report(rows, timing, opts, markdown, figure, command, quick=False):
             findings.append(f"- **{name}**: the verdict differs between ε = {a['eps'] if a else '?'} ({va}) and "
                             f"ε = {SECOND_EPS} ({vb}).")
         expect = {"yes": "integrable", "no": "non-integrable"}.get(lit)
-        if expect and va != expect:
-            findings.append(f"- **{name}**: literature says {lit} ({ref}); the tool says {va}: {_summary(a)}.")
-        elif lit not in ("yes", "no") and va != "undetermined":
-            findings.append(f"- **{name}**: literature {lit}; the tool goes beyond it: {va}: {_summary(a)}.")
+        notes = _literature_notes(name)
+        both = f"{va} (default ε), {vb} (ε = {SECOND_EPS}): {_summary(a)}."
+        if expect and (va != expect or vb != expect):
+            findings.append(f"- **{name}**: literature says {lit} ({ref}); the tool says {both}"
+                            + (f" Literature notes: {notes}" if notes else ""))
+        elif not expect and (va != "undetermined" or vb not in ("undetermined", "missing")):
+            findings.append(f"- **{name}**: literature {lit}; the tool goes beyond it: {both}"
+                            + (f" Literature notes: {notes}" if notes else ""))
         if a:
             curves.append((name, va, a["degrees"]["sequence"]))
             times.append(f"| {name} | {a.get('seconds', 0):.1f} | {(b or {}).get('seconds', 0):.1f} |")
