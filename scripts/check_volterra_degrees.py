@@ -12,6 +12,7 @@ import sys
 from functools import reduce
 
 import sympy as sp
+from sympy.polys.matrices import DomainMatrix
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 5
 K = int(sys.argv[2]) if len(sys.argv) > 2 else 3
@@ -31,20 +32,23 @@ f = sp.Matrix([xs[k] * (at(k + 1) - at(k - 1)) for k in range(N)])
 J = f.jacobian(xs)
 a = [sp.Rational(p, q) for p, q in [(1, 3), (-2, 7), (3, 5), (1, 11), (-4, 9), (5, 13)][:N]]
 b = [sp.Rational(p, q) for p, q in [(2, 5), (1, 4), (-3, 8), (7, 3), (1, 6), (-2, 9)][:N]]
-Q = sp.Poly(1, t, domain="QQ")
-P = [sp.Poly(a[i] + b[i] * t, t, domain="QQ") for i in range(N)]
+R = sp.QQ[t]
+Jt = [[sp.lambdify(xs, J[i, j]) for j in range(N)] for i in range(N)]  # J is linear in x
+ft = [sp.lambdify(xs, f[i]) for i in range(N)]
+Q = R.one
+P = [R.convert(a[i] + b[i] * t) for i in range(N)]
 degs = [1]
 for k in range(1, K + 1):
-    sub = {xs[i]: P[i].as_expr() for i in range(N)}
-    A = sp.Matrix(N, N, lambda i, j: (Q.as_expr() if i == j else 0) - eps * J[i, j].subs(sub))
-    fP = f.subs(sub)
-    det = sp.Poly(sp.expand(A.det(method="berkowitz")), t, domain="QQ")
-    adj = A.adjugate(method="berkowitz")
-    upd = adj * fP
-    newP = [sp.Poly(sp.expand(det.as_expr() * P[i].as_expr() + 2 * eps * upd[i]), t, domain="QQ") for i in range(N)]
+    # A = Q I - eps f'(P) and f(P) over QQ[t] (f' linear, f quadratic in P: polynomial arithmetic only)
+    A = DomainMatrix([[(Q if i == j else R.zero) - R.convert(eps) * Jt[i][j](*P) for j in range(N)]
+                      for i in range(N)], (N, N), R)
+    fP = DomainMatrix([[ft[i](*P)] for i in range(N)], (N, 1), R)
+    det = A.det()
+    upd = A.adjugate() * fP
+    newP = [det * P[i] + R.convert(2 * eps) * upd[i, 0].element for i in range(N)]
     newQ = Q * det
-    g = reduce(sp.gcd, newP + [newQ])
-    Q, P = sp.div(newQ, g)[0], [sp.div(p, g)[0] for p in newP]
-    degs.append(max([Q.degree()] + [p.degree() for p in P]))
+    g = reduce(R.gcd, newP + [newQ])
+    Q, P = R.exquo(newQ, g), [R.exquo(p, g) for p in newP]
+    degs.append(max(v.degree() if v else 0 for v in [Q] + P))
     print(f"k = {k}: degree {degs[-1]}", flush=True)
 print("degrees", degs, "; (4^(k+1) - 1)/3 =", [(4 ** (k + 1) - 1) // 3 for k in range(K + 1)])

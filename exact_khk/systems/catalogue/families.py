@@ -56,7 +56,7 @@ def _volterra(N, periodic):
                      "the graph i -> j for i < j, the KQV system: a statement on the Poisson property, not on "
                      "integrability); only the linear integral sum(x_k), kept by every Kahan map, is declared. "
                      "The atlas's exponential degrees for N = 5, d_k = (4^(k+1) - 1)/3, were recomputed for "
-                     "k = 1, 2, 3 (5, 21, 85, periodic chain) by SymPy alone over a rational line "
+                     "k = 1..4 (5, 21, 85, 341; periodic and open chain) by SymPy alone over a rational line "
                      "(scripts/check_volterra_degrees.py)."}}
 
 
