@@ -41,3 +41,51 @@ def test_bad_folder_exits_2(tmp_path, capsys):
                  "--markdown", str(tmp_path / "a.md")]) == 2
     err = capsys.readouterr().err
     assert "--systems" in err and "Traceback" not in err
+
+
+ROOT = Path(__file__).parent.parent
+ATLAS = ROOT / "docs" / "atlas.md"
+#: the documented command that writes docs/atlas.md (docs/atlas.md's header names it)
+ATLAS_ARGS = ["atlas", "--out", "out/atlas"]
+
+
+def _rows(text):
+    """{system: (literature, default-eps verdict, second-eps verdict)} from the Verdicts table."""
+    table = text.split("## Verdicts")[1].split("## Rules")[0]
+    out = {}
+    for ln in table.splitlines():
+        cells = [c.strip() for c in ln.strip().strip("|").split("|")]
+        if len(cells) < 6 or cells[0] in ("system", "---"):
+            continue
+        out[cells[0]] = (cells[2].split(" ")[0], cells[3].split(" ")[0], cells[4].split(" ")[0])
+    return out
+
+
+def test_committed_atlas_covers_the_catalogue_and_agrees_or_lists_a_finding():
+    from exact_khk.systems.catalogue import load, names
+
+    text = ATLAS.read_text()
+    assert "--quick" not in text.split("## Verdicts")[0], "docs/atlas.md must come from the full atlas"
+    rows = _rows(text)
+    assert set(rows) == set(names())
+    findings = text.split("## Findings")[1].split("## Times")[0]
+    for name, (lit, va, vb) in rows.items():
+        # the literature column is what the catalogue says, and a verdict that differs from a stated
+        # claim (or one that goes beyond an unknown) is listed under Findings
+        assert lit == str((load(name).literature or {}).get("integrable", "unknown"))
+        expect = {"yes": "integrable", "no": "non-integrable"}.get(lit)
+        disagrees = expect is not None and (va != expect or vb != expect)
+        beyond = expect is None and (va != "undetermined" or vb != "undetermined")
+        if disagrees or beyond:
+            assert f"**{name}**" in findings, name
+        assert va in ("integrable", "non-integrable", "undetermined") and vb in (
+            "integrable", "non-integrable", "undetermined"), name
+
+
+@pytest.mark.slow
+def test_committed_atlas_is_what_the_documented_command_writes(tmp_path, monkeypatch):
+    from exact_khk.sweep.atlas import mask_times
+
+    monkeypatch.chdir(tmp_path)
+    assert main(ATLAS_ARGS) == 0
+    assert mask_times((tmp_path / "docs" / "atlas.md").read_text()) == mask_times(ATLAS.read_text())

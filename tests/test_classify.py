@@ -158,3 +158,43 @@ def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def sympy_map_degrees(components, variables, count):
+    """d_0..d_count of a map of P^N by SymPy composition, the common factor divided out (independent of
+    map_degrees: no prime, no line)."""
+    xs = sympy.symbols(variables)
+    F = [sympy.sympify(c, locals=dict(zip(variables, xs))) for c in components]
+    cur, out = list(xs), [1]
+    for _ in range(count):
+        cur = [sympy.expand(f.subs(dict(zip(xs, cur)), simultaneous=True)) for f in F]
+        g = cur[0]
+        for c in cur[1:]:
+            g = sympy.gcd(g, c)
+        cur = [sympy.cancel(c / g) for c in cur]
+        out.append(max(sympy.Poly(c, *xs).total_degree() for c in cur))
+    return tuple(out)
+
+
+def test_degrees_map_command_matches_sympy_composition(capsys):
+    comps = ["X*Y", "Y*Z + Z**2", "Z**2"]
+    golden = sympy_map_degrees(comps, ["X", "Y", "Z"], 5)
+    assert golden == (1, 2, 3, 4, 5, 6)
+    assert main(["degrees", "--map", ", ".join(comps), "--variables", "X,Y,Z", "--steps", "12", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert tuple(data["degrees"][:6]) == golden
+    assert data["fit"]["growth"] == "polynomial"
+    # Sage's monomial map: the command prints the 15 doctest degrees and classifies nothing
+    assert main(["degrees", "--map", "Z**2, X*Y, Y**2", "--variables", "X,Y,Z", "--steps", "15"]) == 0
+    out = capsys.readouterr().out
+    assert ", ".join(map(str, SAGE_DEGREES)) in out and "growth: not classified" in out
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--system", "euler-top"], "--system does not apply"),
+    ([], "--variables"),
+])
+def test_degrees_map_bad_input_exits_2(extra, message, capsys):
+    args = ["degrees", "--map", "X*Y, Y**2"] + (["--variables", "X,Y"] if extra else []) + extra
+    assert main(args) == 2
+    assert message in capsys.readouterr().err

@@ -34,10 +34,14 @@ def cmd_atlas(args):
 
     check_output(args.markdown, "--markdown")
     figure = args.figure or str(Path(args.markdown).parent / "figures" / "atlas_degrees.png")
-    rows, seconds, opts = run_atlas(args.out, args.systems, args.quick, args.workers, args.dask,
+    rows, timing, opts = run_atlas(args.out, args.systems, args.quick, args.workers, args.dask,
                                     echo=lambda line: print(line, file=sys.stderr))
-    command = "exact-khk atlas" + "".join(f" {a}" for a in sys.argv[2:]) if len(sys.argv) > 1 else "exact-khk atlas"
-    findings = write_report(rows, seconds, opts, args.markdown, figure, command, args.quick)
-    print(f"atlas: {len(rows)} systems in {seconds:.0f} s, {len(findings)} findings; written to {args.markdown} "
+    given = [("--systems", args.systems, None), ("--out", args.out, "atlas-results"), ("--workers", args.workers, None),
+             ("--dask", args.dask, None), ("--markdown", args.markdown, "docs/atlas.md"), ("--figure", args.figure, None)]
+    command = " ".join(["exact-khk atlas"] + (["--quick"] if args.quick else [])
+                       + [f"{k} {v}" for k, v, default in given if v != default])
+    findings = write_report(rows, timing, opts, args.markdown, figure, command, args.quick)
+    print(f"atlas: {len(rows)} systems in {timing['wall']:.0f} s wall, {timing['cpu']:.0f} s CPU, {len(findings)} "
+          f"findings; written to {args.markdown} "
           f"and {figure}")
     return 0

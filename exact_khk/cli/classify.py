@@ -22,7 +22,10 @@ def register(sub):
     add_field_options(p)
     p.add_argument("--degree", type=int, default=None,
                    help="largest degree of the integral search (when not given: 4, or lower where the candidates "
-                        "would exceed 1000 monomials)")
+                        "would exceed 70 monomials: 3 in dimension 5, 2 in 6)")
+    p.add_argument("--fit-degree", type=int, default=None,
+                   help="degree bound of the integrals fitted from kernel entries (when not given: twice --degree, "
+                        "or --degree from dimension 6)")
     p.add_argument("--exact", type=int, default=6, metavar="K",
                    help="compose the first K iterates exactly over Q where affordable: exact degrees and the "
                         "proven bound lambda <= d_k^(1/k) (default 6)")
@@ -47,12 +50,13 @@ def cmd_classify(args):
         with Progress(args, 3, "classify", unit="stage") as progress:
             res = classify(system, eps=eps, steps=args.steps, degree=args.degree, field=field_name(system, args),
                            seed=args.line_seed, exact=args.exact,
-                           discover=() if args.no_discover else ("measure", "poisson"), progress=progress)
+                           discover=() if args.no_discover else ("measure", "poisson"), progress=progress,
+                           fit_degree=args.fit_degree)
     except InputError as exc:
         msg = str(exc)
-        for name in ("steps", "degree", "exact", "discover"):
+        for name in ("steps", "degree", "fit_degree", "exact", "discover"):
             if msg.startswith(name + ":"):
-                msg = "--" + name + msg[len(name):]
+                msg = "--" + name.replace("_", "-") + msg[len(name):]
                 break
         raise InputError(msg) from None
     if args.json is not None:

@@ -29,6 +29,10 @@ def register(sub):
     p.add_argument("--no-heights", action="store_true", help="skip the heights of the exact orbit of x0")
     p.add_argument("--max-bits", type=int, default=100_000, help="stop the height orbit past this height (default 100000)")
     p.add_argument("--plot", metavar="FILE.png", help="plot degree and log-height against the step (needs matplotlib)")
+    p.add_argument("--map", metavar="F0,F1,...",
+                   help="instead of a Kahan map: the map of P^N given by homogeneous polynomials of one degree, "
+                        "comma-separated, e.g. 'Z**2, X*Y, Y**2' (needs --variables; docs/diagnostics.md)")
+    p.add_argument("--variables", metavar="X,Y,...", help="with --map: the homogeneous coordinates, in order")
     add_json_option(p, "the degrees, recurrence and heights")
     p.set_defaults(func=cmd_degrees)
 
@@ -73,8 +77,36 @@ def _primes(text):
         raise InputError(f"--primes: expected a count or a comma-separated list of primes, got {text!r}") from None
 
 
+def cmd_map_degrees(args):
+    """``degrees --map``: the degrees of a map of P^N and their recurrence fit."""
+    from exact_khk.diagnostics.map_degrees import MapDegrees
+
+    given = [o for o, v in (("--system", args.system), ("--n", args.n), ("--seed", args.seed), ("--x0", args.x0),
+                            ("--eps", args.eps), ("--exact", args.exact or None), ("--plot", args.plot))
+             if v is not None]
+    if given:
+        raise InputError(f"--map: {given[0]} does not apply to a map given by its components")
+    if not args.variables:
+        raise InputError("--map: give the homogeneous coordinates with --variables, e.g. --variables X,Y,Z")
+    check_output(args.json)
+    try:
+        res = MapDegrees(args.map.split(","), args.variables.split(","), steps=args.steps,
+                         primes=_primes(args.primes), seed=args.line_seed, confirm=args.confirm)
+    except InputError as exc:
+        raise InputError(re.sub(r"^(steps|primes|confirm|variables|map):", lambda m: "--" + m.group(1) + ":",
+                                str(exc))) from None
+    if args.json is not None:
+        write_json(res.to_json(), args.json)
+    if args.json != "-":
+        print(res.summary())
+    return 0
+
+
 def cmd_degrees(args):
     from exact_khk.diagnostics import degree_sequence, plot_growth
+
+    if args.map is not None:
+        return cmd_map_degrees(args)
 
     if args.plot:
         from exact_khk.diagnostics.heights import plot_format

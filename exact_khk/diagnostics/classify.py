@@ -230,21 +230,38 @@ def _discover(key, system, eps, field):
         return f"could not run: {exc}"
 
 
-#: the integral search's default degree: the largest d <= 4 whose candidates number at most this
-MAX_DEFAULT_CANDIDATES = 1000
+#: the integral search's default degree: the largest d <= 4 whose candidates number at most this.
+#: Measured (CPU of find_integrals with its default fit, shared 2-core machine): dimension 5 at
+#: degree 4 (126 candidates) 18-26 s for the Volterra chains, dimension 6 at degree 4 (210) over 90 s
+#: for clebsch, lagrange-top, kirchhoff; at 70 candidates (dimension 5: degree 3, 6: degree 2) every
+#: catalogue system takes at most about 14 s and the integrable ones still show a verified integral
+MAX_DEFAULT_CANDIDATES = 70
+#: from this dimension the default fit degree of the integral entries is the search degree, not twice
+#: it: dimension 6 at degree 2 took over 45 s (lagrange-top) with fit degree 4, 6-14 s with fit degree 2
+CAPPED_FIT_DIM = 6
 
 
 def default_degree(dim: int) -> int:
     """The largest degree d <= 4 with C(dim + d, d) <= MAX_DEFAULT_CANDIDATES candidate monomials (at least 1).
 
-    >>> default_degree(3), default_degree(10), default_degree(40)
-    (4, 3, 2)
+    >>> default_degree(3), default_degree(5), default_degree(6), default_degree(40)
+    (4, 3, 2, 1)
     """
     return max([1] + [d for d in range(1, 5) if math.comb(dim + d, d) <= MAX_DEFAULT_CANDIDATES])
 
 
+def default_fit_degree(dim: int, degree: int) -> int:
+    """The degree bound of the fitted integral entries: 2·degree (find_integrals' own default), capped at
+    ``degree`` from dimension :data:`CAPPED_FIT_DIM` (the measurement above).
+
+    >>> default_fit_degree(3, 4), default_fit_degree(6, 2)
+    (8, 2)
+    """
+    return degree if dim >= CAPPED_FIT_DIM else 2 * degree
+
+
 def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6, confirm=3,
-             discover=("measure", "poisson"), progress=None) -> Classification:
+             discover=("measure", "poisson"), progress=None, fit_degree=None) -> Classification:
     """Classify the Kahan map of ``system`` (a System, catalogue name or system file) at step
     ``eps``: degrees d_0..d_steps over F_p, the first ``exact`` exactly over Q (where affordable),
     integrals of degree ≤ ``degree`` (default :func:`default_degree`), and the discoveries named in ``discover``
@@ -256,22 +273,29 @@ def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6
     check_count(steps, "steps", 4, 400)
     if degree is not None:
         check_count(degree, "degree", 1, 12)
+    if fit_degree is not None:
+        check_count(fit_degree, "fit_degree", 0, 12)
     check_count(exact, "exact", 0, 50)
     unknown = set(discover) - set(DISCOVERIES)
     if unknown:
         raise InputError(f"discover: unknown discovery {sorted(unknown)[0]!r} (known: {', '.join(DISCOVERIES)})")
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
+    auto = degree is None and fit_degree is None
     degree = default_degree(fld.dim) if degree is None else degree
+    fit_degree = default_fit_degree(fld.dim, degree) if fit_degree is None else fit_degree
     stage = (lambda s: progress(s)) if progress is not None else (lambda s: None)
     degs = degree_sequence(sysobj if sysobj is not None else fld, steps=steps, eps=eps, field=field, seed=seed,
                            exact=exact, confirm=confirm)
     stage(1)
     notes = list(degs.notes)
+    if auto and (math.comb(fld.dim + 4, 4) > MAX_DEFAULT_CANDIDATES or fit_degree < 2 * degree):
+        notes.append(f"integral search capped: degree {degree}, fitted entries of degree <= {fit_degree} (defaults "
+                     f"for dimension {fld.dim}, chosen by measured cost; --degree and --fit-degree search further)")
     integrals, inote = None, ""
     try:
         integrals = find_integrals(sysobj if sysobj is not None else fld, degree=degree, field=field, eps=eps,
-                                   seed=seed)
+                                   seed=seed, fit_degree=fit_degree)
     except InputError as exc:
         inote = str(exc)
     stage(2)

@@ -22,6 +22,7 @@ SECOND_EPS = "2/21"
 FULL = {"steps": 20, "exact": 6, "no_discover": False}
 QUICK = {"steps": 8, "exact": 3, "no_discover": True}
 TIMES_HEADING = "## Times"
+TIME_PREFIX = "Time of this run:"
 
 
 def _toml_list(items) -> str:
@@ -58,22 +59,53 @@ def atlas_specs(systems_dir=None, quick=False):
 
 
 def run_atlas(out_dir, systems_dir=None, quick=False, workers=None, dask=None, echo=None):
-    """Run (or resume) the atlas sweeps into ``out_dir``; returns (rows, wall seconds, options)."""
+    """Run (or resume) the atlas sweeps into ``out_dir``; returns (rows, timing, options): timing holds the
+    wall and CPU seconds of this run (CPU of this process plus the cpu_seconds of every task it computed; a
+    resumed run counts only what it computed) and the load average (1, 5, 15 min) before and after."""
     from exact_khk.sweep.run import ResultStore, run_sweep
+
+    import os
+    import resource
 
     specs, opts = atlas_specs(systems_dir, quick)
     t0 = time.perf_counter()
+    load0 = os.getloadavg()
+    cpu0 = resource.getrusage(resource.RUSAGE_SELF).ru_utime + resource.getrusage(resource.RUSAGE_SELF).ru_stime
     rows: dict = {}
+    task_cpu = 0.0
     for tag, spec in specs:
         sub = Path(out_dir) / tag
+        before = set(ResultStore(sub).latest()) if sub.exists() else set()
         run_sweep(spec, sub, workers=workers, dask=dask, plots=False, echo=echo)
         keys = {t.key for t in spec.tasks()}
         for key, rec in ResultStore(sub).latest().items():
+            if key not in before:  # computed by this run: its worker's CPU time
+                task_cpu += float(rec.get("cpu_seconds") or 0.0)
             if key not in keys:
                 continue
             name = rec["params"]["system"].get("name") or rec["params"]["system"].get("file") or key
             rows.setdefault(name, {})["default" if tag.startswith("default") else "second"] = rec
-    return rows, time.perf_counter() - t0, opts
+    # the workers are not this process's children (forkserver): their CPU is the tasks' own cpu_seconds
+    cpu = resource.getrusage(resource.RUSAGE_SELF).ru_utime + resource.getrusage(resource.RUSAGE_SELF).ru_stime \
+        - cpu0 + task_cpu
+    return rows, _add_timing(out_dir, time.perf_counter() - t0, cpu, load0, os.getloadavg()), opts
+
+
+def _add_timing(out_dir, wall, cpu, load0, load1) -> dict:
+    """The time of every run into ``out_dir`` so far (a resumed run adds only what it computed):
+    kept in ``out_dir``/timing.json, so a report written from resumed results states the whole cost."""
+    import os
+
+    from exact_khk.studies.output import write_atomic
+
+    path = Path(out_dir) / "timing.json"
+    old = json.loads(path.read_text()) if path.exists() else None
+    t = {"wall": wall, "cpu": cpu, "load_before": list(load0), "load_after": list(load1), "cores": os.cpu_count(),
+         "runs": 1}
+    if old:
+        t.update(wall=old["wall"] + wall, cpu=old["cpu"] + cpu, load_before=old["load_before"], runs=old["runs"] + 1)
+    write_atomic(path, json.dumps(t).encode(), "--out")
+    return t
 
 
 def _cls(rec):
@@ -95,7 +127,7 @@ def _summary(c) -> str:
         lam += f"; λ ≤ {dd['upper_bound']['bound']} (proven)"
     ints = c["integrals"]
     n_int = ints.get("independent", "not run") if isinstance(ints, dict) else "?"
-    found = {k: ("yes" if isinstance(c[k], dict) and c[k].get("found") else
+    found = {k: ("yes" if isinstance(c[k], dict) and c[k].get("status") == "found" else
                  "not run" if isinstance(c[k], dict) and c[k].get("status") == "not run" else "no")
              for k in ("measure", "poisson")}
     return (f"degrees {', '.join(map(str, seq))}…; growth {c['growth']['class']}{lam}; "
@@ -112,16 +144,41 @@ def _literature(name):
     return str(lit.get("integrable", "unknown")), str(lit.get("reference", "—"))
 
 
-def write_report(rows, seconds, opts, markdown, figure, command, quick=False):
+def timing_line(timing) -> str:
+    """The report's one timing line (written by the command, masked when a regenerated report is compared)."""
+    la, lb = timing["load_before"], timing["load_after"]
+    runs = timing.get("runs", 1)
+    return (f"{TIME_PREFIX} {timing['wall']:.0f} s wall, {timing['cpu']:.0f} s CPU (the command and the CPU time "
+            f"of its tasks{f', summed over {runs} resumed runs' if runs > 1 else ''}) on {timing['cores']} cores; "
+            "load average (1, 5, 15 min) before "
+            f"{la[0]:.2f}, {la[1]:.2f}, {la[2]:.2f}, after {lb[0]:.2f}, {lb[1]:.2f}, {lb[2]:.2f} "
+            "(the machine is shared: other work inflates the wall time).")
+
+
+def _literature_notes(name) -> str:
+    from exact_khk.systems.catalogue import load
+
+    try:
+        return str((getattr(load(name), "literature", None) or {}).get("notes", ""))
+    except Exception:  # a system file, not a catalogue name
+        return ""
+
+
+def write_report(rows, timing, opts, markdown, figure, command, quick=False):
     """Write the Markdown report and the degree figure; returns the findings (list of strings)."""
     from exact_khk.diagnostics.classify import RULES
+    from exact_khk.systems.catalogue.families import FAMILIES
     from exact_khk.studies.output import write_atomic
 
+    fams = "; ".join(f"{f} at " + ", ".join("(" + ", ".join(f"{k}={v}" for k, v in p.items()) + ")" for p in m)
+                     for f, (_, _, m, _) in FAMILIES.items())
     lines = ["# Integrability atlas", "",
              f"Generated by `{command}` (do not edit by hand). Each system is classified at its default ε and "
              f"at the fixed second ε = {SECOND_EPS}; options: steps {opts['steps']}, exact degrees over Q for the "
-             f"first {opts['exact']} iterates, measure/Poisson searches "
-             f"{'skipped' if opts['no_discover'] else 'run'}.", "",
+             f"first {opts['exact']} iterates, integral search at classify's default degree, measure/Poisson "
+             f"searches {'skipped' if opts['no_discover'] else 'run'}. Every parameterized family is classified "
+             f"at more than one parameter point, one row each (fixed before any run, never tuned): {fams}.", "",
+             timing_line(timing), "",
              "![degree sequences](figures/atlas_degrees.png)", "", "## Verdicts", "",
              "| system | dim | literature (reference) | verdict (default ε) | verdict (ε = " + SECOND_EPS
              + ") | evidence (default ε) |", "|---|---|---|---|---|---|"]
@@ -138,10 +195,14 @@ def write_report(rows, seconds, opts, markdown, figure, command, quick=False):
             findings.append(f"- **{name}**: the verdict differs between ε = {a['eps'] if a else '?'} ({va}) and "
                             f"ε = {SECOND_EPS} ({vb}).")
         expect = {"yes": "integrable", "no": "non-integrable"}.get(lit)
-        if expect and va != expect:
-            findings.append(f"- **{name}**: literature says {lit} ({ref}); the tool says {va}: {_summary(a)}.")
-        elif lit not in ("yes", "no") and va != "undetermined":
-            findings.append(f"- **{name}**: literature {lit}; the tool goes beyond it: {va}: {_summary(a)}.")
+        notes = _literature_notes(name)
+        both = f"{va} (default ε), {vb} (ε = {SECOND_EPS}): {_summary(a)}."
+        if expect and (va != expect or vb != expect):
+            findings.append(f"- **{name}**: literature says {lit} ({ref}); the tool says {both}"
+                            + (f" Literature notes: {notes}" if notes else ""))
+        elif not expect and (va != "undetermined" or vb not in ("undetermined", "missing")):
+            findings.append(f"- **{name}**: literature {lit}; the tool goes beyond it: {both}"
+                            + (f" Literature notes: {notes}" if notes else ""))
         if a:
             curves.append((name, va, a["degrees"]["sequence"]))
             times.append(f"| {name} | {a.get('seconds', 0):.1f} | {(b or {}).get('seconds', 0):.1f} |")
@@ -151,7 +212,7 @@ def write_report(rows, seconds, opts, markdown, figure, command, quick=False):
         "not proven); in dimension ≥ 3 a dynamical degree need not satisfy any recurrence.",
         "", "## Findings", ""] + (findings or ["- none: every verdict agrees with the literature where it "
                                                "states one, at both step sizes."])
-    lines += ["", TIMES_HEADING, "", f"Whole atlas: {seconds:.0f} s wall time on a 2-core machine.", "",
+    lines += ["", TIMES_HEADING, "", timing_line(timing), "",
               "| system | seconds (default ε) | seconds (second ε) |", "|---|---|---|"] + times
     write_atomic(markdown, ("\n".join(lines) + "\n").encode(), "--markdown")
     _figure(curves, figure)
@@ -182,5 +243,5 @@ def _figure(curves, path):
 
 
 def mask_times(text: str) -> str:
-    """The report without its "Times" section (for comparing a regenerated report)."""
-    return text.split(TIMES_HEADING)[0]
+    """The report without its timing line and "Times" section (for comparing a regenerated report)."""
+    return "\n".join(line for line in text.split(TIMES_HEADING)[0].split("\n") if not line.startswith(TIME_PREFIX))
