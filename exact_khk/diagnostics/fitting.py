@@ -41,7 +41,7 @@ from exact_khk.errors import InputError, SingularStepError
 #: the fit of one entry at degree δ solves a system with 2·C(N + δ, N)·C(k + J, J) unknowns (k integrals
 #: found, J the degree in them): not beyond this (1300 admits degree 4 in 6 variables with J = 2, which the
 #: Clebsch system's second integral needs: 2·210·3 = 1260; a few seconds per fit on the shared 2-core machine)
-MAX_FIT_UNKNOWNS = 1300
+MAX_FIT_UNKNOWNS = 4000
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
 #: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
@@ -140,7 +140,10 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
         R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
         for i in range(r):
             found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
-    minimal = [S for S in found if not any(T < S for T in found)]
+    minimal = []  # smallest first: a set is minimal iff no smaller minimal set lies inside it
+    for S in sorted(found, key=len):
+        if not any(T < S for T in minimal):
+            minimal.append(S)
     small = [tuple(sorted(S)) for S in sorted(minimal, key=lambda S: (len(S), sorted(S)))]
     # the canonical basis vectors are circuits too (support: pivots and one free column); they are
     # taken in turn with the smallest ones (the Lagrange top's modified energy is fitted from one)
