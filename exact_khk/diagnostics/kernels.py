@@ -172,13 +172,17 @@ class _OrbitKernel:
 
 
 #: bytes per entry of the evaluation matrix of one orbit kernel (:func:`kernel_bytes`): the ``nmod_mat``
-#: and its reduced echelon copy, 8 each; the kernel basis adds BASIS_BYTES_PER_ENTRY per entry
-#: (a Python int below 2^62 and its list slot, 44, plus its ``nmod_mat`` copy, 8).  Measured peak RSS
-#: growth of one orbit kernel: see docs/benchmarks.md, "find-integrals at 10⁴ candidates"
-MATRIX_BYTES_PER_ENTRY = 16
+#: and its reduced echelon copy, 8 each, and FLINT's working space: peak RSS growth 2 349 MB for
+#: 20 variables at degree <= 4 (10 626 candidates × 11 689 + 1 062 points), 19.8 bytes per entry
+MATRIX_BYTES_PER_ENTRY = 20
+#: bytes per entry of a kernel basis held as lists (a Python int below 2^62 and its list slot, 44, and
+#: the list of all entries an ``nmod_mat`` is built from, 8); the basis and its N multiples x_j·v
+#: (:func:`trivial_dim`, :func:`by_degree`) are held at once
 BASIS_BYTES_PER_ENTRY = 52
-#: rows of the evaluation matrix filled between two progress reports
+#: rows of the evaluation matrix filled between two progress reports, for matrices of more than
+#: PROGRESS_ENTRIES entries (about 1 s of filling on the shared 2-core machine)
 PROGRESS_ROWS = 1000
+PROGRESS_ENTRIES = 10 ** 6
 
 
 class KernelTooLarge(InputError):
@@ -221,31 +225,37 @@ def orbit_kernel_mod(fld, eps, x0, exps, steps, p, margin, progress=None, max_by
     m = len(exps)
     head = len(pts) - margin
     if head < 1:  # too short to tell: the kernel of all points, not stable
-        pivots, _free, basis = _kernel_of(evaluation_matrix(exps, pts, p), m, p, max_bytes)
+        pivots, _free, basis = _kernel_of(evaluation_matrix(exps, pts, p), m, p, max_bytes, len(x0) + 1)
         return _OrbitKernel(tuple(x0), basis, m - len(pivots), False, periodic)
-    A = evaluation_matrix(exps, pts[:head], p, say if m * head > 10 ** 6 else None)
-    if m * head > 10 ** 6:
+    A = evaluation_matrix(exps, pts[:head], p, say if m * head > PROGRESS_ENTRIES else None)
+    if m * head > PROGRESS_ENTRIES:
         say(f"echelon form {head} x {m} mod p")
-    pivots, _free, basis = _kernel_of(A, m, p, max_bytes)
+    pivots, _free, basis = _kernel_of(A, m, p, max_bytes, len(x0) + 1)
     del A
     stable = True
     if basis:
         V = flint.nmod_mat(m, len(basis), [v[c] for c in range(m) for v in basis], p)
         stable = not any(int(t) for t in (evaluation_matrix(exps, pts[head:], p) * V).entries())
     if not stable:  # the orbit is set aside as too short; its kernel is that of all points
-        pivots, _free, basis = _kernel_of(evaluation_matrix(exps, pts, p), m, p, max_bytes)
+        pivots, _free, basis = _kernel_of(evaluation_matrix(exps, pts, p), m, p, max_bytes, len(x0) + 1)
     return _OrbitKernel(tuple(x0), basis, m - len(pivots), stable, periodic)
 
 
-def _kernel_of(A, m, p, max_bytes=None):
-    """(pivots, free, canonical basis) of the nullspace of the ``nmod_mat`` A (:func:`canonical_nullspace`)."""
+def _kernel_of(A, m, p, max_bytes=None, copies=1):
+    """(pivots, free, canonical basis) of the nullspace of the ``nmod_mat`` A (:func:`canonical_nullspace`);
+    ``copies`` bases of its size are planned against ``max_bytes``."""
     R, rank = A.rref()
     pivots = _rref_pivots(R, rank, m)
-    if max_bytes is not None and BASIS_BYTES_PER_ENTRY * (m - rank) * m > max_bytes:
+    need = BASIS_BYTES_PER_ENTRY * (m - rank) * m * copies
+    if max_bytes is not None and need > max_bytes:
         raise KernelTooLarge(f"degree: the orbit kernel has dimension {m - rank} over {m} candidates: its basis "
-                             f"needs about {BASIS_BYTES_PER_ENTRY * (m - rank) * m / 2 ** 30:.3g} GiB, beyond the "
-                             f"memory limit of {max_bytes / 2 ** 30:.3g} GiB (EXACT_KHK_MAX_MEMORY)")
+                             f"and its multiples need about {_size(need)}, beyond the memory limit "
+                             f"of {_size(max_bytes)} (EXACT_KHK_MAX_MEMORY)")
     return _canonical(R, pivots, m, p)
+
+
+def _size(b) -> str:
+    return f"{b / 2 ** 30:.3g} GiB" if b >= 2 ** 30 else f"{b / 2 ** 20:.3g} MiB"
 
 
 def _canonical(R, pivots, m, p):
@@ -406,6 +416,8 @@ def lift(rows_by_prime):
     if any(q.denominator % plast == 0 or (q.numerator * pow(q.denominator, -1, plast) - x) % plast
            for q, x in zip(out, check)):
         return None
+    if not rlast:  # a kernel of dimension 0
+        return []
     m = len(rlast[0])
     return [out[i * m:(i + 1) * m] for i in range(len(rlast))]
 
