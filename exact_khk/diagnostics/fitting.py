@@ -41,7 +41,7 @@ from exact_khk.errors import InputError, SingularStepError
 #: the fit of one entry at degree δ solves a system with 2·C(N + δ, N)·C(k + J, J) unknowns (k integrals
 #: found, J the degree in them): not beyond this (1300 admits degree 4 in 6 variables with J = 2, which the
 #: Clebsch system's second integral needs: 2·210·3 = 1260; a few seconds per fit on the shared 2-core machine)
-MAX_FIT_UNKNOWNS = 4000
+MAX_FIT_UNKNOWNS = 1300
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
 #: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
