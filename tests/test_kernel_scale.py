@@ -89,3 +89,35 @@ def test_bad_input(capsys):
     assert main(["find-integrals", "--system", "kqv-lotka-volterra:N=40", "--degree", "4", "--quiet"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "--degree" in err
+
+
+def test_long_kernels_report_their_stages(monkeypatch):
+    from exact_khk.diagnostics import kernels
+
+    monkeypatch.setattr(kernels, "PROGRESS_ENTRIES", 0)
+    monkeypatch.setattr(kernels, "PROGRESS_ROWS", 10)
+    _, fld = resolve_field(EULER, "f")
+    said = []
+    k = orbit_kernel_mod(fld, F(1, 10), _point(random.Random(3), 3), monomials(3, 3), 40, random_primes(1, 0)[0], 8,
+                         progress=said.append)
+    assert k.stable
+    assert said[:3] == ["evaluation rows 10/33", "evaluation rows 20/33", "evaluation rows 30/33"]
+    assert said[-1] == "echelon form 33 x 20 mod p"
+
+
+@pytest.mark.slow
+def test_large_kernel_equals_the_direct_echelon_form():
+    """KQV N = 20 at degree <= 3 (1 771 candidates, 2 126 points): the kernel from the echelon form of
+    the first points and the product with the last equals the canonical nullspace of all rows."""
+    from exact_khk.diagnostics.kernels import _Evaluator, _orbit_mod, canonical_nullspace
+
+    _, fld = resolve_field("kqv-lotka-volterra:N=20", "f")
+    exps = monomials(20, 3)
+    m, margin = len(exps), len(exps) // 10
+    x0, p = _point(random.Random(1), 20), random_primes(1, 0)[0]
+    said = []
+    k = orbit_kernel_mod(fld, F(1, 10), x0, exps, m + 2 * margin, p, margin, progress=said.append)
+    ev = _Evaluator(exps)
+    _, _, basis = canonical_nullspace([ev(q, 1, p) for q in _orbit_mod(fld, F(1, 10), x0, m + 2 * margin, p)], m, p)
+    assert k.stable and k.basis == basis and k.dim == len(basis) > 0
+    assert said and said[-1].startswith("echelon form")
