@@ -121,3 +121,23 @@ def test_large_kernel_equals_the_direct_echelon_form():
     _, _, basis = canonical_nullspace([ev(q, 1, p) for q in _orbit_mod(fld, F(1, 10), x0, m + 2 * margin, p)], m, p)
     assert k.stable and k.basis == basis and k.dim == len(basis) > 0
     assert said and said[-1].startswith("echelon form")
+
+
+def test_circuits_are_minimal_supports():
+    """Every support :func:`circuits` returns is minimal among them (no minimality filter is applied:
+    an echelon row's support is a circuit), and each carries a kernel vector (rank drops by one)."""
+    import flint
+
+    from exact_khk.diagnostics.fitting import circuits
+
+    _, fld = resolve_field("kqv-lotka-volterra:N=5", "f")
+    exps = monomials(5, 2)
+    m, p = len(exps), random_primes(1, 0)[0]
+    k = orbit_kernel_mod(fld, F(1, 10), _point(random.Random(7), 5), exps, m + 16, p, 8)
+    found = [frozenset(S) for S in circuits(k.basis, m, p)]
+    assert len(found) > k.dim
+    assert not any(T < S for S in found for T in found)
+    for S in found[:10]:  # the kernel restricted to S is one line: basis columns outside S have corank 1
+        outside = [c for c in range(m) if c not in S]
+        M = flint.nmod_mat(len(outside), k.dim, [v[c] for c in outside for v in k.basis], p)
+        assert k.dim - M.rank() == 1
