@@ -266,7 +266,7 @@ def test_clebsch_four():
 
 def test_memory_is_planned_and_refused_up_front(monkeypatch, capsys):
     """The evaluation matrices' memory is estimated before any work; beyond EXACT_KHK_MAX_MEMORY the
-    command exits 2 with one line naming the limit (84 candidates × 101 points × 100 bytes > 100 kB)."""
+    command exits 2 with one line naming the limit (84 candidates × 101 points × 20 bytes > 100 kB)."""
     monkeypatch.setenv("EXACT_KHK_MAX_MEMORY", "100K")
     assert main(["find-integrals", "--system", "lagrange-top", "--degree", "3", "--quiet"]) == 2
     err = capsys.readouterr().err

@@ -140,8 +140,9 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
         R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
         for i in range(r):
             found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
-    minimal = [S for S in found if not any(T < S for T in found)]
-    small = [tuple(sorted(S)) for S in sorted(minimal, key=lambda S: (len(S), sorted(S)))]
+    # each support found is minimal already: a kernel vector supported inside row i's support (its
+    # pivot and non-pivot columns) is a multiple of row i, its coefficients being fixed by the pivots
+    small = [tuple(sorted(S)) for S in sorted(found, key=lambda S: (len(S), sorted(S)))]
     # the canonical basis vectors are circuits too (support: pivots and one free column); they are
     # taken in turn with the smallest ones (the Lagrange top's modified energy is fitted from one)
     canonical = [tuple(c for c in range(m) if v[c]) for v in basis]

@@ -69,16 +69,15 @@ from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, r
 from exact_khk.diagnostics.fitting import MAX_FIT_UNKNOWNS, EntryFitter, circuits, entry_jacobian, rank_mod
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
-                                           trivial_dim)
+                                           trivial_dim, KernelTooLarge, kernel_bytes)
 from exact_khk.diagnostics.pencils import (canonical_pair, echelon_pencil, interpolated_pencils,
                                            pencil_integrals, ratio_integrals)
 from exact_khk.errors import InputError, PoleError, SingularStepError
 from exact_khk.parsing import check_count, parse_vector
 
-MAX_MONOMIALS = 3000
-#: bytes per entry of an evaluation matrix (peak RSS growth of one orbit kernel: 93 at 495 candidates
-#: × 594 points, 313 at 210 × 253 where fixed costs dominate)
-KERNEL_BYTES_PER_ENTRY = 100
+#: candidates at most: 20 variables at degree <= 4 (10 626) measured, one orbit kernel 293 s CPU and
+#: 2.3 GB peak (docs/benchmarks.md, "find-integrals at 10⁴ candidates")
+MAX_MONOMIALS = 11_000
 #: the highest degree of a fitted numerator or denominator (:mod:`.fitting`; --fit-degree)
 MAX_FIT_DEGREE = 12
 #: orbits drawn beyond ``orbits`` to replace those on smaller invariant sets
@@ -300,6 +299,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     start = [] if x0 is None else [parse_vector(x0, "x0", N)]  # exact rationals only, as everywhere
     starts = start + [_point(rng, N) for _ in range(orbits)]
     job = _Job(fld, eps, exps, steps, margin, variables, [], [])
+    job.max_bytes = max_bytes
     if steps + 1 < m + margin:
         job.warnings.append(f"orbit too short: {steps + 1} points for {m} candidates (+ margin {margin}); "
                             f"the kernel has dimension >= {m - steps - 1} for that reason alone")
@@ -307,7 +307,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
 
     def kernel(x):
         stage(f"orbit kernel {len(ks) + 1} mod p ({m} candidates)")
-        return job.kernel(x, p0)
+        return job.kernel(x, p0, stage)
 
     ks = []
     for x in starts:
@@ -399,9 +399,8 @@ def fit_shapes(N, k, fit_degree) -> list:
 
 
 def planned_bytes(m, steps) -> int:
-    """The memory of one orbit kernel: (steps + 1) × m values held as Python ints and as an
-    ``nmod_mat`` with its echelon copy, KERNEL_BYTES_PER_ENTRY each."""
-    return KERNEL_BYTES_PER_ENTRY * (steps + 1) * m
+    """The memory of one orbit kernel's evaluation matrix over (steps + 1) points (:func:`.kernels.kernel_bytes`)."""
+    return kernel_bytes(m, steps + 1, 0)
 
 
 def _generic_count(ks) -> int:
@@ -437,13 +436,18 @@ def _fmt(x):
 class _Job:
     """The fixed data of one search, and its extraction steps."""
 
+    max_bytes = None  # the memory limit of one orbit kernel's basis (find_integrals' max_bytes)
+
     def __init__(self, fld, eps, exps, steps, margin, variables, warnings, notes):
         self.fld, self.eps, self.exps, self.steps, self.margin = fld, eps, exps, steps, margin
         self.variables, self.warnings, self.notes = variables, warnings, notes
 
-    def kernel(self, x, p):
+    def kernel(self, x, p, progress=None):
         try:
-            return orbit_kernel_mod(self.fld, self.eps, x, self.exps, self.steps, p, self.margin)
+            return orbit_kernel_mod(self.fld, self.eps, x, self.exps, self.steps, p, self.margin, progress,
+                                    self.max_bytes)
+        except KernelTooLarge:
+            raise
         except (SingularStepError, ZeroDivisionError, InputError):
             return None
 
