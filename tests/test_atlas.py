@@ -87,5 +87,6 @@ def test_committed_atlas_is_what_the_documented_command_writes(tmp_path, monkeyp
     from exact_khk.sweep.atlas import mask_times
 
     monkeypatch.chdir(tmp_path)
+    (tmp_path / "docs").mkdir()  # the documented command runs from the project's root, beside docs/
     assert main(ATLAS_ARGS) == 0
     assert mask_times((tmp_path / "docs" / "atlas.md").read_text()) == mask_times(ATLAS.read_text())

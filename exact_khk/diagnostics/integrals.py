@@ -533,14 +533,20 @@ class _Job:
         primes = list(plist) + [p for p in random_primes(max_primes + len(plist), seed + 1) if p not in plist]
         vx = _point(random.Random(f"verify-{seed}"), N)
         mod_rows = [g for f in kept for g in _grad_mod(f, ref.x0, p0)]
-        for num, den, text in self.level_pencils(kept, plist, seed, max_primes) if len(kept) < visible else ():
-            f = self.integral(*canonical_pair(num, den), vx, verify_steps)
+
+        def accepted(f) -> bool:
+            """Keep ``f`` if it was verified exactly on a fresh orbit and raises the exact rank."""
             r = jacobian_rows([f.polynomials()], point)
             if not f.verified or r is None or _rank(rows + r, N) == len(rows):
-                continue
+                return False
             kept.append(f)
-            rows += r
-            mod_rows += _grad_mod(f, ref.x0, p0)
+            rows.extend(r)
+            mod_rows.extend(_grad_mod(f, ref.x0, p0))
+            return True
+
+        for num, den, text in self.level_pencils(kept, plist, seed, max_primes) if len(kept) < visible else ():
+            if not accepted(self.integral(*canonical_pair(num, den), vx, verify_steps)):
+                continue
             self.notes.append(f"I{len(kept)} from a pencil of the kernel on the level sets {text} = c (candidates "
                               f"free of one of its variables), its coefficients interpolated in c")
         budget = MAX_FITS
@@ -567,13 +573,8 @@ class _Job:
                         break
                 if pair is None:
                     continue
-                f = self.integral(*canonical_pair(*pair), vx, verify_steps)
-                r = jacobian_rows([f.polynomials()], point)
-                if not f.verified or r is None or _rank(rows + r, N) == len(rows):
+                if not accepted(self.integral(*canonical_pair(*pair), vx, verify_steps)):
                     continue
-                kept.append(f)
-                rows += r
-                mod_rows += _grad_mod(f, ref.x0, p0)
                 self.notes.append(f"I{len(kept)} fitted (degree <= {delta}"
                                   + (f", coefficients of degree <= {J} in "
                                      + ", ".join(f"I{i + 1}" for i in T) if J else "")
