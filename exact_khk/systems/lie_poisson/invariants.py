@@ -68,8 +68,8 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     Exact rational arithmetics with python-flint solve the 2n×2n system as a
     2×2 system over circulants (:func:`exact_khk.systems.lie_poisson.circulant.exact_htilde`) when
     the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.systems.lie_poisson.paths.HTILDE_STRUCTURED_MIN_N`
-    (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 3×,
-    40×, 160× faster than the dense solve); the result is the same rational
+    (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 10×,
+    164×, 567× faster than the dense solve); the result is the same rational
     number.  In ``cyclo:N`` with n | N and ``gf:P`` with n | P − 1 (fields over Q(ω)
     included) it is n 2×2 systems over Q(ζ_N) or F_P by the exact DFT
     (:func:`exact_khk.systems.lie_poisson.circulant_dft.exact_htilde`).

@@ -89,15 +89,16 @@ AUTO_SPLIT_BELOW = {7: 2048, 8: 2048, 9: 3584, 10: 5120, 15: 768}
 #: step 447 against 177 µs at n = 16's; a dense step's first call also builds the field's
 #: integer system, 10 ms at n = 32)
 DENSE_BELOW = {11: 512, 13: 512}
-#: exact H̃ by the structured solve from this n (3×, 40×, 160× at n = 3, 8, 16)
+#: exact H̃ by the structured solve from this n (10×, 164×, 567× faster than dense at orbit points,
+#: n = 3, 8, 16: docs/benchmarks.md, "H̃ at orbit points")
 HTILDE_STRUCTURED_MIN_N = 3
 #: a structured step (and H̃) solves over Z[t]/(tⁿ − 1) unsplit for points of height h (bits
 #: of the largest numerator or the common denominator) with n²·h at most this: there the
 #: fixed costs of the ~log₂ n factors' solves outweigh the unsplit solve's Cramer-sized
-#: arithmetic (~n²·h).  One step at random points of 1–64 bits (scripts/bench_division.py),
-#: unsplit / split: n = 16: 0.63–0.74 to 16 bits, 0.82 at 32, 1.09 at 64; n = 24: 0.63–0.75
-#: to 16 bits, 0.90 at 32; n = 32: 0.72–0.78 to 8 bits, 0.84 at 16, 0.96 at 32; n = 64:
-#: 0.90–0.99 to 8 bits, 1.04 at 16; n = 128: 1.08–1.18 from 1 bit
+#: arithmetic (~n²·h).  One step at random points of 1–64 bits, unsplit / split
+#: (docs/benchmarks.md, "Small points unsplit"): n = 16: 0.51–0.80 to 32 bits, 0.88 at 64;
+#: n = 24: 0.66–0.80 to 8 bits, 0.76–1.08 from 16; n = 32: 0.65–0.81 to 8 bits, 0.85–1.09
+#: from 16; n = 64: 0.89 at 1 bit, 0.96–3.26 from 4; n = 128: 1.07–3.74 from 1 bit
 UNSPLIT_MAX_WORK = 8192
 #: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
 #: down the tower (``CirculantRing.norm``, which keeps N and the adjugate A in lowest terms
