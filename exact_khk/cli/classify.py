@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from exact_khk.cli.options import (Progress, add_field_options, add_system_options, check_output, field_name,
-                                   system_from_args, write_json)
+                                   report, system_from_args)
 from exact_khk.errors import InputError
 
 HELP = "integrable, non-integrable or undetermined: a verdict on a Kahan map with its evidence"
@@ -59,11 +59,7 @@ def cmd_classify(args):
                 msg = "--" + name.replace("_", "-") + msg[len(name):]
                 break
         raise InputError(msg) from None
-    if args.json is not None:
-        write_json({"system": system.to_json(), **res.to_json()}, args.json)
-    if args.json in (None,) or args.json != "-":
-        print(system.describe())
-        print(res.summary())
+    if report(system, res, args.json):
         if args.json is not None:
             print(f"classification written to {args.json}")
     return 4 if res.verdict == "undetermined" else 0

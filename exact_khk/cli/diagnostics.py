@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 
 from exact_khk.cli.options import (Progress, add_field_options, add_json_option, add_system_options, check_output,
-                                   field_name, max_memory, system_from_args, write_json)
+                                   field_name, max_memory, report, system_from_args, write_json)
 from exact_khk.errors import InputError
 
 
@@ -129,11 +129,7 @@ def cmd_degrees(args):
     if args.plot:
         plot_growth(args.plot, degrees=res, heights=res.heights,
                     title=f"{res.label}, ε = {eps}, x0 = ({', '.join(map(str, x0))})")
-    if args.json is not None:
-        write_json({"system": system.to_json(), **res.to_json()}, args.json)
-    if args.json != "-":
-        print(system.describe())
-        print(res.summary())
+    if report(system, res, args.json):
         if args.plot:
             print(f"plot written to {args.plot}")
     return 0
@@ -177,11 +173,7 @@ def cmd_find_integrals(args):
 
         write_atomic(args.toml, system_file(system, res, eps, kw["field"], x0 if args.x0 is not None else None),
                      "--toml")
-    if args.json is not None:
-        write_json({"system": system.to_json(), "eps": str(eps), **res.to_json()}, args.json)
-    if args.json != "-":
-        print(system.describe())
-        print(res.summary())
+    if report(system, res, args.json, eps=str(eps)):
         if args.toml:
             print(f"system file with the {len(res.integrals)} integral(s) written to {args.toml} "
                   f"(exact-khk certify --system {args.toml})")
@@ -202,11 +194,7 @@ def _symbolic(args, system, kw, progress):
         from exact_khk.studies.output import write_atomic
 
         write_atomic(args.toml, system_file(system, res), "--toml")
-    if args.json is not None:
-        write_json({"system": system.to_json(), **res.to_json()}, args.json)
-    if args.json != "-":
-        print(system.describe())
-        print(res.summary())
+    if report(system, res, args.json):
         if args.toml:
             print(f"system file with the {sum(f.proven for f in res.integrals)} proven integral(s) written to "
                   f"{args.toml} (exact-khk certify --system {args.toml})")

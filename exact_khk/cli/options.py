@@ -237,6 +237,19 @@ def write_json(obj, target):
         write_atomic(target, text + "\n", "--json")
 
 
+def report(system, res, target, **extra) -> bool:
+    """A result's JSON (``{"system": ..., **extra, **res.to_json()}``) to ``target`` when asked
+    (``--json``), and the system's description and ``res.summary()`` unless that JSON went to
+    stdout; True when the text was printed (the caller may add lines)."""
+    if target is not None:
+        write_json({"system": system.to_json(), **extra, **res.to_json()}, target)
+    if target == "-":
+        return False
+    print(system.describe())
+    print(res.summary())
+    return True
+
+
 def invocation(args, **resolved) -> dict:
     """The command line (``argv``) and its options after defaults (``options``), with what the
     command resolved from them (``resolved``: the arithmetic, ε, x0, ...): an informational

@@ -456,24 +456,27 @@ def sz_bound(num, den, M, r, N, p, trials, kind="integrals"):
     return d, d1, min(1.0, d / (p - d1)) ** trials if p > d1 else 1.0
 
 
+def _regular_points(M, r, N, p, nvars, seed, draws):
+    """(x, M(x) mod p, x̃) at random points x of F_p^nvars (x and the symbols) where det M(x) ≠ 0,
+    x̃ = M⁻¹ r the Kahan step mod p (its symbols copied), from at most ``draws`` draws."""
+    rng = random.Random(f"sz-{seed}")
+    for _ in range(draws):
+        pt = [rng.randrange(p) for _ in range(nvars)]
+        Mp = flint.nmod_mat(N, N, [_mod(e(*pt), p) for row in M for e in row], p)
+        if Mp.det() == 0:
+            continue
+        rp = flint.nmod_mat(N, 1, [_mod(e(*pt), p) for e in r], p)
+        yield pt, Mp, [int(v) for v in Mp.solve(rp).entries()] + pt[N:]
+
+
 def prove_sz(num, den, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0, K=None):
     """(holds, evidence): N(x̃) D(x) = D(x̃) N(x) (with ``K`` = :func:`step_jacobian`: the measure
     identity N(x̃) det K(x̃) D(x) = D(x̃) det M(x) N(x)) at ``trials`` random points (x, symbols) of
     F_p^(N+k) where q, D(x), D(x̃) ≠ 0, and the failure bound of :func:`sz_bound`."""
     what = "I(Phi(x)) = I(x)" if K is None else "m(Phi(x)) det dPhi(x) = m(x)"
-    rng = random.Random(f"sz-{seed}")
     nvars = len(num.context().gens())
-    done = draws = 0
-    while done < trials:
-        draws += 1
-        if draws > 20 * trials:
-            return False, f"no regular point in {draws - 1} draws over F_{p}: not proven"
-        pt = [rng.randrange(p) for _ in range(nvars)]
-        Mp = flint.nmod_mat(N, N, [_mod(e(*pt), p) for row in M for e in row], p)
-        rp = flint.nmod_mat(N, 1, [_mod(e(*pt), p) for e in r], p)
-        if Mp.det() == 0:
-            continue
-        xt = [int(v) for v in Mp.solve(rp).entries()] + pt[N:]
+    done = 0
+    for pt, Mp, xt in _regular_points(M, r, N, p, nvars, seed, 20 * trials):
         dx, dxt = _mod(den(*pt), p), _mod(den(*xt), p)
         if dx == 0 or dxt == 0:
             continue
@@ -485,6 +488,10 @@ def prove_sz(num, den, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0, K=Non
             return False, (f"the identity {what} FAILS at a point of F_{p}^{nvars}: the reconstruction "
                            f"is wrong (raise the samples or the degree)")
         done += 1
+        if done == trials:
+            break
+    else:
+        return False, f"no regular point in {20 * trials} draws over F_{p}: not proven"
     d, d1, bound = sz_bound(num, den, M, r, N, p, trials, "integrals" if K is None else "measure")
     return True, (f"identity {what} over F_{p} at {trials} random points (x, symbols) "
                   f"(Schwartz-Zippel), failure probability <= {bound:.3g} = (d/(p - D1))^{trials}, cleared identity "
@@ -584,26 +591,20 @@ def prove_tensor_sz(pi, K, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0):
     det M ≠ 0; failure bound (d/(p − Nδ))^trials, d bounding the degree of the cleared identity
     max(2(Y + δ) + t + dπ·Nδ, 2δ + dπ·Y + s + 2Nδ) (notation of :func:`sz_bound`; t, s the total and
     symbol degrees of π's entries, dπ their degree in x)."""
-    rng = random.Random(f"sz-{seed}")
     nvars = len(pi[0][0].context().gens())
-    done = draws = 0
-    while done < trials:
-        draws += 1
-        if draws > 20 * trials:
-            return False, f"no regular point in {draws - 1} draws over F_{p}: not proven"
-        pt = [rng.randrange(p) for _ in range(nvars)]
-        Mp = flint.nmod_mat(N, N, [_mod(e(*pt), p) for row in M for e in row], p)
-        if Mp.det() == 0:
-            continue
-        rp = flint.nmod_mat(N, 1, [_mod(e(*pt), p) for e in r], p)
-        xt = [int(v) for v in Mp.solve(rp).entries()] + pt[N:]
 
-        def at(A, v):
-            return flint.nmod_mat(N, N, [_mod(e(*v), p) for row in A for e in row], p)
+    def at(A, v):
+        return flint.nmod_mat(N, N, [_mod(e(*v), p) for row in A for e in row], p)
+    done = 0
+    for pt, Mp, xt in _regular_points(M, r, N, p, nvars, seed, 20 * trials):
         Kt = at(K, xt)
         if Kt * at(pi, pt) * Kt.transpose() != Mp * at(pi, xt) * Mp.transpose():
             return False, f"dPhi pi dPhi^T = pi o Phi FAILS at a point of F_{p}^{nvars}: the reconstruction is wrong"
         done += 1
+        if done == trials:
+            break
+    else:
+        return False, f"no regular point in {20 * trials} draws over F_{p}: not proven"
     delta = max(int(e.total_degree()) for row in M for e in row)
     rho = max(int(e.total_degree()) for e in r)
     Y = max(N * delta, (N - 1) * delta + rho)
