@@ -176,3 +176,22 @@ def test_package_namespace_holds_only_public_names():
     assert public <= set(exact_khk.__all__), public - set(exact_khk.__all__)
     assert "TYPE_CHECKING" not in dir(exact_khk) and "KahanMap" in dir(exact_khk)
     assert math.isfinite(float(exact_khk.to_fraction(get_arith("flint"), "1/3")))
+
+
+def test_a_missing_required_library_is_one_line_exit_5_and_another_missing_module_a_bug():
+    """A source checkout run without its dependencies: one line naming the pip package (exit 5),
+    not "internal error"; a missing module that is not a dependency stays an internal error (70)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    script = ("import sys; sys.modules[{mod!r}] = None\n"
+              "from exact_khk.cli.main import main\n"
+              "sys.exit(main(['certify', '--steps', '2']))")
+    for mod, code, text in (("flint", 5, "python-flint is not installed"),
+                            ("exact_khk.certification.engine", 70, "internal error")):
+        out = subprocess.run([sys.executable, "-c", script.format(mod=mod)], capture_output=True, text=True,
+                             cwd=root, env={"PYTHONPATH": str(root), "PATH": ""})
+        assert out.returncode == code, (mod, out.returncode, out.stderr)
+        assert text in out.stderr and len(out.stderr.strip().splitlines()) == 1, out.stderr

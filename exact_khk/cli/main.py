@@ -5,8 +5,8 @@ input or a request beyond a documented limit (one-line message naming the
 argument and the limit); 3 a singular Kahan step (one-line message naming the
 step, x and eps), an integral evaluated at its pole, or a floating evaluation
 with no trustworthy bit (overflow, condition estimate κ·2^-p ≥ 1); 4
-inconclusive; 5 an output that cannot be written or a resource exhausted;
-70 an internal error (a bug: please report); 130 interrupted (Ctrl-C).
+inconclusive; 5 an output that cannot be written, a resource exhausted or a
+required library not installed; 70 an internal error (a bug: please report); 130 interrupted (Ctrl-C).
 
 Each command lives in a module with ``register(subparsers)``; :data:`COMMANDS`
 names the module and one-line help of each.  A run imports only the module of
@@ -151,6 +151,12 @@ def main(argv=None) -> int:
     return code
 
 
+#: the import names of the required libraries (pyproject.toml's dependencies) and their pip names:
+#: one missing (a source checkout run without installing) is a resource problem, not a bug
+REQUIRED = {"flint": "python-flint", "gmpy2": "gmpy2", "mpmath": "mpmath", "sympy": "sympy", "numpy": "numpy",
+            "matplotlib": "matplotlib", "tqdm": "tqdm"}
+
+
 def _run(argv) -> int:
     args = None
     try:
@@ -183,6 +189,12 @@ def _run(argv) -> int:
         return _fail("interrupted", "stopped by the user (Ctrl-C)", "interrupted")
     except RecursionError as exc:
         return _fail("resource", exc, "output")
+    except ModuleNotFoundError as exc:
+        missing = (exc.name or "").split(".")[0]
+        if missing not in REQUIRED:
+            return _fail("internal error", f"{type(exc).__name__}: {exc} (please report this)", "internal")
+        return _fail("resource", f"the required library {REQUIRED[missing]} is not installed in this Python "
+                                 f"({sys.executable}); install exact_khk with its dependencies: pip install .", "output")
     except SystemExit as exc:  # argparse --help/--version, or a library calling sys.exit
         return exc.code if isinstance(exc.code, int) else (EXIT["ok"] if exc.code is None else EXIT["input"])
     except Exception as exc:  # noqa: BLE001 - the one error boundary of the command line
