@@ -43,6 +43,14 @@ def test_bad_folder_exits_2(tmp_path, capsys):
     assert "--systems" in err and "Traceback" not in err
 
 
+def test_default_report_outside_the_repository_is_refused_before_work(tmp_path, monkeypatch, capsys):
+    """Run where there is no docs/ folder: the default report path is refused up front, naming --markdown."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["atlas", "--out", str(tmp_path / "o"), "--quick"]) == 2
+    err = capsys.readouterr().err
+    assert "--markdown PATH" in err and "Traceback" not in err and not (tmp_path / "o").exists()
+
+
 ROOT = Path(__file__).parent.parent
 ATLAS = ROOT / "docs" / "atlas.md"
 #: the documented command that writes docs/atlas.md (docs/atlas.md's header names it)

@@ -30,8 +30,12 @@ def cmd_atlas(args):
     from pathlib import Path
 
     from exact_khk.cli.options import check_output
+    from exact_khk.errors import InputError
     from exact_khk.sweep.atlas import run_atlas, write_report
 
+    if args.markdown == "docs/atlas.md" and not Path("docs").is_dir():
+        raise InputError("--markdown: the default report docs/atlas.md needs a docs/ folder in the current "
+                         "directory (the repository's); pass --markdown PATH elsewhere")
     check_output(args.markdown, "--markdown")
     figure = args.figure or str(Path(args.markdown).parent / "figures" / "atlas_degrees.png")
     rows, timing, opts = run_atlas(args.out, args.systems, args.quick, args.workers, args.dask,
