@@ -141,3 +141,18 @@ def test_circuits_are_minimal_supports():
         outside = [c for c in range(m) if c not in S]
         M = flint.nmod_mat(len(outside), k.dim, [v[c] for c in outside for v in k.basis], p)
         assert k.dim - M.rank() == 1
+
+
+def test_rational_reconstruction_beyond_float_range():
+    """Moduli beyond 2^1024 (an eps of 400 digits makes the fits' CRT moduli that large): p/q is
+    recovered from p·q^-1 mod m, at heights up to the bound sqrt(m/2) (computed exactly)."""
+    from fractions import Fraction
+
+    from exact_khk.diagnostics.kernels import rational_reconstruction
+
+    m = 2 ** 2203 - 1  # a Mersenne prime
+    q = Fraction(-(7 ** 300), 11 ** 250)
+    a = q.numerator * pow(q.denominator, -1, m) % m
+    assert rational_reconstruction(a, m) == q
+    edge = Fraction(-(2 ** 1100), 2 ** 1101 - 1)  # |p|, q just below sqrt(m/2) ~ 2^1101
+    assert rational_reconstruction(edge.numerator * pow(edge.denominator, -1, m) % m, m) == edge

@@ -11,6 +11,7 @@ remaindering with rational reconstruction.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -380,7 +381,7 @@ def rational_reconstruction(a: int, m: int):
     >>> rational_reconstruction(Fraction(3, 7).numerator * pow(7, -1, 1009) % 1009, 1009)
     Fraction(3, 7)
     """
-    bound = int((m // 2) ** 0.5)
+    bound = math.isqrt(m // 2)  # exact: a float square root overflows beyond 2^1024 and rounds below
     r0, r1, s0, s1 = m, a % m, 0, 1
     while r1 > bound:
         q = r0 // r1
