@@ -57,6 +57,7 @@ Adding a kind of claim is one :class:`Claim` here (plus what a system declares f
 from __future__ import annotations
 
 from fractions import Fraction
+from itertools import combinations, product
 from typing import NamedTuple
 
 from exact_khk.arith import get_arith
@@ -201,9 +202,9 @@ def _gradient_deg(run, fn, base):
     return None if a is None or b is None else minus(partial(a), partial(b))
 
 
-def _bracket_deg(run, fn, base, q):
-    """∇Iᵀ Q ∇I_B for Q polynomial of degree q (one denominator per factor)."""
-    a, b = function_deg(run.integrals[base]), function_deg(fn)
+def _bracket_deg(run, a, b, q):
+    """∇Iᵀ Q ∇I' for the integrals named ``a``, ``b`` and Q polynomial of degree q (one denominator per factor)."""
+    a, b = function_deg(run.integrals[a]), function_deg(run.integrals[b])
     if a is None or b is None or q is None:
         return None
     ga, gb = partial(a), partial(b)
@@ -506,13 +507,21 @@ def _plus_w(ar, P, e):
 
 @claim("commutation", lambda system: len(system.field_names()) > 1)
 def commutation(run):
+    """Φ_f∘Φ_g = Φ_g∘Φ_f for every other field g (option ``pairs`` "all": every pair of maps, at
+    the points of the Φ_f orbit)."""
     ar, pts, N = run.ar, run.pts, run.system.dim
-    for g in run.system.field_names()[1:]:
-        run.add(*commuting(ar, g, run.phi, run.map(g), pts), degree=lambda: minus(*[step_deg(N, step_deg(N))] * 2))
+    degree = lambda: minus(*[step_deg(N, step_deg(N))] * 2)  # noqa: E731
+    names = run.system.field_names()
+    for g in names[1:]:
+        run.add(*commuting(ar, g, run.phi, run.map(g), pts), degree=degree)
         phi_2g = KahanMap(run.map(g).field, 2 * run.eps, ar)
         run.control(f"control: commutation with Phi_{g} at 2 eps",
                     f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
                     lambda phi_2g=phi_2g: compare(ar, commute_items(run.phi, phi_2g, pts)), expected=False)
+    for a, b in combinations(names[1:], 2) if run.options["pairs"] == "all" else ():
+        run.add(f"commutation Phi_{a} o Phi_{b}", f"Phi_{a}(Phi_{b}(x)) = Phi_{b}(Phi_{a}(x)) at the {len(pts)} "
+                f"points x_k of the Phi_f orbit", lambda a=a, b=b: compare(ar, commute_points_items(
+                    run.map(a), run.map(b), pts)), degree=degree)
 
 
 # --- involution -----------------------------------------------------------------------
@@ -522,7 +531,8 @@ def commutation(run):
     getattr(fn, "base", None) for fn in system.integrals().values()), files=False)
 def involution(run):
     """{I, I_B}_J = {I, I_B}_Π = 0 and ∇I_B = B ∇I for every integral I_B declared as the
-    image of I under an involution B (J the ε → 0 limit of Π); first the identity of the
+    image of I under an involution B (J the ε → 0 limit of Π; option ``brackets`` "all": the
+    brackets of every pair of integrals, after the gradients); first the identity of the
     gradients of the coefficients of Π's second form, where the tensor declares one."""
     ar, pts, fast = run.ar, run.pts, run.fast
     P = run.system.poisson()
@@ -539,23 +549,28 @@ def involution(run):
     else:
         J, Pi = (lambda k: P.at_eps_zero(ar, pts[k])), (lambda k: run.tensor("f", k))
         brk, times = bracket, matvec
+    names = list(run.integrals)
     for name, fn in run.integrals.items():
         if getattr(fn, "base", None) is None:
             continue
         B = [[ar.convert(t) for t in row] for row in run.system.involution(fn.signs, cyclotomic=True)]
         B = B if fast is None else fmpq_mat(B)
-        base, s = fn.base, fn.signs
+        base = fn.base
         run.add(f"integral gradients grad {name} = B grad {base}",
                 orbit_statement(run, f"grad {name} = B grad {base} (exact gradients)"),
                 at_points(run, lambda k, name=name, B=B, base=base: (run.gradient(name, k),
                                                                      times(B, run.gradient(base, k)))),
                 degree=lambda fn=fn, base=base: _gradient_deg(run, fn, base))
-        for Q, T in ((P.limit_name, J), (P.name, Pi)):
-            run.add(f"involution {{{base},{name}}}_{Q}", orbit_statement(run, f"grad {base}^T {Q} grad {name} = 0"),
-                    at_points(run, lambda k, name=name, base=base, T=T: (
-                        brk(run.gradient(base, k), T(k), run.gradient(name, k)), None)),
-                    degree=lambda fn=fn, base=base, Q=Q: _bracket_deg(run, fn, base, 1 if Q == P.limit_name
-                                                                        else tensor_deg(P)))
+        if run.options["brackets"] == "base":
+            pairs = [(base, name)]
+        elif name == names[-1]:  # "all": every pair of integrals, after the last one's gradients
+            pairs = list(combinations(names, 2))
+        else:
+            continue
+        for (a, b), (Q, T) in product(pairs, ((P.limit_name, J), (P.name, Pi))):
+            run.add(f"involution {{{a},{b}}}_{Q}", orbit_statement(run, f"grad {a}^T {Q} grad {b} = 0"),
+                    at_points(run, lambda k, a=a, b=b, T=T: (brk(run.gradient(a, k), T(k), run.gradient(b, k)), None)),
+                    degree=lambda a=a, b=b, Q=Q: _bracket_deg(run, a, b, 1 if Q == P.limit_name else tensor_deg(P)))
 
 
 # --- rank of the gradients ----------------------------------------------------------

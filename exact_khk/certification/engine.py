@@ -66,12 +66,13 @@ def run_claims(run, wanted):
 
 
 def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claims=None,
-                   progress=None, poisson_points=None, identities=None, prove=False) -> Certificate:
+                   progress=None, poisson_points=None, identities=None, prove=False, options=None) -> Certificate:
     """Certify what ``system`` declares on the orbit of ``x0`` (default: the system's
     own x0 and ε) in ``arith`` (default: the fastest exact arithmetic).
 
     ``claims``: a subset of :data:`~exact_khk.certification.claims.CLAIMS`, or its names comma-separated
-    (default: the system's own list, else every claim it declares something for).  ``progress(name)``
+    (default: the system's own list, else every claim it declares something for; ``options``: the
+    claims' options, :attr:`Run.options`).  ``progress(name)``
     is called before each check.  ``poisson_points``: evaluate the Poisson-map and Jacobi checks
     at this many evenly spread orbit points (default: all).  A singular step of Φ_f or of a
     commuting map raises :class:`~exact_khk.errors.SingularStepError`.  The same claims in the other
@@ -92,25 +93,27 @@ def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claim
     if prove:
         symbolic_limit(system)
     with ar.local():  # e.g. the working precision of a ball arithmetic
-        run = Run(system, x0, eps, steps, ar, progress, poisson_points)
+        run = Run(system, x0, eps, steps, ar, progress, poisson_points, options=options)
         run_claims(run, wanted)
         orbit = tuple(tuple(ar.format(t) for t in p) for p in run.pts)
         values = run.integral_values()
     orbits = [run.orbit(m) for m in run.field_names] if run.paper else [run.pts]
     height = max(point_height(ar, p) for pts in orbits for p in pts) if ar.rational else None
-    checks = run.checks + other_modes(system, identities, prove, wanted, progress)
+    checks = run.checks + other_modes(system, identities, prove, wanted, progress, options=options)
     return Certificate(system, tuple(x0), eps, steps, ar.name, (), tuple(checks), library_versions(),
                        time.perf_counter() - t_start, height, orbit, values, run.phi.path)
 
 
-def other_modes(system, identities=None, prove=False, claims=None, progress=None, prove_system=None) -> list:
+def other_modes(system, identities=None, prove=False, claims=None, progress=None, prove_system=None,
+                options=None) -> list:
     """The records of the identity mode over ``identities`` (gf:P; two draws) and of the symbolic
     mode (``prove``; on ``prove_system`` if given), as ``certify`` appends them."""
     out = []
     if identities is not None:
-        out += identity_checks(system, identities, trials=2, seed=0, claims=claims, progress=progress)
+        out += identity_checks(system, identities, trials=2, seed=0, claims=claims, progress=progress,
+                               options=options)
     if prove:
-        out += symbolic_checks(prove_system or system, claims, progress)
+        out += symbolic_checks(prove_system or system, claims, progress, options=options)
     return out
 
 
@@ -125,13 +128,16 @@ class Run:
     names its map), its own negative controls replace the automatic controls of each claim
     (:meth:`control`), and its statements are worded as the paper's certificate words them."""
 
-    def __init__(self, system, x0, eps, steps, ar, progress, poisson_points=None, point_free=False):
+    def __init__(self, system, x0, eps, steps, ar, progress, poisson_points=None, point_free=False, options=None):
         self.system, self.x0, self.eps, self.steps, self.ar = system, x0, eps, steps, ar
         self.progress, self.checks, self._fixed = progress, [], None
         #: per check: (the claim it belongs to, its degree bound or None); the claim being checked
         self.origin, self.claim = [], None
         #: no point to judge controls by (the modes: a random or a symbolic x0): point-free rules only
         self.point_free = point_free
+        #: the claims' options: ``pairs`` "f" (Φ_f with each other map commutes) or "all" (every pair
+        #: of maps); ``brackets`` "base" ({I, I_B} for each I_B = image of I) or "all" (every pair)
+        self.options = {"pairs": "f", "brackets": "base", **(options or {})}
         self.paper = bool(system.certificate_options)
         self.field_names = system.field_names()
         self.e = ar.convert(eps)
@@ -290,7 +296,8 @@ def _undefined(check) -> bool:
     return check.holds is None or "skipped" in check.detail or "undefined" in check.detail
 
 
-def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=None, max_draws=None) -> list:
+def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=None, max_draws=None,
+                    options=None) -> list:
     """The registry's claims as identities of rational functions in (x, ε), by Schwartz–Zippel over
     ``arith`` = gf:P (default P = DEFAULT_PRIME): each draw (x, ε) uniform in F_P^{N+1} is a run of
     the engine with x0 = x and one step; a draw where ε = 0 or a claim meets a pole or a singular
@@ -328,7 +335,7 @@ def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=
             singular.append("eps = 0")
             continue
         try:
-            run = Run(system, x, e, 1, ar, progress, point_free=True)
+            run = Run(system, x, e, 1, ar, progress, point_free=True, options=options)
             run_claims(run, wanted)
         except (SingularStepError, PoleError) as exc:
             singular.append(str(exc))
@@ -383,7 +390,7 @@ def symbolic_limit(system) -> int:
     return N
 
 
-def symbolic_checks(system, claims=None, progress=None) -> list:
+def symbolic_checks(system, claims=None, progress=None, options=None) -> list:
     """The registry's claims proved as identities of rational functions: the engine run once with
     x0 = (x_0, …, x_{N−1}) and ε symbols of Q(x, ε) (:class:`~exact_khk.certification.proofs.
     RationalFunctionArith`) and one step, so ``==`` of the two sides is the identity itself.
@@ -400,7 +407,7 @@ def symbolic_checks(system, claims=None, progress=None) -> list:
     wanted = wanted_claims(system, claims)
     ar = RationalFunctionArith([f"x{i}" for i in range(N)] + ["eps"])
     g = ar.gens()
-    run = Run(system, g[:N], g[N], 1, ar, progress, point_free=True)
+    run = Run(system, g[:N], g[N], 1, ar, progress, point_free=True, options=options)
     run_claims(run, wanted)
     ring = f"Q({', '.join(ar.symbols)})"
     out = []
