@@ -256,7 +256,7 @@ def orbit_statement(run, what):
 
 def at_points(run, sides, ks=None):
     """compare(sides(k)) for k in ``ks`` (default: every point of the Φ_f orbit)."""
-    ks = range(len(run.pts)) if ks is None else ks
+    ks = run.points if ks is None else ks
     return lambda: compare(run.ar, ((k, lambda k=k: sides(k)) for k in ks))
 
 
@@ -584,14 +584,14 @@ def rank_of_gradients(run):
     and the rank drops on critical sets of the integrals (an equilibrium: all gradients vanish).
     So: True with rank r somewhere, None (undecided) if nowhere, False only for a rank above r
     (impossible if the declared relations hold)."""
-    ar, npts = run.ar, len(run.pts)
+    ar, npts = run.ar, len(run.points)
     rank_of = flint_rank if run.fast is not None else (lambda rows: rank(ar, rows))
     for name, statement, rows, expected in run.system.gradient_ranks(ar):
         def evaluate(rows=rows, expected=expected):
             if not getattr(ar, "decides", ar.exact):
                 return None, "n/a", "rank not decidable in this arithmetic"
             ranks, poles = {}, []
-            for k in range(npts):
+            for k in run.points:
                 try:
                     r = rank_of(rows(lambda name, k=k: run.gradient(name, k)))
                 except PoleError:

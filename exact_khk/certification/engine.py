@@ -133,7 +133,7 @@ class Run:
         self.progress, self.checks, self._fixed = progress, [], None
         #: per check: (the claim it belongs to, its degree bound or None); the claim being checked
         self.origin, self.claim = [], None
-        #: no point to judge controls by (the modes: a random or a symbolic x0): point-free rules only
+        #: x0 generic (the modes: a random or a symbolic point): the controls' point-free rules only
         self.point_free = point_free
         #: the claims' options: ``pairs`` "f" (Φ_f with each other map commutes) or "all" (every pair
         #: of maps); ``brackets`` "base" ({I, I_B} for each I_B = image of I) or "all" (every pair)
@@ -154,6 +154,9 @@ class Run:
                                         detail="; ".join(filter(None, [f"a step of Phi_{name}", exc.detail]))
                                         ) from None
         self.pts = self.orbit("f")
+        #: the orbit points a check at every point evaluates: x0 alone at a generic x0 (``point_free``:
+        #: an identity at x0 is one at every point)
+        self.points = range(1) if point_free else range(len(self.pts))
         K = steps  # the Poisson checks' points: all, or poisson_points of them evenly spread
         self.ks = list(range(K)) if poisson_points is None or poisson_points >= K else sorted(
             {round(i * (K - 1) / max(poisson_points - 1, 1)) for i in range(poisson_points)})
