@@ -157,8 +157,10 @@ def test_evidence_doc_examples_run(capsys):
     for b in blocks:
         exec(compile(b, "docs/evidence.md", "exec"), {})
     out = capsys.readouterr().out
-    assert out.count("exact in Q(zeta_3) at 4 orbit points") == 8
-    assert "control:commutation False" in out and "proof:jacobi True" in out
+    assert "control: commutation with non-associated field False exact in Q(zeta_3)" in out
+    assert "involution {K~[-++],K~[++-]}_Pi True exact in Q(zeta_3)" in out and "None" not in out
+    assert "proof: Poisson map Phi_f True symbolic proof: identity in Q(x0, x1, x2, eps)" in out
+    assert "for every admissible Hessian" in out
 
 
 def test_cli_prove_without_options_proves_the_documented_n2_system(capsys):

@@ -124,3 +124,45 @@ def prove_limits(system):
         raise InputError(f"a, b, c: a coefficient of {bits} bits is beyond the {PROVE_MAX_BITS} bits the symbolic "
                          f"proofs take (PROVE_MAX_BITS: they grow to minutes); --identities gf:P checks the "
                          f"same claims as identities")
+
+
+#: the registry's claims of complete Liouville integrability (:func:`liouville`)
+LIOUVILLE_CLAIMS = ("integrals", "commutation", "involution", "rank")
+
+
+def liouville(system=None, x0=None, eps=None, arith="cyclo:3", steps=2, patterns=None, pairs="all",
+              trials=None, seed=0, progress=None) -> list:
+    """Complete Liouville integrability: the registry's claims :data:`LIOUVILLE_CLAIMS` run by the
+    engine on the family's system with the maps Φ_f and Φ_g[s] of ``patterns`` (default: all
+    2^n − 2 involutions) and the integrals H̃ and K̃_j of
+    :func:`~exact_khk.certification.identities.integral_patterns`, with the family's negative
+    controls: conservation of every integral by every map, commutation of every pair of maps
+    (``pairs='f'``: Φ_f with each Φ_g), ∇K̃ = B∇H̃ and {I, I'} = 0 for J and Π for every pair of
+    integrals, and the rank of the gradients.  Exactly at the points x_0..x_steps of the Φ_f orbit
+    of x0 in an exact ``arith`` (cyclo:N holds every involution for n | N), or as identities over
+    gf:P (the engine's identity mode, ``trials`` random draws, default 3; x0 and ε unused).
+
+    >>> recs = liouville(steps=1)
+    >>> all(r.passed for r in recs), recs[0].name, recs[0].evidence
+    (True, 'integral H~ conserved by Phi_f', 'exact in Q(zeta_3)')
+    """
+    from exact_khk.arith.cyclotomic import GFArith
+    from exact_khk.certification.engine import identity_checks
+    from exact_khk.certification.identities import integral_patterns, involution_patterns
+
+    system = default_system() if system is None else system
+    n, ar = system.n, get_arith(arith)
+    patterns = involution_patterns(n) if patterns is None else [format_signs(parse_signs(p, n)) for p in patterns]
+    if pairs not in ("all", "f"):
+        raise InputError(f"pairs: expected 'all' or 'f', got {pairs!r}")
+    check_signs_arith(n, patterns + integral_patterns(n), ar, "involutions")
+    family = system.with_involutions(patterns, integrals=integral_patterns(n))
+    options = {"pairs": pairs, "brackets": "all"}
+    if isinstance(ar, GFArith):
+        return identity_checks(family, ar, trials=3 if trials is None else trials, seed=seed,
+                               claims=LIOUVILLE_CLAIMS, progress=progress, options=options)
+    if not ar.exact:
+        raise InputError(f"arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), got {ar.name}")
+    x0 = DEFAULT_X0 if x0 is None else x0
+    return list(certify_system(family, x0, DEFAULT_EPS if eps is None else eps, steps, ar, claims=LIOUVILLE_CLAIMS,
+                               progress=progress, options=options).checks)

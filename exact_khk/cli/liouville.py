@@ -25,10 +25,7 @@ from exact_khk.arith.cyclotomic import GFArith
 from exact_khk.errors import InputError
 from exact_khk.parsing import format_signs, parse_signs
 from exact_khk.certification.identities import integral_patterns, involution_patterns
-
-#: the registry's claims ``liouville`` checks
-LIOUVILLE_CLAIMS = ("integrals", "commutation", "involution", "rank")
-
+from exact_khk.systems.lie_poisson.system import check_signs_arith
 
 def register(sub):
     p = sub.add_parser("liouville", help="certify complete integrability (all involutions)",
@@ -151,9 +148,8 @@ def _report(args, system, recs, extra, status=None):
 
 
 def cmd_liouville(args):
-    from exact_khk.certification.engine import certify_system, identity_checks
+    from exact_khk.certification.lie_poisson import liouville
     from exact_khk.kahan.map import KahanMap
-    from exact_khk.systems.lie_poisson.system import check_signs_arith
 
     check_output(args.json)
     system, x0, eps = system_from_args(args)
@@ -169,19 +165,12 @@ def cmd_liouville(args):
         raise InputError(f"--arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), got {ar.name}")
     check_signs_arith(system.n, pats + integral_patterns(system.n), ar, "--involutions")
     _check_work(args, system.n, len(pats), ar)
-    family = system.with_involutions(pats, integrals=integral_patterns(system.n))
-    options = {"pairs": args.pairs, "brackets": "all"}
+    if not isinstance(ar, GFArith) and args.steps < 1:
+        raise InputError(f"--steps: liouville at orbit points needs at least 1 step, got {args.steps}")
     with Progress(args, None, "liouville", unit="check") as progress:
-        if isinstance(ar, GFArith):
-            recs = identity_checks(family, ar, trials=args.trials, seed=args.draw_seed, claims=LIOUVILLE_CLAIMS,
-                                   progress=progress, options=options)
-            extra = {"arith": ar.name, "trials": args.trials}
-        else:
-            if args.steps < 1:
-                raise InputError(f"--steps: liouville at orbit points needs at least 1 step, got {args.steps}")
-            recs = certify_system(family, x0, eps, args.steps, ar, claims=LIOUVILLE_CLAIMS, progress=progress,
-                                  options=options).checks
-            extra = {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
+        recs = liouville(system, x0, eps, ar, args.steps, pats, args.pairs, args.trials, args.draw_seed, progress)
+    extra = {"arith": ar.name, "trials": args.trials} if isinstance(ar, GFArith) else \
+        {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
     return _report(args, system, recs, {**extra, "involutions": pats}, status_of(recs))
 
 
