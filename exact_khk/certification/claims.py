@@ -51,7 +51,21 @@ automatic ones (:meth:`~exact_khk.certification.engine.Run.control`).  Quantitie
 share (integrals, gradients, Π) come memoised from the run, by the system's fast forms where it
 has them (:meth:`~exact_khk.systems.base.System.fast_forms`; the generic route where None).
 
-Adding a kind of claim is one :class:`Claim` here (plus what a system declares for it).
+The engine runs the registry in three modes (:mod:`~exact_khk.certification.engine`): exact at
+the orbit points; as identities over F_P at random draws of (x, ε) (Schwartz–Zippel,
+:func:`~exact_khk.certification.engine.identity_checks`); and symbolically over Q(x, ε)
+(:func:`~exact_khk.certification.engine.symbolic_checks`).  The claims are written once for
+all three: the modes only change the arithmetic and x0 (a random draw or the symbols, one
+step; ``run.points`` is then x0 alone, and ``run.point_free`` tells the controls' rules that
+there is no point to judge them by), so a claim states its mode evaluations by what it passes
+to ``run.add``: ``degree=lambda: Deg(...)``, the bound in (x, ε) of its residual as a rational
+function (:class:`Deg`, derived from what the system declares by the rules there), which the
+identity mode needs for its failure bound (a check without one is recorded there as not
+available, undecided).  Controls need no bound (a nonzero residual refutes exactly), nor does
+the rank (rank r at one point proves generic rank r).
+
+Adding a kind of claim is one :class:`Claim` here, each check with its ``degree`` (plus what a
+system declares for it).
 """
 
 from __future__ import annotations

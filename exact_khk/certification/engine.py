@@ -10,6 +10,10 @@ inapplicable (each claim's rule, and one for all: at a fixed point of Φ_f every
 control is inapplicable), and a certificate with no applicable control is
 INCONCLUSIVE (:func:`~exact_khk.certification.records.status_of`).
 
+The same registry in the other modes: :func:`identity_checks` (identities over F_P at random
+draws, with each claim's degree bound; ``certify --identities``, ``liouville --arith gf:P``) and
+:func:`symbolic_checks` (proofs over Q(x, ε); ``certify --prove``, ``prove``).
+
 >>> from exact_khk.systems.expressions import ExpressionSystem
 >>> top = ExpressionSystem.from_expressions(["x", "y", "z"], field={"x": "y*z", "y": "-2*z*x", "z": "x*y"},
 ...                                         x0=["1", "2", "3"], eps="1/10")
@@ -315,7 +319,7 @@ def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=
     >>> from exact_khk.systems.catalogue import resolve
     >>> recs = identity_checks(resolve("euler-top"), trials=2)
     >>> all(r.passed for r in recs), recs[0].name, recs[0].evidence.split(";")[0]
-    (True, 'identity: reversibility Phi_f', 'probabilistic over F_4611686018420360881 with failure bound <= 1.124e-33')
+    (True, 'identity: reversibility Phi_f', 'probabilistic over F_4611686018420360881 with failure bound <= 4.519e-35')
     """
     import random
 
@@ -372,6 +376,7 @@ def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=
             first = replace(first, residual="n/a", detail=evidence)
         else:
             holds = True if all(c.holds for c in at_draws) else None
+            first = replace(first, detail=f"zero at each of the {k} draws" if holds else first.detail)
             bound = min(1.0, d.num / slack) ** k if slack > 0 else 1.0  # 1: no guarantee (P too small)
             evidence = (f"probabilistic over F_{P} with failure bound <= {bound:.4g}; {k} random points in "
                         f"F_P^{N + 1}, cleared numerator degree <= {d.num} in (x, eps), bound (d/(P - S*D1 - 1))^k "
