@@ -217,7 +217,7 @@ def _gradient_deg(run, fn, base):
 
 
 def _bracket_deg(run, a, b, q):
-    """∇Iᵀ Q ∇I' for the integrals named ``a``, ``b`` and Q polynomial of degree q (one denominator per factor)."""
+    """∇Iᵀ Q ∇I' for the integrals named ``a``, ``b``, Q polynomial of degree q (one denominator per factor)."""
     a, b = function_deg(run.integrals[a]), function_deg(run.integrals[b])
     if a is None or b is None or q is None:
         return None

@@ -292,9 +292,10 @@ class Run:
 
 # --- the other modes: identities over F_P (Schwartz–Zippel) and symbolic proofs ------------
 
-#: the largest dimension the symbolic mode takes: every claim of the Euler top (N = 3) in 0.3 s,
-#: of the family's n = 2 (N = 4, 3 maps) in 6 s; N = 6 (the Lagrange top, the family's n = 3)
-#: did not finish in 5 minutes
+#: the largest dimension the symbolic mode takes, measured on a loaded 2-core machine: every claim
+#: of the Euler top (N = 3) in 0.3 s, of the family's n = 2 (N = 4, 3 maps) in 6 s; in N = 6 the
+#: Lagrange top took 10 s, but Clebsch's reversibility did not finish in 5 minutes and the
+#: family's n = 3 spends 1.5 CPU minutes on H~ conserved by Phi_f alone (of dozens of such claims)
 SYMBOLIC_MAX_DIM = 4
 
 
@@ -368,7 +369,8 @@ def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=
                         f"r x r minor mod P){note}")
         elif false is not None:
             j, first = false
-            holds, evidence = False, f"exact refutation over F_{P}: nonzero residual at a regular point (draw {j}){note}"
+            holds = False
+            evidence = f"exact refutation over F_{P}: nonzero residual at a regular point (draw {j}){note}"
         elif not first.expected:
             holds, evidence = first.holds, f"exact over F_{P}: held at the {k} random points (x, eps){note}"
         elif d is None:
@@ -393,7 +395,8 @@ def symbolic_limit(system) -> int:
     N = system.dim
     if N > SYMBOLIC_MAX_DIM:
         raise InputError(f"prove: symbolic proofs are offered up to dimension {SYMBOLIC_MAX_DIM} "
-                         f"(SYMBOLIC_MAX_DIM; dimension 6 takes beyond minutes), {system.name} has dimension {N}; "
+                         f"(SYMBOLIC_MAX_DIM: in dimension 6 Clebsch and the family's n = 3 take beyond minutes), "
+                         f"{system.name} has dimension {N}; "
                          f"--identities checks the same claims over F_P")
     return N
 
