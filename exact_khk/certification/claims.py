@@ -532,10 +532,14 @@ def commutation(run):
         run.control(f"control: commutation with Phi_{g} at 2 eps",
                     f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
                     lambda phi_2g=phi_2g: compare(ar, commute_items(run.phi, phi_2g, pts)), expected=False)
+    def image(m, k):  # Φ_m(x_k) at a point of the Φ_f orbit, memoised: every pair shares it
+        return run.memo((m, "image", k), lambda: run.orbit(m)[1] if k == 0 and run.paper else run.map(m).step(pts[k]))
+
     for a, b in combinations(names[1:], 2) if run.options["pairs"] == "all" else ():
         run.add(f"commutation Phi_{a} o Phi_{b}", f"Phi_{a}(Phi_{b}(x)) = Phi_{b}(Phi_{a}(x)) at the {len(pts)} "
-                f"points x_k of the Phi_f orbit", lambda a=a, b=b: compare(ar, commute_points_items(
-                    run.map(a), run.map(b), pts)), degree=degree)
+                f"points x_k of the Phi_f orbit", lambda a=a, b=b: compare(ar, (
+                    (k, lambda k=k: (run.map(a).step(image(b, k)), run.map(b).step(image(a, k))))
+                    for k in run.points)), degree=degree)
 
 
 # --- involution -----------------------------------------------------------------------
