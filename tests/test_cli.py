@@ -112,7 +112,7 @@ def test_liouville_default_runs_on_the_built_in_system(capsys):
 
     assert main(["liouville"]) == 0
     out = capsys.readouterr().out
-    assert "exact in Q(zeta_3)" in out and "control:conservation" in out
+    assert "exact in Q(zeta_3)" in out and "control: integral H~ conserved by Phi_control" in out
     assert main(["liouville", "--arith", "flint"]) == 2
     assert "cyclo:3" in capsys.readouterr().err
 

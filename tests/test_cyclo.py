@@ -9,8 +9,8 @@ from exact_khk import InputError, KahanMap, LiePoissonSystem, NotRationalError, 
 from .conftest import EXACT
 from exact_khk.arith.cyclotomic import CycloNumber, cyclotomic_field
 from exact_khk.systems.lie_poisson.invariants import grad_Htilde
-from exact_khk.certification.identities import (integral_patterns, involution_patterns,
-                                  liouville_at_points, liouville_identities)
+from exact_khk.certification.identities import integral_patterns, involution_patterns
+from exact_khk.certification.lie_poisson import liouville
 from exact_khk.systems.lie_poisson.invariants import Htilde
 from exact_khk.systems.lie_poisson.system import (DEFAULT_X0, default_system, involution_circulant,
                                involution_circulant_cyclotomic, rational_sign_patterns, random_point)
@@ -185,14 +185,23 @@ def test_grad_htilde_matches_symbolic_derivative(n):
 # --- complete Liouville integrability, exact in Q(ζ_N) --------------------------------
 
 
-def _check(records):
-    assert [r.name for r in records] == ["conservation", "commutation", "gradients", "involutivity:J",
-                                         "involutivity:Pi", "rank", "control:commutation",
-                                         "control:conservation"]
+def _check(records, n=None, patterns=None, pairs="all"):
+    """Every claim holds and the family's four controls fail; the claims cover conservation of every
+    integral by every map, commutation (of every pair of maps), ∇K~ = B∇H~ and the brackets of every
+    pair of the n + 1 integrals (H~ and the n K~_j), and the rank."""
     for r in records:
         assert r.passed, r
-    assert [r.holds for r in records if r.name.startswith("control")] == [False, False]
-    assert all(r.residual != "0" for r in records if r.name.startswith("control"))
+    names = [r.name.removeprefix("identity: ") for r in records]
+    controls = [r for r in records if not r.expected]
+    assert [r.holds for r in controls] == [False] * 4 and all(r.residual != "0" for r in controls)
+    if n is not None:
+        maps = 1 + len(involution_patterns(n) if patterns is None else patterns)
+        integrals = 1 + len([s for s in integral_patterns(n) if s != "+" * n])
+        assert sum(x.startswith("integral ") and " conserved by Phi_" in x for x in names) == integrals * maps
+        assert sum(x.startswith("commutation ") for x in names) == (maps * (maps - 1) // 2 if pairs == "all"
+                                                                    else maps - 1)
+        assert sum(x.startswith("involution {") for x in names) == integrals * (integrals - 1)
+        assert any(x.startswith("rank of integral gradients") for x in names)
 
 
 def test_paper_6d_example_with_b0_b1_b2():
@@ -201,30 +210,30 @@ def test_paper_6d_example_with_b0_b1_b2():
     system = default_system()
     assert integral_patterns(3) == ["-++", "+-+", "++-"]
     for N in (3, 6):
-        recs = liouville_at_points(system, DEFAULT_X0, "1/10", f"cyclo:{N}", steps=3,
-                                   patterns=integral_patterns(3))
-        _check(recs)
-        assert recs[0].evidence == f"exact in Q(zeta_{N}) at 4 orbit points"
-        assert recs[5].residual == "ranks [3, 3, 3, 3], n = 3"
+        recs = liouville(system, DEFAULT_X0, "1/10", f"cyclo:{N}", steps=3, patterns=integral_patterns(3))
+        _check(recs, 3, integral_patterns(3))
+        assert recs[0].evidence == f"exact in Q(zeta_{N})" and recs[0].detail == "checked at 3 orbit points"
+        rank = next(r for r in recs if r.name.startswith("rank of integral gradients (H~"))
+        assert rank.residual == "rank 3" and rank.detail == "rank 3 at 4 of 4 points"
 
 
-@pytest.mark.parametrize("n, pairs, steps", [(2, "all", 1), (3, "all", 1), (4, "all", 1), (5, "f", 0)])
+@pytest.mark.parametrize("n, pairs, steps", [(2, "all", 1), (3, "all", 1), (4, "all", 1), (5, "f", 1)])
 def test_liouville_exact_all_involutions(n, pairs, steps):
     system = LiePoissonSystem.random(n, seed=n)
-    _check(liouville_at_points(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=steps, pairs=pairs))
+    _check(liouville(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=steps, pairs=pairs), n, pairs=pairs)
 
 
-def test_liouville_singular_step_names_the_map_and_the_point(capsys):
-    """At x0 = (0, -3, 2, 3, 3, 0, 2, 3) (the point --seed 1 drew before seeded points avoided the
-    degenerate sets), exact-khk liouville --n 4 --seed 1 stops with exit 3 because Phi_f is singular
-    at Phi_g[++-+](x_0); the message names that step, and the claim is re-checked directly."""
+def test_liouville_at_a_singular_step_is_inconclusive_and_names_it(capsys):
+    """At x0 = (0, -3, 2, 3, 3, 0, 2, 3) Phi_f is singular at Phi_g[++-+](x_0): the commutation of
+    the two maps is undecided there (certify's rule: a point where a side is undefined is skipped
+    and listed), so liouville ends INCONCLUSIVE (exit 4); the singular step is re-checked directly."""
     from exact_khk.cli.main import main
     from exact_khk.errors import SingularStepError
 
     given = "0,-3,2,3,3,0,2,3"
-    assert main(["liouville", "--n", "4", "--seed", "1", "--x0", given, "--quiet"]) == 3
-    err = capsys.readouterr().err
-    assert "at the orbit point x = x_0 of Phi_f: a step of Phi_f at Phi_g[++-+](x)" in err
+    assert main(["liouville", "--n", "4", "--seed", "1", "--x0", given, "--quiet"]) == 4
+    out = capsys.readouterr().out
+    assert "??   commutation Phi_f o Phi_g[++-+]" in out and "Kahan step undefined" in out
     system, ar = LiePoissonSystem.random(4, 1), get_arith("cyclo:4")
     x0 = [Fraction(t) for t in given.split(",")]
     y = KahanMap(system.field_for_signs("++-+"), "1/10", ar).step(x0)
@@ -233,35 +242,36 @@ def test_liouville_singular_step_names_the_map_and_the_point(capsys):
     KahanMap(system.field("f"), "1/10", ar).step(x0)  # x_0 itself is regular for Phi_f
 
 
-def test_liouville_pole_names_the_integral_and_the_point(capsys):
-    """exact-khk liouville --n 4 --seed 6 meets a pole of K~[-+++] at Phi_f(x_1) = x_2: exit 3,
-    and the message names the integral and the point; the pole is re-checked directly."""
+def test_liouville_pole_is_skipped_and_listed(capsys):
+    """exact-khk liouville --n 4 --seed 6 meets a pole of H~ at x_2 = Phi_f(x_1): the point is
+    skipped and listed by each check that needs it (the others decide), and the pole is re-checked
+    directly."""
     from exact_khk.cli.main import main
     from exact_khk.errors import PoleError
 
-    assert main(["liouville", "--n", "4", "--seed", "6", "--quiet"]) == 3
-    err = capsys.readouterr().err
-    assert "K~_0 = K~[-+++] at Phi_f(x) (x = x_1, the orbit point of Phi_f)" in err
+    assert main(["liouville", "--n", "4", "--seed", "6", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "skipped k = [2], where undefined (first: H~ has a pole at x = " in out
     system = LiePoissonSystem.random(4, 6)
     x2 = KahanMap(system.field("f"), "1/10", "fraction").orbit(random_point(4, 6, system=system), 2)[2]
     with pytest.raises(PoleError):
-        Htilde(system.field_for_signs("-+++"), x2, "1/10", "fraction")
+        Htilde(system.field("f"), x2, "1/10", "fraction")
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("n", [5, 6, 7, 8])
 def test_liouville_exact_all_involutions_large_n(n):
     system = LiePoissonSystem.random(n, seed=n)
-    _check(liouville_at_points(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=0,
-                               pairs="all" if n <= 6 else "f"))
+    pairs = "all" if n <= 6 else "f"
+    _check(liouville(system, random_point(n, 1), "1/7", f"cyclo:{n}", steps=1, pairs=pairs), n, pairs=pairs)
 
 
 def test_rational_arithmetic_keeps_rational_involutions():
     # n = 4 in Q: only rational patterns; the full set of integrals needs cyclo:4
     system = LiePoissonSystem.random(4, seed=4)
     pats = [p for p in rational_sign_patterns(4) if p not in ("++++", "----")]
-    with pytest.raises(NotRationalError):
-        liouville_at_points(system, random_point(4, 1), "1/7", "flint", steps=0, patterns=pats)
+    with pytest.raises(InputError, match="not a rational involution"):
+        liouville(system, random_point(4, 1), "1/7", "flint", steps=1, patterns=pats)
 
 
 def test_integrals_are_exact_in_every_field_containing_omega():
@@ -277,7 +287,7 @@ def test_n2_liouville_in_every_exact_arithmetic(name):
     """n = 2: all involutions are rational, so every exact arithmetic certifies the
     claims, and the controls fail in each of them."""
     system = LiePoissonSystem.random(2, seed=7)
-    _check(liouville_at_points(system, random_point(2, 3), "1/5", name, steps=2))
+    _check(liouville(system, random_point(2, 3), "1/5", name, steps=2), 2)
 
 
 # --- command line -----------------------------------------------------------------------
@@ -290,25 +300,25 @@ def test_cli_liouville_cyclo(capsys):
 
     assert main(["liouville", "--arith", "cyclo:3", "--involutions", "basis", "--steps", "1", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert out["ok"] and out["involutions"] == ["-++", "+-+", "++-"]
-    assert {r["name"]: r["holds"] for r in out["records"]}["control:commutation"] is False
-    assert all(r["evidence"] == "exact in Q(zeta_3) at 2 orbit points" for r in out["records"])
-    assert main(["liouville", "--arith", "flint", "--steps", "0"]) == 2
-    assert "--arith: flint cannot represent" in capsys.readouterr().err
+    assert out["ok"] and out["status"] == "VALID" and out["involutions"] == ["-++", "+-+", "++-"]
+    holds = {r["name"]: r["holds"] for r in out["records"]}
+    assert holds["control: commutation with non-associated field"] is False
+    assert holds["involution {K~[-++],K~[++-]}_Pi"] is True
+    assert all(r["evidence"] == "exact in Q(zeta_3)" for r in out["records"])
+    assert main(["liouville", "--arith", "flint", "--steps", "1"]) == 2
+    assert "is not a rational involution" in capsys.readouterr().err
 
 
-def test_liouville_reports_progress_in_solves():
-    """``progress(k)`` hears the running count of solves, ending at the count the
-    Schwartz–Zippel bound states for one point (a single trial, so the two agree)."""
+def test_liouville_reports_progress_by_check():
+    """``progress(name)`` hears each check before it runs, at points and over F_P."""
     system = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
     seen = []
-    recs = liouville_identities(system, trials=1, seed=1, progress=seen.append)
-    assert all(r.passed for r in recs)
-    solves = int(re.search(r"S = (\d+) solves", recs[0].evidence).group(1))
-    assert seen == sorted(set(seen)) and seen[-1] == solves > 10
+    recs = liouville(system, arith=f"gf:{4611686018420360881}", trials=1, seed=1, progress=seen.append)
+    assert all(r.passed for r in recs) and seen[0] == "integral H~ conserved by Phi_f"
+    assert [r.name for r in recs] == [f"identity: {name}" for name in seen]
     seen.clear()
-    liouville_at_points(system, DEFAULT_X0, "1/10", "cyclo:3", steps=1, progress=seen.append)
-    assert seen == sorted(set(seen)) and seen[-1] == 2 * solves  # two orbit points, the same solves each
+    recs = liouville(system, DEFAULT_X0, "1/10", "cyclo:3", steps=1, progress=seen.append)
+    assert [r.name for r in recs] == seen
 
 
 @pytest.mark.parametrize("n", range(2, 13))

@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from exact_khk import KahanMap, LiePoissonSystem, get_arith
-from exact_khk.certification.proofs import (RationalFunctionArith, prove_all, prove_commutation, prove_conservation,
-                              prove_jacobi)
+from exact_khk.certification.engine import symbolic_checks
+from exact_khk.certification.proofs import RationalFunctionArith, prove_jacobi
 
 S2 = LiePoissonSystem.from_vectors("1,2", "0,1", "3,1")
 
@@ -69,37 +69,26 @@ def test_kahan_step_over_rational_functions_specialises_to_the_rational_step():
     """The symbolic step at x = (1, 0, 0, 1), ε = 1/3 equals the exact rational step."""
     ar = RationalFunctionArith(["x0", "x1", "x2", "x3", "eps"])
     *x, eps = ar.gens()
-    from exact_khk.certification.proofs import _kmap
-
-    y = _kmap(S2.field("f"), eps, ar).step(x)
+    y = KahanMap(S2.field("f"), eps, ar, method="dense").step(x)
     point = [1, 0, 0, 1, Fraction(1, 3)]
     spec = [ar.evaluate(t, point) for t in y]
     assert spec == list(KahanMap(S2.field("f"), "1/3", "fraction").step([1, 0, 0, 1]))
 
 
 def test_n2_proofs():
-    """Each proof is followed by its negative control, which must be disproved."""
-    recs = prove_all(S2)
-    assert [r.name for r in recs] == ["proof:conservation", "proof:conservation:control", "proof:commutation",
-                                      "proof:commutation:control", "proof:jacobi", "proof:jacobi:control"]
+    """Every claim of the registry proved for the family's n = 2 (the engine's symbolic mode), each
+    negative control disproved."""
+    recs = symbolic_checks(S2.with_involutions(["+-", "-+"]))
+    names = [r.name for r in recs]
+    for name in ("integral H~ conserved by Phi_f", "integral K~[+-] conserved by Phi_g[-+]",
+                 "commutation Phi_f o Phi_g[+-]", "Poisson tensor Pi Jacobi identity", "involution {H~,K~[-+]}_Pi",
+                 "control: commutation with non-associated field", "control: integral H~ conserved by Phi_control"):
+        assert f"proof: {name}" in names, name
     for r in recs:
-        control = r.name.endswith(":control")
-        assert r.passed and r.expected is not control and r.holds is not control, r
-        assert (r.residual == "0") is not control
-        assert r.evidence.startswith("symbolic disproof: " if control else "symbolic proof: ")
-    assert "Q(x0, x1, x2, x3, eps)" in recs[0].evidence
-
-
-@pytest.mark.parametrize("signs", ["-+", "+-"])
-def test_n2_associated_maps(signs):
-    assert prove_conservation(S2, kind="g", signs=signs).holds is True
-    assert prove_commutation(S2, kind="g", signs=signs).holds is True
-
-
-def test_n2_negative_controls_fail_symbolically():
-    for r in (prove_conservation(S2, kind="control"), prove_commutation(S2, kind="control")):
-        assert r.expected is False and r.holds is False and r.passed, r
-        assert r.residual != "0" and "eps" in r.residual
+        assert r.passed and r.holds is r.expected, r
+        assert (r.residual == "0") is r.expected or r.name.startswith("proof: rank")
+        assert r.evidence.startswith("symbolic proof: " if r.expected else "symbolic disproof: ")
+    assert "Q(x0, x1, x2, x3, eps)" in recs[0].evidence and len([r for r in recs if not r.expected]) == 4
 
 
 @pytest.mark.parametrize("n", [2, 3])
@@ -119,35 +108,18 @@ def test_jacobi_negative_control():
     assert not ok and res != "0"
 
 
-def test_prove_all_is_for_n2_and_3():
+def test_prove_is_for_n2_and_refuses_big_coefficients_at_once():
+    """n = 3 (dimension 6: H~ conserved by Phi_f alone takes 1.5 CPU minutes, and the registry has
+    dozens of such claims) is refused, as is a 5000-digit coefficient (SymPy ran for minutes)."""
     from exact_khk import InputError
+    from exact_khk.certification.lie_poisson import PROVE_MAX_BITS, prove_limits
 
-    with pytest.raises(InputError, match="n = 2"):
-        prove_all(LiePoissonSystem.random(4, seed=1))
-
-
-def test_prove_all_refuses_coefficients_beyond_its_bits_at_once():
-    """A 5000-digit coefficient ran SymPy for minutes: refused before any proof starts."""
-    from exact_khk import InputError
-    from exact_khk.certification.proofs import PROVE_MAX_BITS
-
+    with pytest.raises(InputError, match="dimension 4"):
+        prove_limits(LiePoissonSystem.random(3, seed=1))
     big = LiePoissonSystem.from_vectors([2 ** PROVE_MAX_BITS, 1], "0,1", "3,1")
     with pytest.raises(InputError, match=rf"a coefficient of {PROVE_MAX_BITS + 1} bits is beyond the "
                                          rf"{PROVE_MAX_BITS} bits"):
-        prove_all(big, progress=lambda stage: pytest.fail(f"a proof started: {stage}"))
-
-
-@pytest.mark.slow
-def test_n3_proofs_and_their_controls():
-    """n = 3 (about 11 CPU minutes since Henrici's arithmetic; before it, conservation alone
-    did not finish in 13 minutes): the three identities proved, the three controls disproved,
-    with progress reported before each."""
-    from exact_khk.systems.lie_poisson import default_system
-
-    stages = []
-    recs = prove_all(default_system(), stages.append)
-    assert [r.holds for r in recs] == [True, False, True, False, True, False]
-    assert all(r.passed for r in recs) and len(stages) == 6 and "n = 3" in recs[0].claim
+        prove_limits(big)
 
 
 def test_symbolic_results_agree_with_exact_arithmetic_at_a_point():
@@ -161,14 +133,7 @@ def test_symbolic_results_agree_with_exact_arithmetic_at_a_point():
     assert ar.evaluate(h, [2, -1, 1, 3, Fraction(1, 5)]) == Htilde(S2.field("f"), [Q(t) for t in (2, -1, 1, 3)], "1/5", Q)
 
 
-def test_cli_prove(capsys):
-    from exact_khk.cli.main import main
-
-    assert main(["prove", "--n", "2", "--seed", "1"]) == 0
-    out = capsys.readouterr().out
-    assert out.count("symbolic proof") == 3 and out.count("symbolic disproof") == 3
-
-
+@pytest.mark.slow
 def test_cli_prove_takes_a_system_by_its_vectors_without_a_point(capsys):
     """--a/--b/--c name a system; prove needs no --x0 (and refuses one): it used to demand
     it, so a system given by its vectors could not be proved at all."""
@@ -176,7 +141,7 @@ def test_cli_prove_takes_a_system_by_its_vectors_without_a_point(capsys):
 
     assert main(["prove", "--a", "1,0", "--b", "2,1", "--c", "1,3"]) == 0
     out = capsys.readouterr().out
-    assert "a=(1, 0), b=(2, 1), c=(1, 3)" in out and out.count("holds=True") == 3
+    assert "a=(1, 0), b=(2, 1), c=(1, 3)" in out and "VALID" in out and "FAIL" not in out
     assert main(["orbit", "--a", "1,0", "--b", "2,1", "--c", "1,3"]) == 2   # a point command still needs --x0
     assert "--x0 is required" in capsys.readouterr().err
 
@@ -192,19 +157,21 @@ def test_evidence_doc_examples_run(capsys):
     for b in blocks:
         exec(compile(b, "docs/evidence.md", "exec"), {})
     out = capsys.readouterr().out
-    assert out.count("exact in Q(zeta_3) at 4 orbit points") == 8
-    assert "control:commutation False" in out and "proof:jacobi True" in out
+    assert "control: commutation with non-associated field False exact in Q(zeta_3)" in out
+    assert "involution {K~[-++],K~[++-]}_Pi True exact in Q(zeta_3)" in out and "None" not in out
+    assert "proof: Poisson map Phi_f True symbolic proof: identity in Q(x0, x1, x2, eps)" in out
+    assert "for every admissible Hessian" in out
 
 
 def test_cli_prove_without_options_proves_the_documented_n2_system(capsys):
-    """`exact-khk prove` alone refused (the built-in default has n = 3); it now proves the n = 2
-    system of docs/evidence.md, with the three negative controls disproved."""
+    """`exact-khk prove` alone proves the n = 2 system of docs/evidence.md: every claim of the
+    registry proved, the four negative controls disproved."""
     from exact_khk.cli.main import main
 
     assert main(["prove"]) == 0
     out = capsys.readouterr().out
-    assert "a=(1, 2), b=(0, 1), c=(3, 1)" in out and out.count("ok  ") == 6 and "FAIL" not in out
-    assert out.count(":control") == 3 and out.count("holds=False") == 3
+    assert "a=(1, 2), b=(0, 1), c=(3, 1)" in out and "FAIL" not in out and out.rstrip().endswith("VALID")
+    assert out.count("symbolic disproof") == 4 and out.count("holds=False") == 4
 
 
 @pytest.mark.parametrize("option", [["--eps", "1/3"], ["--x0", "1,0,0,1"]])

@@ -344,7 +344,7 @@ def test_inline_errors_from_the_mathematics(tmp_path):
                       'prove = true\n', origin="p.toml")
     res = run_sweep(spec, tmp_path, workers=0, plots=False)
     (rec,) = lines(tmp_path)
-    assert rec["verdict"] == "ERROR" and rec["error"].startswith("InputError: prove: symbolic proofs are available")
+    assert rec["verdict"] == "ERROR" and rec["error"].startswith("InputError: prove: symbolic proofs are offered up to dimension 4")
     assert res.summary.counts == {"ERROR": 1}
 
 

@@ -14,7 +14,7 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
     """Certify ``system`` (default: the built-in Lie–Poisson system) on the orbit of
     ``x0``; see :func:`exact_khk.certification.lie_poisson.certify` (options
     ``signs``, ``poisson_points``, ``identities``, ``prove``) and
-    :func:`exact_khk.certification.engine.certify_system` (option ``claims``)."""
+    :func:`exact_khk.certification.engine.certify_system` (options ``claims``, ``identities``, ``prove``)."""
     from exact_khk.certification import engine, lie_poisson
     from exact_khk.errors import InputError
     from exact_khk.systems.catalogue import System, resolve
@@ -26,7 +26,8 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
     if not isinstance(system, System):
         raise InputError(f"system: expected a System (e.g. System.load('euler-top')) or a catalogue name, "
                          f"got {type(system).__name__}")
-    other = sorted(set(options) - {"claims", "progress"})
+    other = sorted(set(options) - {"claims", "progress", "identities", "prove"})
     if other:
-        raise InputError(f"{other[0]}: an option of Lie-Poisson systems only; {system.name} takes claims=")
+        raise InputError(f"{other[0]}: an option of Lie-Poisson systems only; {system.name} takes claims=, "
+                         f"identities=, prove=")
     return engine.certify_system(system, x0, eps, steps, arith, **options)

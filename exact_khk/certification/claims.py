@@ -51,12 +51,28 @@ automatic ones (:meth:`~exact_khk.certification.engine.Run.control`).  Quantitie
 share (integrals, gradients, Π) come memoised from the run, by the system's fast forms where it
 has them (:meth:`~exact_khk.systems.base.System.fast_forms`; the generic route where None).
 
-Adding a kind of claim is one :class:`Claim` here (plus what a system declares for it).
+The engine runs the registry in three modes (:mod:`~exact_khk.certification.engine`): exact at
+the orbit points; as identities over F_P at random draws of (x, ε) (Schwartz–Zippel,
+:func:`~exact_khk.certification.engine.identity_checks`); and symbolically over Q(x, ε)
+(:func:`~exact_khk.certification.engine.symbolic_checks`).  The claims are written once for
+all three: the modes only change the arithmetic and x0 (a random draw or the symbols, one
+step; ``run.points`` is then x0 alone, and ``run.point_free`` tells the controls' rules that
+there is no point to judge them by), so a claim states its mode evaluations by what it passes
+to ``run.add``: ``degree=lambda: Deg(...)``, the bound in (x, ε) of its residual as a rational
+function (:class:`Deg`, derived from what the system declares by the rules there), which the
+identity mode needs for its failure bound (a check without one is recorded there as not
+available, undecided).  Controls need no bound (a nonzero residual refutes exactly), nor does
+the rank (rank r at one point proves generic rank r).
+
+Adding a kind of claim is one :class:`Claim` here, each check with its ``degree`` (plus what a
+system declares for it).
 """
 
 from __future__ import annotations
 
 from fractions import Fraction
+from itertools import combinations, product
+from typing import NamedTuple
 
 from exact_khk.arith import get_arith
 from exact_khk.certification.checks import (bracket, commute_items, commute_points_items, compare, conserved_items,
@@ -72,6 +88,159 @@ from exact_khk.linalg.dual import jacobian as dual_jacobian
 #: relative perturbation of the "perturbed point" controls (exact arithmetics)
 PERTURBATION = Fraction(1, 2 ** 60)
 
+
+
+# --- degrees in (x, eps): the Schwartz–Zippel bounds of the identity mode -----------------
+
+
+class Deg(NamedTuple):
+    """Degree bounds of a rational function of (x, ε) (every x_i and ε a variable of degree 1)
+    written num/den: ``num`` and ``den`` bound the total degrees of a numerator and a denominator,
+    ``sing`` the degree of the product of every denominator its evaluation divides by (a draw where
+    that product vanishes is singular and redrawn).  The rules (``(a, b)`` = (num, den)):
+
+    * a coordinate of x: (1, 0); a declared function: its (deg num, deg den) (:func:`function_deg`);
+    * a Kahan step of a quadratic field at y = Y/D (Y, D of degrees ≤ (s, r)): L = D(I − εf'(y))
+      has entries of degree ≤ u = max(s, r) + 1 and f(y) = F/D² with deg F ≤ 2t, t = max(s, r + 1),
+      so Φ(y) = y + 2ε adj(L) F/(det L · D) (Cramer) is (max(s + Nu, 1 + (N−1)u + 2t), Nu + r),
+      dividing by det L (degree Nu): at y = x, (2N + 1, 2N) (:func:`step_deg`);
+    * a function (a, b) at y = Y/D as above: p(Y/D) = P̂/D^a with deg P̂ ≤ a·t (a monomial x^α ε^j,
+      |α| + j ≤ a, becomes Y^α ε^j D^(a−|α|)), so (a t + (b − m) r, b t + (a − m) r), m = min(a, b),
+      dividing by the cleared denominator (degree b t) (:func:`at`);
+    * a − b: (max(a1 + b2, a2 + b1), b1 + b2); a·b: (a1 + a2, b1 + b2); a sum of products with
+      one denominator per factor: the same as one product; ∂/∂x_i: (a + b − 1, 2b).
+
+    A check's residual is compared at its first point (k = 0, or k = 1 for conservation): it
+    vanishes at a random regular draw with probability ≤ num/(P − …) unless it is zero."""
+
+    num: int
+    den: int
+    sing: int = 0
+
+
+X = Deg(1, 0)  # a coordinate of x (or ε)
+
+
+def minus(a, b):
+    return Deg(max(a.num + b.den, b.num + a.den), a.den + b.den, a.sing + b.sing)
+
+
+def times(a, b):
+    return Deg(a.num + b.num, a.den + b.den, a.sing + b.sing)
+
+
+def partial(a):
+    return Deg(a.num + a.den - 1, 2 * a.den, a.sing)
+
+
+def at(fn, y):
+    """The function of degrees ``fn`` evaluated at the point of degrees ``y`` (see :class:`Deg`)."""
+    t, m = max(y.num, y.den + 1), min(fn.num, fn.den)
+    return Deg(fn.num * t + (fn.den - m) * y.den, fn.den * t + (fn.num - m) * y.den,
+               y.sing + fn.sing + fn.den * t)
+
+
+def step_deg(N, y=X):
+    """A Kahan step of a quadratic field in dimension N at the point of degrees ``y``."""
+    u, t = max(y.num, y.den) + 1, max(y.num, y.den + 1)
+    return Deg(max(y.num + N * u, 1 + (N - 1) * u + 2 * t), N * u + y.den, y.sing + N * u)
+
+
+def jacobian_deg(N):
+    """dΦ(x) = (I − εf'(x))^{-1}(I + εf'(Φ(x))): adj/det (2N − 2, 2N) times entries (u, 2N) of
+    I + εf'(y) at y = Φ(x) (u = 2N + 2), one denominator per factor."""
+    y = step_deg(N)
+    return Deg(2 * N - 2 + max(y.num, y.den) + 1, 2 * N + y.den, y.sing + 2 * N)
+
+
+def function_deg(fn):
+    """(deg num, deg den) in (x, ε) of a declared function (a
+    :class:`~exact_khk.systems.functions.RationalFunction`, or an object with ``degrees()``),
+    or None when it states none."""
+    if hasattr(fn, "degrees"):
+        a, b = fn.degrees()
+        return Deg(a, b, b)
+    num, den = getattr(fn, "num", None), getattr(fn, "den", None)
+    if num is None or not hasattr(num, "terms"):
+        return None
+    a, b = (max((sum(e) for e in p.terms), default=0) for p in (num, den))
+    return Deg(a, b, b)
+
+
+def tensor_deg(P):
+    """The degree of a Poisson tensor with polynomial entries (``degrees()``, or the entries of a
+    :class:`~exact_khk.systems.functions.PolynomialTensor` with constant denominators), else None."""
+    if hasattr(P, "degrees"):
+        return P.degrees()
+    entries = [e for row in getattr(P, "entries", ()) for e in row]
+    degs = [function_deg(e) for e in entries]
+    if not entries or any(d is None or d.den for d in degs):
+        return None
+    return max(d.num for d in degs)
+
+
+def _poly(p):
+    return None if p is None else Deg(p, 0)
+
+
+def _conserved_deg(run, fn):
+    """I(Φ(x)) − I(x)."""
+    d = function_deg(fn)
+    return None if d is None else minus(at(d, step_deg(run.system.dim)), d)
+
+
+def _definition_deg(run, fn):
+    """I(x) − h(x, Φ(x)), h = (2ε)^{-1} xᵀ J(z)^{-1} x̃ with J linear and z = (x + x̃)/2 = Z/D
+    (deg Z ≤ 2N + 1, deg D ≤ 2N): xᵀ adj(J(Z)) X̃ / det J(Z) (D cancels) is
+    (1 + (N−1)(2N+1) + 2N+1, N(2N+1)), and (2ε)^{-1} adds 1 to both."""
+    d, N = function_deg(fn), run.system.dim
+    c = N * (2 * N + 1) + 1
+    return None if d is None else minus(d, Deg(c, c, 2 * N + c))
+
+
+def _jacobi_deg(P):
+    """Σ Π_im ∂_mΠ_jk (cyclic) for polynomial entries of degree p: 2p − 1."""
+    p = tensor_deg(P)
+    return None if p is None else Deg(max(2 * p - 1, 0), 0)
+
+
+def _poisson_map_deg(N, P):
+    """dΦ Π dΦᵀ − Π(Φ(x)) (:func:`jacobian_deg`; Π polynomial of degree p)."""
+    p, J = tensor_deg(P), jacobian_deg(N)
+    return None if p is None else minus(Deg(2 * J.num + p, 2 * J.den, J.sing), at(Deg(p, 0), step_deg(N)))
+
+
+def _gradient_deg(run, fn, base):
+    """∇I_B − B ∇I (B constant)."""
+    a, b = function_deg(fn), function_deg(run.integrals[base])
+    return None if a is None or b is None else minus(partial(a), partial(b))
+
+
+def _bracket_deg(run, a, b, q):
+    """∇Iᵀ Q ∇I' for the integrals named ``a``, ``b``, Q polynomial of degree q (one denominator per factor)."""
+    a, b = function_deg(run.integrals[a]), function_deg(run.integrals[b])
+    if a is None or b is None or q is None:
+        return None
+    ga, gb = partial(a), partial(b)
+    return Deg(ga.num + q + gb.num, ga.den + gb.den, ga.sing + gb.sing)
+
+
+def _det_deg(N):
+    """det dΦ(x): entries over one denominator (:func:`jacobian_deg`)."""
+    J = jacobian_deg(N)
+    return Deg(N * J.num, N * J.den, J.sing)
+
+
+def _modified_deg(run):
+    """H + (2ε/3) ∇Hᵀ (I − εf'(x))^{-1} f for H polynomial of degree h: (I − εf')^{-1} f is
+    adj/det (2(N−1) + 2, 2N), times ε∇H (h, 0), plus H: (2N + h, 2N)."""
+    N, h = run.system.dim, function_deg(run.system.hamiltonian_form()[1])
+    return None if h is None or h.den else Deg(2 * N + h.num, 2 * N, 2 * N)
+
+
+def _measure_deg(N, m):
+    """m(Φ(x)) det dΦ(x) − m(x)."""
+    return None if m is None else minus(times(at(m, step_deg(N)), _det_deg(N)), m)
 
 
 class Claim:
@@ -101,7 +270,7 @@ def orbit_statement(run, what):
 
 def at_points(run, sides, ks=None):
     """compare(sides(k)) for k in ``ks`` (default: every point of the Φ_f orbit)."""
-    ks = range(len(run.pts)) if ks is None else ks
+    ks = run.points if ks is None else ks
     return lambda: compare(run.ar, ((k, lambda k=k: sides(k)) for k in ks))
 
 
@@ -131,7 +300,7 @@ def definition(run):
         run.add(f"integral {name} (closed form = definition)",
                 f"{name}(x) {fn.definition_text.format(map=f'Phi_{m}')} at the {K} points "
                 f"of the Phi_{m} orbit", at_points(run, lambda k, name=name, m=m, h=h: (run.value(name, m, k), h(k)),
-                                                   range(K)))
+                                                   range(K)), degree=lambda fn=fn: _definition_deg(run, fn))
 
 
 # --- reversibility ------------------------------------------------------------------
@@ -155,8 +324,10 @@ def commuting(ar, name, phi_f, phi_g, pts):
 @claim("reversibility")
 def reversibility(run):
     ar, K = run.ar, run.steps
+    N = run.system.dim
     for name in run.system.field_names():
-        run.add(*reversible(ar, name, run.map(name), run.orbit(name)))
+        run.add(*reversible(ar, name, run.map(name), run.orbit(name)),
+                degree=lambda: minus(step_deg(N, step_deg(N)), X))
     pts = run.pts
     run.control("control: Phi_f applied twice returns",
                 "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
@@ -186,7 +357,8 @@ def integrals(run):
                 statement = f"{name}(y_k) = {name}(y_0) along the Phi_{m} orbit of x0"
                 evaluate = lambda fn=fn, m=m: compare(ar, conserved_items(  # noqa: E731
                     lambda x: fn(ar, x, run.e), lazy_orbit(run.map(m), run.x0, K)))
-            run.add(f"integral {name} conserved by Phi_{m}", statement, evaluate)
+            run.add(f"integral {name} conserved by Phi_{m}", statement, evaluate,
+                    degree=lambda fn=fn: _conserved_deg(run, fn))
         _perturbed_point_control(run, name, fn)
         if fn.depends_on_eps:
             _eps_zero_control(run, name, fn)
@@ -244,7 +416,7 @@ def declared_controls(run):
         run.add(f"control: {name} conserved by Phi_f",
                 f"[control, must fail] {name} = {fn.text} is conserved along the Phi_f orbit",
                 lambda fn=fn: compare(ar, conserved_items(lambda x: fn(ar, x, e), pts)), expected=False)
-    for c in run.system.negative_controls(run.x0, run.eps):
+    for c in run.system.negative_controls(*((None, None) if run.point_free else (run.x0, run.eps))):
         fn, statement = c.function, c.statement
         if c.kind == "commutes":
             evaluate = lambda c=c: compare(ar, commute_points_items(  # noqa: E731
@@ -266,6 +438,7 @@ def declared_controls(run):
         check = run_check(c.name, statement, ar, evaluate, False,
                           degenerate=(lambda c=c: c.degenerate(ar, pts)) if c.degenerate else None)
         why = c.moot() if c.moot is not None and check.applicable else None
+        run.origin.append((None, None))
         run.checks.append(inapplicable(check, why) if why else check)
 
 
@@ -280,21 +453,23 @@ def poisson(run):
         run.add(f"Poisson tensor {P.name} formula",
                 orbit_statement(run, f"{P.name} = {P.text} equals {P.formula_text}"),
                 at_points(run, lambda k: fast.Pi_sides(pts[k]) if fast is not None
-                          else (run.tensor("f", k), P.formula(ar, pts[k], e))))
+                          else (run.tensor("f", k), P.formula(ar, pts[k], e))), degree=lambda: _poly(tensor_deg(P)))
     jacobi = (lambda k: fast.jacobiator(pts[k])) if fast is not None else (lambda k: P.jacobiator(ar, pts[k], e))
     if run.paper:
         subset = "every point" if len(run.ks) == K else f"{len(run.ks)} of the {K} points (k = {run.ks})"
         run.add(f"Poisson tensor {P.name} Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at {subset} "
-                f"of the Phi_f orbit", at_points(run, lambda k: (jacobi(k), None), run.ks))
+                f"of the Phi_f orbit", at_points(run, lambda k: (jacobi(k), None), run.ks),
+                degree=lambda: _jacobi_deg(P))
         for m in run.field_names:
             run.add(f"Poisson map Phi_{m}",
                     f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) for Phi_{m} at {subset} of its orbit",
-                    lambda m=m: compare(ar, poisson_map_sides(run, m)))
+                    lambda m=m: compare(ar, poisson_map_sides(run, m)), degree=lambda: _poisson_map_deg(N, P))
         return
     run.add("Poisson tensor Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} "
-            f"orbit points", at_points(run, lambda k: (jacobi(k), None)))
+            f"orbit points", at_points(run, lambda k: (jacobi(k), None)), degree=lambda: _jacobi_deg(P))
     run.add("Poisson map Phi_f", f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) at the {K} orbit points",
-            lambda: compare(ar, poisson_map_items(run.phi, lambda k: P.matrix(ar, pts[k], e), pts, range(K))))
+            lambda: compare(ar, poisson_map_items(run.phi, lambda k: P.matrix(ar, pts[k], e), pts, range(K))),
+            degree=lambda: _poisson_map_deg(N, P))
     run.add("control: Jacobi identity of Pi + W", "[control, must fail] Pi + W, W = e_0^e_1 + x_1 e_1^e_2, "
             "satisfies the Jacobi identity at the orbit points",
             lambda: compare(ar, ((k, lambda k=k: (jacobiator(ar, _plus_w(ar, P, e), pts[k]), None))
@@ -346,13 +521,25 @@ def _plus_w(ar, P, e):
 
 @claim("commutation", lambda system: len(system.field_names()) > 1)
 def commutation(run):
-    ar, pts = run.ar, run.pts
-    for g in run.system.field_names()[1:]:
-        run.add(*commuting(ar, g, run.phi, run.map(g), pts))
+    """Φ_f∘Φ_g = Φ_g∘Φ_f for every other field g (option ``pairs`` "all": every pair of maps, at
+    the points of the Φ_f orbit)."""
+    ar, pts, N = run.ar, run.pts, run.system.dim
+    degree = lambda: minus(*[step_deg(N, step_deg(N))] * 2)  # noqa: E731
+    names = run.system.field_names()
+    for g in names[1:]:
+        run.add(*commuting(ar, g, run.phi, run.map(g), pts), degree=degree)
         phi_2g = KahanMap(run.map(g).field, 2 * run.eps, ar)
         run.control(f"control: commutation with Phi_{g} at 2 eps",
                     f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
                     lambda phi_2g=phi_2g: compare(ar, commute_items(run.phi, phi_2g, pts)), expected=False)
+    def image(m, k):  # Φ_m(x_k) at a point of the Φ_f orbit, memoised: every pair shares it
+        return run.memo((m, "image", k), lambda: run.orbit(m)[1] if k == 0 and run.paper else run.map(m).step(pts[k]))
+
+    for a, b in combinations(names[1:], 2) if run.options["pairs"] == "all" else ():
+        run.add(f"commutation Phi_{a} o Phi_{b}", f"Phi_{a}(Phi_{b}(x)) = Phi_{b}(Phi_{a}(x)) at the {len(pts)} "
+                f"points x_k of the Phi_f orbit", lambda a=a, b=b: compare(ar, (
+                    (k, lambda k=k: (run.map(a).step(image(b, k)), run.map(b).step(image(a, k))))
+                    for k in run.points)), degree=degree)
 
 
 # --- involution -----------------------------------------------------------------------
@@ -362,7 +549,8 @@ def commutation(run):
     getattr(fn, "base", None) for fn in system.integrals().values()), files=False)
 def involution(run):
     """{I, I_B}_J = {I, I_B}_Π = 0 and ∇I_B = B ∇I for every integral I_B declared as the
-    image of I under an involution B (J the ε → 0 limit of Π); first the identity of the
+    image of I under an involution B (J the ε → 0 limit of Π; option ``brackets`` "all": the
+    brackets of every pair of integrals, after the gradients); first the identity of the
     gradients of the coefficients of Π's second form, where the tensor declares one."""
     ar, pts, fast = run.ar, run.pts, run.fast
     P = run.system.poisson()
@@ -371,7 +559,7 @@ def involution(run):
             (lambda k: P.coefficient_gradients(ar, pts[k]))
         run.add("gradients of q_l: grad q_l = A^l grad q_0",
                 P.coefficient_statement("closed form" if fast is not None else "dual numbers", len(pts)),
-                at_points(run, lambda k: P.coefficient_sides(grads(k))))
+                at_points(run, lambda k: P.coefficient_sides(grads(k))), degree=lambda: Deg(1, 0))
     if fast is not None:
         J = lambda k: fast.J_int(pts[k])  # noqa: E731
         Pi = lambda k: run.memo(("f", "Pi_int", k), lambda: fast.Pi_int(pts[k]))  # noqa: E731
@@ -379,20 +567,28 @@ def involution(run):
     else:
         J, Pi = (lambda k: P.at_eps_zero(ar, pts[k])), (lambda k: run.tensor("f", k))
         brk, times = bracket, matvec
+    names = list(run.integrals)
     for name, fn in run.integrals.items():
         if getattr(fn, "base", None) is None:
             continue
         B = [[ar.convert(t) for t in row] for row in run.system.involution(fn.signs, cyclotomic=True)]
         B = B if fast is None else fmpq_mat(B)
-        base, s = fn.base, fn.signs
+        base = fn.base
         run.add(f"integral gradients grad {name} = B grad {base}",
                 orbit_statement(run, f"grad {name} = B grad {base} (exact gradients)"),
                 at_points(run, lambda k, name=name, B=B, base=base: (run.gradient(name, k),
-                                                                     times(B, run.gradient(base, k)))))
-        for Q, T in ((P.limit_name, J), (P.name, Pi)):
-            run.add(f"involution {{{base},{name}}}_{Q}", orbit_statement(run, f"grad {base}^T {Q} grad {name} = 0"),
-                    at_points(run, lambda k, name=name, base=base, T=T: (
-                        brk(run.gradient(base, k), T(k), run.gradient(name, k)), None)))
+                                                                     times(B, run.gradient(base, k)))),
+                degree=lambda fn=fn, base=base: _gradient_deg(run, fn, base))
+        if run.options["brackets"] == "base":
+            pairs = [(base, name)]
+        elif name == names[-1]:  # "all": every pair of integrals, after the last one's gradients
+            pairs = list(combinations(names, 2))
+        else:
+            continue
+        for (a, b), (Q, T) in product(pairs, ((P.limit_name, J), (P.name, Pi))):
+            run.add(f"involution {{{a},{b}}}_{Q}", orbit_statement(run, f"grad {a}^T {Q} grad {b} = 0"),
+                    at_points(run, lambda k, a=a, b=b, T=T: (brk(run.gradient(a, k), T(k), run.gradient(b, k)), None)),
+                    degree=lambda a=a, b=b, Q=Q: _bracket_deg(run, a, b, 1 if Q == P.limit_name else tensor_deg(P)))
 
 
 # --- rank of the gradients ----------------------------------------------------------
@@ -406,14 +602,14 @@ def rank_of_gradients(run):
     and the rank drops on critical sets of the integrals (an equilibrium: all gradients vanish).
     So: True with rank r somewhere, None (undecided) if nowhere, False only for a rank above r
     (impossible if the declared relations hold)."""
-    ar, npts = run.ar, len(run.pts)
+    ar, npts = run.ar, len(run.points)
     rank_of = flint_rank if run.fast is not None else (lambda rows: rank(ar, rows))
     for name, statement, rows, expected in run.system.gradient_ranks(ar):
         def evaluate(rows=rows, expected=expected):
             if not getattr(ar, "decides", ar.exact):
                 return None, "n/a", "rank not decidable in this arithmetic"
             ranks, poles = {}, []
-            for k in range(npts):
+            for k in run.points:
                 try:
                     r = rank_of(rows(lambda name, k=k: run.gradient(name, k)))
                 except PoleError:
@@ -441,7 +637,7 @@ def rank_of_gradients(run):
 
 @claim("jacobian")
 def jacobian(run):
-    ar, K, pts, f, eps = run.ar, run.steps, run.pts, run.f, run.eps
+    ar, K, pts, f, eps, N = run.ar, run.steps, run.pts, run.f, run.eps, run.system.dim
 
     def dual_step(k):
         return dual_jacobian(ar, lambda d, xd: KahanMap(f, eps, d, method="dense").step(xd), pts[k])[1]
@@ -449,7 +645,7 @@ def jacobian(run):
     run.add("Jacobian of Phi_f", f"the derivative of the step (dual numbers through the solve) equals "
             f"(I - eps f'(x))^-1 (I + eps f'(Phi(x))) at the {K} orbit points",
             lambda: compare(ar, ((k, lambda k=k: (dual_step(k), run.map_jacobian(pts[k], pts[k + 1])))
-                                 for k in range(K))))
+                                 for k in range(K))), degree=lambda: minus(partial(step_deg(N)), jacobian_deg(N)))
     run.add("control: Jacobian with f'(x) for f'(Phi(x))",
             "[control, must fail] the derivative of the step equals (I - eps f'(x))^-1 (I + eps f'(x))",
             lambda: compare(ar, ((k, lambda k=k: (dual_step(k), run.map_jacobian(pts[k], pts[k])))
@@ -464,11 +660,13 @@ def jacobian(run):
 
 @claim("cmoq", lambda system: system.hamiltonian_form() is not None)
 def cmoq(run):
-    ar, e, K, pts = run.ar, run.e, run.steps, run.pts
+    ar, e, K, pts, N = run.ar, run.e, run.steps, run.pts, run.system.dim
     _, H = run.system.hamiltonian_form()
     modified = lambda x: modified_energy(ar, run.f, H, x, e)  # noqa: E731
     run.add("CMOQ modified energy conserved", f"H~(x) = H(x) + (2 eps/3) grad H(x)^T (I - eps f'(x))^-1 f(x) "
-            f"is conserved along the Phi_f orbit (k = 1..{K})", lambda: compare(ar, conserved_items(modified, pts)))
+            f"is conserved along the Phi_f orbit (k = 1..{K})", lambda: compare(ar, conserved_items(modified, pts)),
+            degree=lambda: None if _modified_deg(run) is None else minus(at(_modified_deg(run), step_deg(N)),
+                                                                          _modified_deg(run)))
 
     def det_sides(k):
         D = determinant_or_undecided(ar, run.map_jacobian(pts[k], pts[k + 1]))
@@ -476,7 +674,8 @@ def cmoq(run):
 
     run.add("CMOQ invariant measure", "det dPhi(x) det(I - eps f'(x)) = det(I - eps f'(Phi(x))): the measure "
             f"dx / det(I - eps f'(x)) is preserved at the {K} orbit points",
-            lambda: compare(ar, ((k, lambda k=k: det_sides(k)) for k in range(K))))
+            lambda: compare(ar, ((k, lambda k=k: det_sides(k)) for k in range(K))),
+            degree=lambda: minus(times(_det_deg(N), Deg(2 * N, 0, 2 * N)), at(Deg(2 * N, 0), step_deg(N))))
     run.add("control: H conserved", "[control, must fail] the Hamiltonian H itself is conserved along the "
             "Phi_f orbit", lambda: compare(ar, conserved_items(lambda x: H(ar, x, e), pts)), expected=False)
     run.add("control: Phi_f preserves volume", "[control, must fail] det dPhi(x) = 1 at the orbit points",
@@ -523,7 +722,8 @@ def measure(run):
     density = lambda x: m(ar, x, e)  # noqa: E731
     run.add("invariant measure", f"m(Phi(x)) det dPhi(x) = m(x), m = {m.text}: the measure m(x) dx is preserved "
             f"at the {K} orbit points", lambda: compare(ar, ((k, lambda k=k: (
-                density(pts[k + 1]) * run.det_jacobian(k), density(pts[k]))) for k in range(K))))
+                density(pts[k + 1]) * run.det_jacobian(k), density(pts[k]))) for k in range(K))),
+            degree=lambda: _measure_deg(run.system.dim, function_deg(m)))
     run.add("control: measure with density 1 preserved", "[control, must fail] det dPhi(x) = 1 at the orbit points "
             "(the density 1 in place of m)",
             lambda: compare(ar, ((k, lambda k=k: (run.det_jacobian(k), ar.one)) for k in range(K))), expected=False,

@@ -10,6 +10,10 @@ inapplicable (each claim's rule, and one for all: at a fixed point of Φ_f every
 control is inapplicable), and a certificate with no applicable control is
 INCONCLUSIVE (:func:`~exact_khk.certification.records.status_of`).
 
+The same registry in the other modes: :func:`identity_checks` (identities over F_P at random
+draws, with each claim's degree bound; ``certify --identities``, ``liouville --arith gf:P``) and
+:func:`symbolic_checks` (proofs over Q(x, ε); ``certify --prove``, ``prove``).
+
 >>> from exact_khk.systems.expressions import ExpressionSystem
 >>> top = ExpressionSystem.from_expressions(["x", "y", "z"], field={"x": "y*z", "y": "-2*z*x", "z": "x*y"},
 ...                                         x0=["1", "2", "3"], eps="1/10")
@@ -21,6 +25,7 @@ INCONCLUSIVE (:func:`~exact_khk.certification.records.status_of`).
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 from exact_khk.arith import get_arith, point_height
 from exact_khk.certification.checks import inapplicable, run_check
@@ -37,27 +42,9 @@ def applicable_claims(system) -> tuple:
     return tuple(name for name, c in REGISTRY.items() if c.declared(system))
 
 
-def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claims=None,
-                   progress=None, poisson_points=None) -> Certificate:
-    """Certify what ``system`` declares on the orbit of ``x0`` (default: the system's
-    own x0 and ε) in ``arith`` (default: the fastest exact arithmetic).
-
-    ``claims``: a subset of :data:`~exact_khk.certification.claims.CLAIMS`, or its names comma-separated
-    (default: the system's own list, else every claim it declares something for).  ``progress(name)``
-    is called before each check.  ``poisson_points``: evaluate the Poisson-map and Jacobi checks
-    at this many evenly spread orbit points (default: all).  A singular step of Φ_f or of a
-    commuting map raises :class:`~exact_khk.errors.SingularStepError`.
-    """
-    t_start = time.perf_counter()
-    ar = get_arith(arith)
-    x0 = parse_vector(system.default_x0 if x0 is None else x0, "x0", system.dim)
-    eps = parse_rational(system.default_eps if eps is None else eps, "eps")
-    if eps == 0:
-        raise InputError("eps: the step size must be nonzero")
-    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
-        raise InputError(f"steps: expected a positive integer, got {steps!r}")
-    if poisson_points is not None and (not isinstance(poisson_points, int) or poisson_points < 1):
-        raise InputError(f"poisson_points: expected a positive integer, got {poisson_points!r}")
+def wanted_claims(system, claims=None) -> tuple:
+    """The claims to check: ``claims`` (a list, or names comma-separated), else the system's own
+    list, else every claim it declares something for; InputError for an unknown or undeclared one."""
     known = applicable_claims(system)
     if isinstance(claims, str):  # 'integrals,reversibility', as on the command line
         claims = [c.strip() for c in claims.split(",") if c.strip()]
@@ -69,18 +56,69 @@ def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claim
             raise InputError(f"claims: unknown claim {c!r}; expected some of {', '.join(CLAIMS)}")
         if c not in known:
             raise InputError(f"claims: {system.name} declares nothing to check for {c!r}")
+    return wanted
+
+
+def run_claims(run, wanted):
+    """Check the claims ``wanted`` on ``run`` (in the system's ``claim_order``), then its own controls."""
+    for name in run.system.claim_order or REGISTRY:
+        if name in wanted:
+            run.claim = name
+            REGISTRY[name].check(run)
+    run.claim = None
+    declared_controls(run)
+
+
+def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claims=None,
+                   progress=None, poisson_points=None, identities=None, prove=False, options=None) -> Certificate:
+    """Certify what ``system`` declares on the orbit of ``x0`` (default: the system's
+    own x0 and ε) in ``arith`` (default: the fastest exact arithmetic).
+
+    ``claims``: a subset of :data:`~exact_khk.certification.claims.CLAIMS`, or its names comma-separated
+    (default: the system's own list, else every claim it declares something for; ``options``: the
+    claims' options, :attr:`Run.options`).  ``progress(name)``
+    is called before each check.  ``poisson_points``: evaluate the Poisson-map and Jacobi checks
+    at this many evenly spread orbit points (default: all).  A singular step of Φ_f or of a
+    commuting map raises :class:`~exact_khk.errors.SingularStepError`.  The same claims in the other
+    modes are appended: ``identities`` (a gf:P name) by :func:`identity_checks` (two draws),
+    ``prove`` by :func:`symbolic_checks` (refused before any work beyond :data:`SYMBOLIC_MAX_DIM`).
+    """
+    t_start = time.perf_counter()
+    ar = get_arith(arith)
+    x0 = parse_vector(system.default_x0 if x0 is None else x0, "x0", system.dim)
+    eps = parse_rational(system.default_eps if eps is None else eps, "eps")
+    if eps == 0:
+        raise InputError("eps: the step size must be nonzero")
+    if not isinstance(steps, int) or isinstance(steps, bool) or steps < 1:
+        raise InputError(f"steps: expected a positive integer, got {steps!r}")
+    if poisson_points is not None and (not isinstance(poisson_points, int) or poisson_points < 1):
+        raise InputError(f"poisson_points: expected a positive integer, got {poisson_points!r}")
+    wanted = wanted_claims(system, claims)
+    if prove:
+        symbolic_limit(system)
     with ar.local():  # e.g. the working precision of a ball arithmetic
-        run = Run(system, x0, eps, steps, ar, progress, poisson_points)
-        for name in system.claim_order or REGISTRY:
-            if name in wanted:
-                REGISTRY[name].check(run)
-        declared_controls(run)
+        run = Run(system, x0, eps, steps, ar, progress, poisson_points, options=options)
+        run_claims(run, wanted)
         orbit = tuple(tuple(ar.format(t) for t in p) for p in run.pts)
         values = run.integral_values()
     orbits = [run.orbit(m) for m in run.field_names] if run.paper else [run.pts]
     height = max(point_height(ar, p) for pts in orbits for p in pts) if ar.rational else None
-    return Certificate(system, tuple(x0), eps, steps, ar.name, (), tuple(run.checks), library_versions(),
+    checks = run.checks + other_modes(system, identities, prove, wanted, progress, options=options)
+    return Certificate(system, tuple(x0), eps, steps, ar.name, (), tuple(checks), library_versions(),
                        time.perf_counter() - t_start, height, orbit, values, run.phi.path)
+
+
+def other_modes(system, identities=None, prove=False, claims=None, progress=None, prove_system=None,
+                options=None) -> list:
+    """The records of the identity mode over ``identities`` (gf:P; two draws) and of the symbolic
+    mode (``prove``; on ``prove_system`` if given), as ``certify`` appends them."""
+    out = []
+    if identities is not None:
+        out += identity_checks(system, identities, trials=2, seed=0, claims=claims, progress=progress,
+                               options=options)
+    if prove:
+        out += symbolic_checks(prove_system or system, claims, progress, options=options)
+    return out
 
 
 class Run:
@@ -94,9 +132,16 @@ class Run:
     names its map), its own negative controls replace the automatic controls of each claim
     (:meth:`control`), and its statements are worded as the paper's certificate words them."""
 
-    def __init__(self, system, x0, eps, steps, ar, progress, poisson_points=None):
+    def __init__(self, system, x0, eps, steps, ar, progress, poisson_points=None, point_free=False, options=None):
         self.system, self.x0, self.eps, self.steps, self.ar = system, x0, eps, steps, ar
         self.progress, self.checks, self._fixed = progress, [], None
+        #: per check: (the claim it belongs to, its degree bound or None); the claim being checked
+        self.origin, self.claim = [], None
+        #: x0 generic (the modes: a random or a symbolic point): the controls' point-free rules only
+        self.point_free = point_free
+        #: the claims' options: ``pairs`` "f" (Φ_f with each other map commutes) or "all" (every pair
+        #: of maps); ``brackets`` "base" ({I, I_B} for each I_B = image of I) or "all" (every pair)
+        self.options = {"pairs": "f", "brackets": "base", **(options or {})}
         self.paper = bool(system.certificate_options)
         self.field_names = system.field_names()
         self.e = ar.convert(eps)
@@ -113,6 +158,9 @@ class Run:
                                         detail="; ".join(filter(None, [f"a step of Phi_{name}", exc.detail]))
                                         ) from None
         self.pts = self.orbit("f")
+        #: the orbit points a check at every point evaluates: x0 alone at a generic x0 (``point_free``:
+        #: an identity at x0 is one at every point)
+        self.points = range(1) if point_free else range(len(self.pts))
         K = steps  # the Poisson checks' points: all, or poisson_points of them evenly spread
         self.ks = list(range(K)) if poisson_points is None or poisson_points >= K else sorted(
             {round(i * (K - 1) / max(poisson_points - 1, 1)) for i in range(poisson_points)})
@@ -120,8 +168,11 @@ class Run:
         self.fast = system.fast_forms(ar, self.e)
         self.shared = self.fast.share_integrals(self.integrals) if self.fast is not None else set()
 
-    def add(self, name, claim, fn, expected=True, degenerate=None):
-        """Evaluate and record one check (a control: ``expected`` False, with its inapplicability rule)."""
+    def add(self, name, claim, fn, expected=True, degenerate=None, degree=None):
+        """Evaluate and record one check (a control: ``expected`` False, with its inapplicability rule;
+        a claim: ``degree() -> Deg`` bounds its residual as a rational function of (x, ε), for the
+        identity mode, :func:`~exact_khk.certification.modes.identity_checks`)."""
+        self.origin.append((self.claim, degree))
         if self.progress is not None:
             self.progress(name)
         check = run_check(name, claim, self.ar, fn, expected, degenerate)
@@ -237,3 +288,145 @@ class Run:
             except PoleError:
                 out[name] = None
         return out
+
+
+# --- the other modes: identities over F_P (Schwartz–Zippel) and symbolic proofs ------------
+
+#: the largest dimension the symbolic mode takes, measured on a loaded 2-core machine: every claim
+#: of the Euler top (N = 3) in 0.3 s, of the family's n = 2 (N = 4, 3 maps) in 6 s; in N = 6 the
+#: Lagrange top took 10 s, but Clebsch's reversibility did not finish in 5 minutes and the
+#: family's n = 3 spends 1.5 CPU minutes on H~ conserved by Phi_f alone (of dozens of such claims)
+SYMBOLIC_MAX_DIM = 4
+
+
+def _undefined(check) -> bool:
+    """Whether a check met a pole or a singular step (its draw is then redrawn)."""
+    return check.holds is None or "skipped" in check.detail or "undefined" in check.detail
+
+
+def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=None, max_draws=None,
+                    options=None) -> list:
+    """The registry's claims as identities of rational functions in (x, ε), by Schwartz–Zippel over
+    ``arith`` = gf:P (default P = DEFAULT_PRIME): each draw (x, ε) uniform in F_P^{N+1} is a run of
+    the engine with x0 = x and one step; a draw where ε = 0 or a claim meets a pole or a singular
+    step is redrawn (counted in the records).  A claim's check merged over the ``trials`` draws holds
+    iff its residual is zero at every one; with d its declared degree bound (``degree`` of
+    :meth:`Run.add`, :class:`~exact_khk.certification.claims.Deg`) a false identity passes with
+    probability ≤ (d/(P − S·D1 − 1))^k, k the draws, S the checks and D1 the largest degree of the
+    denominators one check divides by (conditioning on regular draws).  A check with no bound is
+    recorded as not available (undecided).  A nonzero residual refutes exactly (the controls); rank
+    r at a random point proves generic rank r (a nonzero r x r minor mod P is one over Q).
+
+    >>> from exact_khk.systems.catalogue import resolve
+    >>> recs = identity_checks(resolve("euler-top"), trials=2)
+    >>> all(r.passed for r in recs), recs[0].name, recs[0].evidence.split(";")[0]
+    (True, 'identity: reversibility Phi_f', 'probabilistic over F_4611686018420360881 with failure bound <= 4.519e-35')
+    """
+    import random
+
+    from exact_khk.arith.cyclotomic import DEFAULT_PRIME, GFArith
+
+    ar = get_arith(arith or f"gf:{DEFAULT_PRIME}")
+    if not isinstance(ar, GFArith):
+        raise InputError(f"arith: Schwartz–Zippel checks run over gf:P, got {ar.name}")
+    if not isinstance(trials, int) or isinstance(trials, bool) or trials < 1:
+        raise InputError(f"trials: expected a positive integer, got {trials!r}")
+    wanted, N, P = wanted_claims(system, claims), system.dim, ar.P
+    rng, runs, singular, t0 = random.Random(seed), [], [], time.perf_counter()
+    limit = max_draws if max_draws is not None else 10 * trials
+    while len(runs) < trials:
+        if len(runs) + len(singular) >= limit:
+            raise InputError(f"trials: only {len(runs)} of {trials} random points were regular after "
+                             f"{limit} draws (P = {P} too small?)")
+        x, e = [rng.randrange(P) for _ in range(N)], rng.randrange(P)
+        if e == 0:
+            singular.append("eps = 0")
+            continue
+        try:
+            run = Run(system, x, e, 1, ar, progress, point_free=True, options=options)
+            run_claims(run, wanted)
+        except (SingularStepError, PoleError) as exc:
+            singular.append(str(exc))
+            continue
+        bad = next((c for c, (_, deg) in zip(run.checks, run.origin) if c.expected and deg and _undefined(c)), None)
+        if bad is not None:
+            singular.append(f"{bad.name}: {bad.detail}")
+            continue
+        runs.append(run)
+    degs = [deg() if deg else None for _, deg in runs[0].origin]
+    bounded = [d for d, c in zip(degs, runs[0].checks) if d is not None and c.expected]
+    S, D1, k = len(bounded), max((d.sing for d in bounded), default=0), len(runs)
+    slack = P - S * D1 - 1
+    note = f"; {len(singular)} singular draw(s) redrawn (first: {singular[0][:120]})" if singular else ""
+    seconds = time.perf_counter() - t0
+    out = []
+    for i, (first, (claim, _), d) in enumerate(zip(runs[0].checks, runs[0].origin, degs)):
+        at_draws = [run.checks[i] for run in runs]
+        false = next(((j, c) for j, c in enumerate(at_draws) if c.holds is False and c.applicable), None)
+        if claim == "rank":
+            holds = True if any(c.holds for c in at_draws) else first.holds
+            evidence = (f"exact over F_{P}: rank r at a random point proves generic rank r over Q (a nonzero "
+                        f"r x r minor mod P){note}")
+        elif false is not None:
+            j, first = false
+            holds = False
+            evidence = f"exact refutation over F_{P}: nonzero residual at a regular point (draw {j}){note}"
+        elif not first.expected:
+            holds, evidence = first.holds, f"exact over F_{P}: held at the {k} random points (x, eps){note}"
+        elif d is None:
+            holds, evidence = None, "not available in the identity mode: no degree bound stated for this check"
+            first = replace(first, residual="n/a", detail=evidence)
+        else:
+            holds = True if all(c.holds for c in at_draws) else None
+            first = replace(first, detail=f"zero at each of the {k} draws" if holds else first.detail)
+            bound = min(1.0, d.num / slack) ** k if slack > 0 else 1.0  # 1: no guarantee (P too small)
+            evidence = (f"probabilistic over F_{P} with failure bound <= {bound:.4g}; {k} random points in "
+                        f"F_P^{N + 1}, cleared numerator degree <= {d.num} in (x, eps), bound (d/(P - S*D1 - 1))^k "
+                        f"with S = {S} checks, D1 = {D1} (the degree of the denominators one check divides by)"
+                        f"{note}")
+        out.append(replace(first, name=f"identity: {first.name}", holds=holds, arith=ar.name, seconds=seconds,
+                           claim=f"{first.claim} [as an identity in (x, eps): x0 random in F_P^{N}, one step]",
+                           evidence=evidence))
+    return out
+
+
+def symbolic_limit(system) -> int:
+    """The dimension of ``system``; InputError beyond :data:`SYMBOLIC_MAX_DIM`."""
+    N = system.dim
+    if N > SYMBOLIC_MAX_DIM:
+        raise InputError(f"prove: symbolic proofs are offered up to dimension {SYMBOLIC_MAX_DIM} "
+                         f"(SYMBOLIC_MAX_DIM: in dimension 6 Clebsch and the family's n = 3 take beyond minutes), "
+                         f"{system.name} has dimension {N}; "
+                         f"--identities checks the same claims over F_P")
+    return N
+
+
+def symbolic_checks(system, claims=None, progress=None, options=None) -> list:
+    """The registry's claims proved as identities of rational functions: the engine run once with
+    x0 = (x_0, …, x_{N−1}) and ε symbols of Q(x, ε) (:class:`~exact_khk.certification.proofs.
+    RationalFunctionArith`) and one step, so ``==`` of the two sides is the identity itself.
+    Refused beyond :data:`SYMBOLIC_MAX_DIM`.
+
+    >>> from exact_khk.systems.catalogue import resolve
+    >>> recs = symbolic_checks(resolve("euler-top"))
+    >>> all(r.passed for r in recs), recs[0].evidence
+    (True, 'symbolic proof: identity in Q(x0, x1, x2, eps)')
+    """
+    from exact_khk.certification.proofs import RationalFunctionArith
+
+    N = symbolic_limit(system)
+    wanted = wanted_claims(system, claims)
+    ar = RationalFunctionArith([f"x{i}" for i in range(N)] + ["eps"])
+    g = ar.gens()
+    run = Run(system, g[:N], g[N], 1, ar, progress, point_free=True, options=options)
+    run_claims(run, wanted)
+    ring = f"Q({', '.join(ar.symbols)})"
+    out = []
+    for c, (claim, _) in zip(run.checks, run.origin):
+        what = "rank over" if claim == "rank" else "identity in" if c.holds else "a nonzero difference in"
+        evidence = (f"symbolic {'proof' if c.holds else 'disproof'}: {what} {ring}" if c.holds is not None
+                    else f"symbolic: not decided in {ring}")
+        residual = c.residual if len(c.residual) <= 300 else f"{c.residual[:300]}... ({len(c.residual)} characters)"
+        out.append(replace(c, name=f"proof: {c.name}", residual=residual, evidence=evidence,
+                           claim=f"{c.claim} [as an identity of rational functions in (x, eps), one step]"))
+    return out

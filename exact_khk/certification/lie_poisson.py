@@ -42,8 +42,7 @@ import time
 from dataclasses import replace
 
 from exact_khk.arith import as_point, get_arith
-from exact_khk.certification.engine import certify_system
-from exact_khk.certification.proofs import PROVE_MAX_N
+from exact_khk.certification.engine import certify_system, other_modes, symbolic_limit
 from exact_khk.errors import InputError
 from exact_khk.kahan.map import KahanMap
 from exact_khk.parsing import format_signs, parse_signs, parse_vector
@@ -82,12 +81,11 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     before each check.  A singular step of Φ_f or Φ_g raises
     :class:`SingularStepError`.
 
-    Further evidence, appended as checks of their own kind: ``identities`` (a
-    ``gf:P`` name) adds the Schwartz–Zippel identity checks of
-    :func:`exact_khk.certification.identities.liouville_identities` for every involution
-    (probabilistic, with a stated failure bound); ``prove=True`` adds the
-    symbolic proofs of :func:`exact_khk.certification.proofs.prove_all` (n = 2 in
-    seconds, n = 3 in minutes; refused before any work for other n).
+    Further evidence, appended as checks of their own kind (the registry's claims in the engine's
+    other modes, :func:`~exact_khk.certification.engine.other_modes`): ``identities`` (a ``gf:P``
+    name) as identities by Schwartz–Zippel, for every involution gf:P expresses (probabilistic,
+    with a stated failure bound); ``prove=True`` as symbolic proofs, for the rational involutions
+    (n = 2; refused before any work for other n and for coefficients beyond :data:`PROVE_MAX_BITS`).
     """
     t_start = time.perf_counter()
     system = default_system() if system is None else system
@@ -99,21 +97,72 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, signs=N
     if any(s in ("+" * n, "-" * n) for s in signs):
         raise InputError("signs: ±I are not involutions of interest (K~ = ±H~); leave them out")
     check_signs_arith(n, signs, ar)
-    if prove and not 2 <= n <= PROVE_MAX_N:
-        raise InputError(f"prove: symbolic proofs are available for n = 2 and 3 only (got n = {n})")
+    if prove:
+        prove_limits(system)
     cert = certify_system(system.with_involutions(signs), x0, DEFAULT_EPS if eps is None else eps, steps, ar,
                           progress=progress, poisson_points=poisson_points)
-    checks = list(cert.checks)
-    if identities is not None:
-        from exact_khk.certification.identities import liouville_identities
+    rational = system.with_involutions(default_signs(n))
+    checks = cert.checks + tuple(other_modes(
+        system.with_involutions(default_signs(n, identities)) if identities is not None else rational,
+        identities, prove, progress=progress, prove_system=rational))
+    return replace(cert, system=system, signs=tuple(signs), checks=checks, seconds=time.perf_counter() - t_start)
 
-        if progress is not None:
-            progress("identities (Schwartz–Zippel)")
-        checks += [replace(r, name=f"identity: {r.name}")
-                   for r in liouville_identities(system, identities, trials=2, seed=0)]
-    if prove:
-        from exact_khk.certification.proofs import prove_all
 
-        checks += prove_all(system, progress)
-    return replace(cert, system=system, signs=tuple(signs), checks=tuple(checks),
-                   seconds=time.perf_counter() - t_start)
+#: the largest coefficient (bits of a numerator or denominator of a, b, c) the symbolic proofs take:
+#: the rational functions grow with them (the former `prove --n 2` with a_0 = 2^b + 1: 1.9 s at
+#: b = 64, 4.8 s at 512, 25 s at 2048, 67 s at 4096)
+PROVE_MAX_BITS = 1024
+
+
+def prove_limits(system):
+    """InputError, before any work, for a system beyond the symbolic mode's reach: dimension
+    (:data:`~exact_khk.certification.engine.SYMBOLIC_MAX_DIM`) or coefficients (:data:`PROVE_MAX_BITS`)."""
+    symbolic_limit(system)
+    bits = max(max(abs(q.numerator).bit_length(), q.denominator.bit_length())
+               for q in (*system.a, *system.b, *system.c))
+    if bits > PROVE_MAX_BITS:
+        raise InputError(f"a, b, c: a coefficient of {bits} bits is beyond the {PROVE_MAX_BITS} bits the symbolic "
+                         f"proofs take (PROVE_MAX_BITS: they grow to minutes); --identities gf:P checks the "
+                         f"same claims as identities")
+
+
+#: the registry's claims of complete Liouville integrability (:func:`liouville`)
+LIOUVILLE_CLAIMS = ("integrals", "commutation", "involution", "rank")
+
+
+def liouville(system=None, x0=None, eps=None, arith="cyclo:3", steps=2, patterns=None, pairs="all",
+              trials=None, seed=0, progress=None) -> list:
+    """Complete Liouville integrability: the registry's claims :data:`LIOUVILLE_CLAIMS` run by the
+    engine on the family's system with the maps Φ_f and Φ_g[s] of ``patterns`` (default: all
+    2^n − 2 involutions) and the integrals H̃ and K̃_j of
+    :func:`~exact_khk.certification.identities.integral_patterns`, with the family's negative
+    controls: conservation of every integral by every map, commutation of every pair of maps
+    (``pairs='f'``: Φ_f with each Φ_g), ∇K̃ = B∇H̃ and {I, I'} = 0 for J and Π for every pair of
+    integrals, and the rank of the gradients.  Exactly at the points x_0..x_steps of the Φ_f orbit
+    of x0 in an exact ``arith`` (cyclo:N holds every involution for n | N), or as identities over
+    gf:P (the engine's identity mode, ``trials`` random draws, default 3; x0 and ε unused).
+
+    >>> recs = liouville(steps=1)
+    >>> all(r.passed for r in recs), recs[0].name, recs[0].evidence
+    (True, 'integral H~ conserved by Phi_f', 'exact in Q(zeta_3)')
+    """
+    from exact_khk.arith.cyclotomic import GFArith
+    from exact_khk.certification.engine import identity_checks
+    from exact_khk.certification.identities import integral_patterns, involution_patterns
+
+    system = default_system() if system is None else system
+    n, ar = system.n, get_arith(arith)
+    patterns = involution_patterns(n) if patterns is None else [format_signs(parse_signs(p, n)) for p in patterns]
+    if pairs not in ("all", "f"):
+        raise InputError(f"pairs: expected 'all' or 'f', got {pairs!r}")
+    check_signs_arith(n, patterns + integral_patterns(n), ar, "involutions")
+    family = system.with_involutions(patterns, integrals=integral_patterns(n))
+    options = {"pairs": pairs, "brackets": "all"}
+    if isinstance(ar, GFArith):
+        return identity_checks(family, ar, trials=3 if trials is None else trials, seed=seed,
+                               claims=LIOUVILLE_CLAIMS, progress=progress, options=options)
+    if not ar.exact:
+        raise InputError(f"arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), got {ar.name}")
+    x0 = DEFAULT_X0 if x0 is None else x0
+    return list(certify_system(family, x0, DEFAULT_EPS if eps is None else eps, steps, ar, claims=LIOUVILLE_CLAIMS,
+                               progress=progress, options=options).checks)

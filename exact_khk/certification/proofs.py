@@ -1,25 +1,20 @@
-"""Symbolic proofs for n = 2 and 3: the identities hold in the field of rational functions.
+"""Symbolic proofs: identities in the field of rational functions.
 
 :class:`RationalFunctionArith` is an exact arithmetic whose elements are
 rational functions p/q of symbols (python-flint ``fmpq_mpoly``, reduced by a
-gcd, denominator monic), so the *same* generic algorithms (Kahan step, H̃)
-run over Q(x_0, …, x_{2n−1}, ε): comparing the results with ``==`` proves an
-identity of rational functions, for all x and ε where both sides are defined.
+gcd, denominator monic), so the *same* generic algorithms (Kahan step, integrals,
+the claims of the registry) run over Q(x_0, …, x_{N−1}, ε): comparing the results
+with ``==`` proves an identity of rational functions, for all x and ε where both
+sides are defined (the engine's symbolic mode,
+:func:`~exact_khk.certification.engine.symbolic_checks`).
 
-* :func:`prove_conservation` — H̃(Φ_f(x, ε), ε) = H̃(x, ε);
-* :func:`prove_commutation` — Φ_f∘Φ_g = Φ_g∘Φ_f (same ε);
-* :func:`prove_jacobi` — the Jacobi identity of Π(x) = J − ε² J Hs J Hs J
-  (polynomial; for J itself with ``eps_zero=True``).
-
-The system (its Hessian) is fixed by the caller; pass ``symbolic_hessian=True``
-to :func:`prove_jacobi` to prove it for every admissible Hessian at once (the
-composition proofs with a, b, c symbolic did not finish in 10 minutes for n = 2).
-Each returns a :class:`~exact_khk.certification.lie_poisson.Check` with evidence
-"symbolic proof".
+:func:`prove_jacobi` proves the Jacobi identity of the family's Π(x) = J − ε² J Hs J Hs J
+as a polynomial identity, with ``symbolic_hessian=True`` for every admissible Hessian at once
+(a theorem about the family, beyond one system's claims).
 
 >>> from exact_khk import LiePoissonSystem
 >>> s = LiePoissonSystem.from_vectors("1,2", "0,1", "3,1")
->>> prove_conservation(s).holds
+>>> prove_jacobi(s, symbolic_hessian=True).holds
 True
 """
 
@@ -31,11 +26,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.arith import Arith, _as_fraction
-from exact_khk.errors import InputError
-from exact_khk.certification.checks import inapplicable_if
 from exact_khk.certification.records import Check
-from exact_khk.systems.lie_poisson.invariants import Htilde
-from exact_khk.kahan.map import KahanMap
 from exact_khk.linalg.dense import matmul
 from exact_khk.systems.lie_poisson.system import hankel
 
@@ -201,74 +192,6 @@ def _block_hessian(abc):
     return [ra + rb for ra, rb in zip(Xa, Xb)] + [rb + rc for rb, rc in zip(Xb, Xc)]
 
 
-def _setup(system):
-    """The arithmetic Q(x, ε), the symbols x and ε, and ``field(kind, signs)``."""
-    n = system.n
-    ar = RationalFunctionArith([f"x{i}" for i in range(2 * n)] + ["eps"])
-    g = ar.gens()
-    return ar, g[:2 * n], g[2 * n], lambda kind, signs=None: _named_field(system, kind, signs)
-
-
-def _named_field(system, kind, signs):
-    return system.field_for_signs(signs) if kind == "g" and signs is not None else system.field(kind, signs)
-
-
-def _kmap(field, eps, ar):
-    """A KahanMap over the rational functions with the symbol ε as step size."""
-    return KahanMap(field, eps, ar, method="dense")
-
-
-def _evidence(holds, ring, scope="for this system", identity="identity"):
-    """A proof when the identity holds; a disproof (a nonzero difference) when it does not."""
-    return (f"symbolic proof: {identity} in {ring} {scope}" if holds
-            else f"symbolic disproof: a nonzero difference in {ring} {scope}")
-
-
-def _record(name, claim, holds, residual, ar, t0, expected=True):
-    return Check(name, claim, expected, holds, residual, ar.name, time.perf_counter() - t0,
-                 _evidence(holds, f"Q({', '.join(ar.symbols)})"))
-
-
-def _control(record, system):
-    """A control record that did not fail, recorded as inapplicable where the control cannot
-    fail for this system (as certify's controls 1 and 2, at every point: ``everywhere``)."""
-    from exact_khk.systems.lie_poisson.controls import ControlDegeneracy
-
-    return inapplicable_if(record, lambda: ControlDegeneracy(system).everywhere())
-
-
-def prove_conservation(system, kind="f", signs=None):
-    """Prove H̃(Φ(x, ε), ε) = H̃(x, ε) in Q(x, ε) for Φ = Φ_f, Φ_g (``kind='g'``,
-    involution ``signs``, default B_0) or the control map (``kind='control'``:
-    the identity is false and the record says so: ``expected`` False; inapplicable where
-    it cannot fail, see :func:`_control`)."""
-    t0 = time.perf_counter()
-    ar, x, eps, field = _setup(system)
-    fld = field(kind, signs)
-    y = _kmap(fld, eps, ar).step(x)
-    h = field("f")
-    diff = Htilde(h, y, eps, ar) - Htilde(h, x, eps, ar)
-    record = _record("proof:conservation" + (":control" if kind == "control" else ""),
-                     f"H~(Phi_{fld.label}(x, eps), eps) = H~(x, eps), n = {system.n}",
-                     ar.is_zero(diff), ar.format(diff), ar, t0, kind != "control")
-    return _control(record, system) if kind == "control" else record
-
-
-def prove_commutation(system, kind="g", signs=None):
-    """Prove Φ_f(Φ_g(x, ε), ε) = Φ_g(Φ_f(x, ε), ε) in Q(x, ε) (g: involution ``signs``,
-    default B_0; ``kind='control'`` for the negative control, ``expected`` False, inapplicable
-    where it cannot fail)."""
-    t0 = time.perf_counter()
-    ar, x, eps, field = _setup(system)
-    f, g = _kmap(field("f"), eps, ar), _kmap(field(kind, signs), eps, ar)
-    d = [p - q for p, q in zip(f.step(g.step(x)), g.step(f.step(x)))]
-    bad = next((ar.format(t) for t in d if not ar.is_zero(t)), "")
-    record = _record("proof:commutation" + (":control" if kind == "control" else ""),
-                     f"Phi_f o Phi_{g.field.label} = Phi_{g.field.label} o Phi_f, n = {system.n}",
-                     not bad, bad or "0", ar, t0, kind != "control")
-    return _control(record, system) if kind == "control" else record
-
-
 def jacobi_residual(system, symbolic_hessian=False, eps_zero=False, perturb=False):
     """(holds, residual) of the Jacobi identity
     Σ_l Π_il ∂_l Π_jk + Π_jl ∂_l Π_ki + Π_kl ∂_l Π_ij = 0 (all i < j < k) for
@@ -316,49 +239,8 @@ def prove_jacobi(system, symbolic_hessian=False, eps_zero=False, perturb=False):
     holds, res, names = jacobi_residual(system, symbolic_hessian, eps_zero, perturb)
     scope = "for every admissible Hessian (a, b, c symbolic)" if symbolic_hessian else "for this system"
     tensor = ("J(x)" if eps_zero else "Pi(x)") + (" + eps^2 x0 (E01 - E10)" if perturb else "")
+    ring = f"Q[{', '.join(names)}]"
+    evidence = (f"symbolic proof: polynomial identity in {ring} {scope}" if holds
+                else f"symbolic disproof: a nonzero difference in {ring} {scope}")
     return Check("proof:jacobi" + (":control" if perturb else ""), f"Jacobi identity of {tensor}, n = {system.n}",
-                 not perturb, holds, res, "qmpoly[" + ",".join(names) + "]", time.perf_counter() - t0,
-                 _evidence(holds, f"Q[{', '.join(names)}]", scope, "polynomial identity"))
-
-
-#: the largest n whose conservation and commutation proofs ``prove_all`` runs.  n = 3 takes
-#: minutes (the default n = 3 system: 1.5, 1.3, 2.1 and 6.3 CPU minutes for conservation,
-#: its control, commutation and its control, under 130 MB, with Henrici's products and sums of
-#: fractions; with SymPy's plain rational-function arithmetic conservation alone did not finish
-#: in 13 minutes); n ≥ 4 is refused (not measured)
-PROVE_MAX_N = 3
-#: the largest coefficient (bits of a numerator or denominator of a, b, c) the proofs take: SymPy's
-#: rational functions grow with them (`prove --n 2` with a_0 = 2^b + 1: 1.9 s at b = 64, 4.8 s at
-#: 512, 25 s at 2048, 67 s at 4096)
-PROVE_MAX_BITS = 1024
-
-
-def prove_all(system, progress=None):
-    """The symbolic proofs for n = 2 (seconds) and n = 3 (minutes): conservation of H̃ by
-    Φ_f, commutation of Φ_f with Φ_{B_0}, and the Jacobi identity of Π, each followed by
-    its negative control, which must be disproved (the control map for the first two, a
-    perturbed Π for the third: ``expected`` False).  ``progress(stage)`` is called before
-    each.  Refused for n > :data:`PROVE_MAX_N`; use :func:`prove_jacobi` (any n) and
-    :func:`~exact_khk.certification.identities.liouville_identities` there."""
-    if not 2 <= system.n <= PROVE_MAX_N:
-        raise InputError(f"n: symbolic proofs of conservation and commutation are offered for n = 2 "
-                         f"(seconds) and 3 (minutes), got n = {system.n} (use prove_jacobi, or "
-                         f"liouville_identities over gf:P)")
-    bits = max(max(abs(q.numerator).bit_length(), q.denominator.bit_length())
-               for q in (*system.a, *system.b, *system.c))
-    if bits > PROVE_MAX_BITS:
-        raise InputError(f"a, b, c: a coefficient of {bits} bits is beyond the {PROVE_MAX_BITS} bits the symbolic "
-                         f"proofs take (PROVE_MAX_BITS: they grow to minutes); liouville_identities over gf:P "
-                         f"(exact-khk liouville --arith gf:P) checks the same claims as identities")
-    steps = [("conservation", lambda: prove_conservation(system)),
-             ("conservation control", lambda: prove_conservation(system, kind="control")),
-             ("commutation", lambda: prove_commutation(system)),
-             ("commutation control", lambda: prove_commutation(system, kind="control")),
-             ("Jacobi identity", lambda: prove_jacobi(system)),
-             ("Jacobi control", lambda: prove_jacobi(system, perturb=True))]
-    out = []
-    for stage, run in steps:
-        if progress is not None:
-            progress(f"proof: {stage}")
-        out.append(run())
-    return out
+                 not perturb, holds, res, "qmpoly[" + ",".join(names) + "]", time.perf_counter() - t0, evidence)

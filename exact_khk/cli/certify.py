@@ -68,8 +68,8 @@ def register(sub):
                    help="also check every claim as an identity in (x, eps) by Schwartz–Zippel over F_P "
                    f"(probabilistic evidence with a stated failure bound; default P = {DEFAULT_PRIME})")
     p.add_argument("--prove", action="store_true",
-                   help="also prove conservation, commutation and the Jacobi identity symbolically "
-                        "(n = 2 in seconds, n = 3 in minutes)")
+                   help="also prove every claim symbolically, as an identity of rational functions in "
+                        "(x, eps) (dimension <= 4: the Euler top, the family's n = 2; seconds)")
     p.add_argument("--claims", metavar="LIST",
                    help="with --system: comma-separated claims to certify, some of " + ", ".join(CLAIMS)
                    + " (default: the system file's list, else everything it declares)")
@@ -137,14 +137,15 @@ def _advise(cert):
 
 def _certify_system(args, system, x0, eps):
     """``certify --system``: the generic certificate of what the system declares."""
-    for opt, given in (("--signs", args.signs), ("--poisson-points", args.poisson_points),
-                       ("--identities", args.identities), ("--prove", args.prove)):
+    for opt, given in (("--signs", args.signs), ("--poisson-points", args.poisson_points)):
         if given:
             raise InputError(f"{opt} applies only to the Lie–Poisson family, not to --system")
     ar = get_arith(args.arith)
     check_resources("certify", system, KahanMap(system.field("f"), eps, ar), x0, args.steps, dense=True,
                     orbits=len(system.field_names()), per_point=1 + system.dim, cube_numbers=2)
-    cert = certify_system(system, x0, eps, args.steps, ar, claims=args.claims)  # a comma list
+    with Progress(args, None, "certify", unit="check") as progress:
+        cert = certify_system(system, x0, eps, args.steps, ar, claims=args.claims,  # a comma list
+                              identities=args.identities, prove=args.prove, progress=progress)
     if args.json != "-":
         print(cert.summary().rsplit("\n", 1)[0])
         print(cert.table())

@@ -1,16 +1,18 @@
 """``exact-khk liouville`` and ``exact-khk prove``: complete integrability checks.
 
-``liouville`` checks the n integrals, their conservation by Φ_f and every Φ_g,
-pairwise commutation, involutivity and rank n: exactly at orbit points for an
-exact arithmetic (``--arith cyclo:3``), or as identities by Schwartz–Zippel for
-``--arith gf:P``.  ``prove`` gives the symbolic proofs (n = 2, 3).
+Both run the claim registry (:mod:`~exact_khk.certification.claims`) through the engine on the
+family's system with the involutions chosen (:mod:`~exact_khk.certification.engine`).
+``liouville`` checks the claims ``integrals`` (H~ and the n integrals K~_j conserved by Φ_f and every
+Φ_g), ``commutation`` (every pair of maps, option ``pairs``), ``involution`` (∇K~ = B∇H~ and
+{I, I'} = 0 for J and Π for every pair of integrals, option ``brackets``) and ``rank``, with the
+family's negative controls: exactly at orbit points for an exact arithmetic (``--arith cyclo:3``),
+or as identities by Schwartz–Zippel for ``--arith gf:P`` (the engine's identity mode).  ``prove``
+proves every claim of the registry symbolically (the engine's symbolic mode; n = 2).
 
-``liouville`` ends as ``certify`` does (exit 0 VALID, 1 INVALID, 4 INCONCLUSIVE):
-at a degenerate x0 (J(x0) singular, or an equilibrium) a control that held is
-*inapplicable* and a rank below n undecided, by certify's rule, never a failure.
-Its work (:func:`_check_work`) is estimated and refused up front beyond
-:data:`MAX_WORK_SECONDS`.  ``prove`` exits 0 when every record is as expected
-(claims hold, controls fail), 1 otherwise.
+Both end as ``certify`` does (exit 0 VALID, 1 INVALID, 4 INCONCLUSIVE): at a degenerate x0
+(J(x0) singular, or an equilibrium) a control that held is *inapplicable* and a rank below n
+undecided, by certify's rule, never a failure.  ``liouville``'s work (:func:`_check_work`) is
+estimated and refused up front beyond :data:`MAX_WORK_SECONDS`.
 """
 
 from __future__ import annotations
@@ -20,11 +22,10 @@ from exact_khk.cli.options import (Progress, add_json_option, add_system_options
                                    system_from_args, write_json)
 from exact_khk.certification.records import library_versions, status_of
 from exact_khk.arith.cyclotomic import GFArith
-from exact_khk.errors import InputError, NotRationalError
+from exact_khk.errors import InputError
 from exact_khk.parsing import format_signs, parse_signs
-from exact_khk.certification.identities import (integral_patterns, involution_patterns, liouville_at_points,
-                         liouville_identities)
-
+from exact_khk.certification.identities import integral_patterns, involution_patterns
+from exact_khk.systems.lie_poisson.system import check_signs_arith
 
 def register(sub):
     p = sub.add_parser("liouville", help="certify complete integrability (all involutions)",
@@ -43,10 +44,10 @@ def register(sub):
     add_json_option(p, "the records")
     p.set_defaults(func=cmd_liouville)
 
-    q = sub.add_parser("prove", help="symbolic proofs for small n (n = 2 in seconds, n = 3 in minutes)",
-                       description="Prove H~ o Phi_f = H~, Phi_f o Phi_g = Phi_g o Phi_f and the Jacobi "
-                       "identity of Pi as identities of rational functions in x and eps, for n = 2 (seconds) "
-                       "and n = 3 (minutes) (with no "
+    q = sub.add_parser("prove", help="symbolic proofs of every claim for n = 2 (seconds)",
+                       description="Prove every claim of the certificate (closed forms, conservation, "
+                       "commutation, reversibility, Poisson structure, involution, rank) with its negative "
+                       "controls as identities of rational functions in x and eps, for n = 2 (seconds) (with no "
                        "system options: the n = 2 system a = %s, b = %s, c = %s of docs/evidence.md)."
                        % PROVE_DEFAULT_VECTORS)
     add_system_options(q, steps_default=0, lie_poisson_only=True, arith=False)
@@ -85,8 +86,7 @@ def _patterns(n, spec):
 
 
 def _solves(n, patterns, pairs):
-    """The solves (Kahan steps and integrals) of
-    :func:`~exact_khk.certification.identities.residuals_at` at one point: every map's image and
+    """An estimate of the solves (Kahan steps and integrals) at one point: every map's image and
     the n integrals there, the pairs of maps composed both ways, the gradients, the controls."""
     maps = 1 + patterns
     composed = maps * (maps - 1) if pairs == "all" else 2 * (maps - 1)
@@ -148,6 +148,9 @@ def _report(args, system, recs, extra, status=None):
 
 
 def cmd_liouville(args):
+    from exact_khk.certification.lie_poisson import liouville
+    from exact_khk.kahan.map import KahanMap
+
     check_output(args.json)
     system, x0, eps = system_from_args(args)
     # default: all involutions need Q(omega), omega = exp(2 pi i / n), from n = 3 on
@@ -156,31 +159,24 @@ def cmd_liouville(args):
         raise InputError(f"--trials: expected an integer from 1 to {MAX_TRIALS} (MAX_TRIALS; the failure bound "
                          f"shrinks geometrically, a handful is enough), got {args.trials}")
     pats = _patterns(system.n, args.involutions)
-    from exact_khk.kahan.map import KahanMap
-
     check_resources("liouville", system, KahanMap(system.field("f"), eps, ar), x0, args.steps, dense=True,
                     orbits=1 + len(pats), per_point=1 + system.dim, cube_numbers=2)
     if not isinstance(ar, GFArith) and not ar.exact:
         raise InputError(f"--arith: liouville needs an exact arithmetic (cyclo:N, gf:P, flint, ...), got {ar.name}")
+    check_signs_arith(system.n, pats + integral_patterns(system.n), ar, "--involutions")
     _check_work(args, system.n, len(pats), ar)
-    with Progress(args, None, "liouville", unit="solve") as progress:
-        if isinstance(ar, GFArith):
-            recs = liouville_identities(system, ar, trials=args.trials, seed=args.draw_seed,
-                                        patterns=pats, pairs=args.pairs, progress=progress)
-            extra = {"arith": ar.name, "trials": args.trials}
-        else:
-            try:
-                recs = liouville_at_points(system, x0, eps, ar, steps=args.steps, patterns=pats,
-                                           pairs=args.pairs, progress=progress)
-            except NotRationalError as exc:
-                raise InputError(f"--arith: {ar.name} cannot represent the involutions over Q(omega) ({exc}); "
-                                 f"use --arith cyclo:{system.n} or gf:P") from None
-            extra = {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
+    if not isinstance(ar, GFArith) and args.steps < 1:
+        raise InputError(f"--steps: liouville at orbit points needs at least 1 step, got {args.steps}")
+    with Progress(args, None, "liouville", unit="check") as progress:
+        recs = liouville(system, x0, eps, ar, args.steps, pats, args.pairs, args.trials, args.draw_seed, progress)
+    extra = {"arith": ar.name, "trials": args.trials} if isinstance(ar, GFArith) else \
+        {"arith": ar.name, "x0": [str(t) for t in x0], "eps": str(eps), "steps": args.steps}
     return _report(args, system, recs, {**extra, "involutions": pats}, status_of(recs))
 
 
 def cmd_prove(args):
-    from exact_khk.certification.proofs import prove_all
+    from exact_khk.certification.engine import symbolic_checks
+    from exact_khk.certification.lie_poisson import default_signs, prove_limits
 
     check_output(args.json)
     if args.steps:
@@ -195,6 +191,7 @@ def cmd_prove(args):
         system = LiePoissonSystem.from_vectors(*PROVE_DEFAULT_VECTORS)
     else:
         system, _, _ = system_from_args(args, point=False)
-    with Progress(args, 6, "prove", unit="proof") as progress:
-        recs = prove_all(system, progress)
-    return _report(args, system, recs, {})
+    prove_limits(system)
+    with Progress(args, None, "prove", unit="check") as progress:
+        recs = symbolic_checks(system.with_involutions(default_signs(system.n)), progress=progress)
+    return _report(args, system, recs, {}, status_of(recs))

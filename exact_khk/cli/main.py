@@ -51,7 +51,7 @@ COMMANDS = {
     "enclose": ("exact_khk.cli.study", "certified enclosure of an orbit (naive balls and Lohner), real inputs"),
     "hard": ("exact_khk.cli.study", "run the catalogue of hard cases (near-singular steps, ...)"),
     "liouville": ("exact_khk.cli.liouville", "certify complete integrability (all involutions)"),
-    "prove": ("exact_khk.cli.liouville", "symbolic proofs for small n (n = 2 in seconds, n = 3 in minutes)"),
+    "prove": ("exact_khk.cli.liouville", "symbolic proofs of every claim for n = 2 (seconds)"),
 }
 COMMAND_MODULES = list(dict.fromkeys(module for module, _ in COMMANDS.values()))
 

@@ -441,9 +441,8 @@ register(TaskKind(
     options={"signs": Option(_signs, "involutions: 'b0', 'default' or a list of sign patterns", "lie-poisson"),
              "poisson_points": Option(_positive_int, "Poisson-map checks at this many orbit points",
                                       "lie-poisson"),
-             "identities": Option(_gf, "a gf:P arithmetic for the Schwartz–Zippel identity checks",
-                                  "lie-poisson"),
-             "prove": Option(_bool, "add the symbolic proofs (n = 2, 3)", "lie-poisson"),
+             "identities": Option(_gf, "a gf:P arithmetic for the Schwartz–Zippel identity checks"),
+             "prove": Option(_bool, "add the symbolic proofs (dimension <= 4)"),
              "claims": Option(_claims, "the claims to certify (system files)", "expressions")},
     verdicts=("VALID", "INVALID", "INCONCLUSIVE"), ok="VALID", figures=("height_bits", "false", "open")))
 register(TaskKind(

@@ -86,6 +86,8 @@ class ControlDegeneracy:
         """Reasons shared by every control: J(x0) singular, x0 an equilibrium."""
         def reason():
             x = self.x0
+            if x is None:  # no point (x generic): only the system's own reasons
+                return "Hs = 0: every point is an equilibrium" if not any(map(any, self.system.hessian)) else None
             if self.system.singular_J(x):
                 return ("J(x0) is singular (X(u0) is: u0 lies on the invariant set where a DFT value "
                         "sum_i u_i w^(ij) vanishes, e.g. u = 0, equal coordinates, sum u = 0)")
@@ -135,6 +137,8 @@ class ControlDegeneracy:
     def equilibrium(self):
         """x0 an equilibrium (Hs x0 = 0): the orbit of Φ_f is one point, where the perturbed-point
         control compares H~ near x0 with H~(x0) itself and shows nothing about the map, even when it fails."""
+        if self.x0 is None:
+            return self.common()
         if not any(matvec(self.system.hessian, list(self.x0))):
             return "x0 is an equilibrium (Hs x0 = 0): the orbit is one point, where every function is conserved"
         return None
@@ -149,7 +153,7 @@ class ControlDegeneracy:
 
     def control_conserves(self):
         why = self.common() or self._planar() or self._self_paired()
-        if not why and self._pole(self.system.field("f"), self.x0):
+        if not why and self.x0 is not None and self._pole(self.system.field("f"), self.x0):
             why = "H~ has a pole at x0"
         return why
 
@@ -159,6 +163,8 @@ class ControlDegeneracy:
             return why
         if self._self_paired(constant=True):
             return self._self_paired(constant=True)
+        if self.x0 is None:
+            return why
         bad = non_admissible_hessian(self.system)
         if not any(matvec(bad, list(self.x0))):
             return "x0 is an equilibrium of the non-admissible field (Hs' x0 = 0)"
@@ -170,7 +176,7 @@ class ControlDegeneracy:
     def perturbed(self, x_last, ar):
         """The fourth control; ``x_last`` is the orbit's last point (in ``ar``)."""
         why = self.common()
-        if why:
+        if why or self.x0 is None:
             return why
         f = self.system.field("f")
         if self._pole(f, self.x0):

@@ -408,6 +408,12 @@ class HtildeIntegral:
         """h(x, y) (:func:`htilde_definition`): equals H̃(x) for y = Φ(x)."""
         return htilde_definition(self.fld, x, y, eps, ar)
 
+    def degrees(self):
+        """Degree bounds (numerator, denominator) in (x, ε): H̃ = xᵀ adj(R) M x / det R with
+        R = I − ε²(M J(x))² of entries of degree ≤ 4 (Cramer): (4N − 2, 4N), N = 2n."""
+        N = self.fld.dim
+        return 4 * N - 2, 4 * N
+
     def at_eps_zero(self):
         """The ε → 0 limit is 2H = xᵀ M x, which the certificate's own controls cover: None."""
         return None
@@ -436,6 +442,11 @@ class PiTensor:
 
     def at_eps_zero(self, ar, x):
         return self.system.J(list(x))
+
+    def degrees(self):
+        """The degree in (x, ε) of the polynomial entries of Π (J Hs J Hs J cubic, times ε²) and of
+        its second form (q_l quadratic, ε² q_l A^l J): 5."""
+        return 5
 
     def jacobiator(self, ar, x, eps):
         from exact_khk.linalg.dual import jacobiator

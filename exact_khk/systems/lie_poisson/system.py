@@ -245,6 +245,8 @@ class LiePoissonSystem(System):
     _fields: dict = field(default_factory=dict, repr=False, compare=False)
     #: the involutions of the associated fields (None: :func:`default_involutions`), see :meth:`with_involutions`
     chosen: tuple = field(default=None, repr=False, compare=False)
+    #: the involutions of the integrals K~[s] (None: those of the fields), see :meth:`with_involutions`
+    chosen_integrals: tuple = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         n = len(self.a)
@@ -343,10 +345,17 @@ class LiePoissonSystem(System):
         """The involutions certified (:meth:`with_involutions`; default :func:`default_involutions`)."""
         return list(self.chosen) if self.chosen is not None else default_involutions(self.n, arith)
 
-    def with_involutions(self, signs) -> "LiePoissonSystem":
+    def with_involutions(self, signs, integrals=None) -> "LiePoissonSystem":
         """The same system whose fields, integrals and claims are those of the involutions ``signs``
-        (patterns as :func:`~exact_khk.parsing.format_signs` writes them; non-rational ones over Q(ω))."""
-        return dataclasses.replace(self, chosen=tuple(signs))
+        (patterns as :func:`~exact_khk.parsing.format_signs` writes them; non-rational ones over Q(ω));
+        ``integrals``: the involutions of the integrals K~[s] instead (the identity: H~ alone)."""
+        return dataclasses.replace(self, chosen=tuple(signs),
+                                   chosen_integrals=None if integrals is None else tuple(integrals))
+
+    def integral_involutions(self) -> list:
+        """The involutions s of the integrals K~[s] (:meth:`with_involutions`)."""
+        chosen = self.involutions() if self.chosen_integrals is None else self.chosen_integrals
+        return [s for s in chosen if s != "+" * self.n]
 
     def field_names(self) -> tuple:
         """f and the associated g[s] of every involution of :meth:`involutions`."""
@@ -357,7 +366,7 @@ class LiePoissonSystem(System):
         from exact_khk.systems.lie_poisson.invariants import HtildeIntegral
 
         out = {"H~": HtildeIntegral("H~", self.field("f"), "x^T (I - eps^2 (Hs J(x))^2)^-1 Hs x")}
-        for s in self.involutions():
+        for s in self.integral_involutions():
             out[f"K~[{s}]"] = HtildeIntegral(f"K~[{s}]", self.field("g", s, cyclotomic=True),
                                              f"as H~ with B Hs, B = B[{s}]", base="H~", signs=s)
         return out
@@ -385,7 +394,7 @@ class LiePoissonSystem(System):
         from exact_khk.systems.lie_poisson.invariants import shift_index
 
         n, names = self.n, list(self.integrals())
-        r = rank([[1] * n] + [list(parse_signs(s, n)) for s in self.involutions()])
+        r = rank([[1] * n] + [list(parse_signs(s, n)) for s in self.integral_involutions()])
         n_rational = len(divisor_classes(n))
         over = (f"all n = {n} integrals are expressible in {ar.name}" if expresses_omega(ar, n) or n_rational == n
                 else f"over Q only {n_rational} of the n = {n} integrals are expressible (the others need Q(omega))")
