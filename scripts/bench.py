@@ -417,9 +417,8 @@ def write(path, info, args, res, elapsed):
           "### The split step against the dense one", "",
           "dense / split time (above 1: split faster) for 8 steps of `KahanMap.orbit` from points of the orbit "
           "of `random_point(n, 1)` (by the start point's height), and for one step at random points of height h "
-          "(answers of Cramer size). `auto` takes the split step at these n from the start: for flint at "
-          f"n ≤ {AUTO_SPLIT_MAX_N}, for gmpy2 at every n < 16 "
-          "(its dense step is Bareiss elimination).", "",
+          "(answers of Cramer size). `auto` takes the split step from the start at "
+          f"n ≤ {AUTO_SPLIT_MAX_N}, with flint and gmpy2 (whose dense step is Bareiss elimination).", "",
           "| arith | n | along the orbit | random points |", "|---|---|---|---|"]
     L += [f"| {a} | {n} | " + ", ".join(f"{h} bits: {q:.2f}" for h, q in orbit) + " | "
           + ", ".join(f"{h} bits: {q:.2f}" for h, q in rand) + " |" for a, n, orbit, rand in res["split"]]

@@ -139,8 +139,8 @@ def test_split_refuses_what_it_cannot_do():
 
 
 @pytest.mark.parametrize("n, flint_path, gmpy2_path", [
-    (2, "split", "split"), (6, "split", "split"), (7, "structured", "split"),
-    (11, "structured", "split"), (12, "structured", "split"), (15, "structured", "split"),
+    (2, "split", "split"), (6, "split", "split"), (7, "structured", "dense"),
+    (11, "structured", "dense"), (12, "structured", "dense"), (15, "structured", "dense"),
     (16, "structured", "dense"),
 ])
 def test_auto_paths(n, flint_path, gmpy2_path):
@@ -162,10 +162,10 @@ def test_split_rejects_non_circulant_blocks():
         KahanMap(fld, "1/3", "flint", method="split")
 
 
-@pytest.mark.parametrize("arith, ns", [("flint", range(2, AUTO_SPLIT_MAX_N + 1)), ("gmpy2", (2, 7, 11, 13, 15))])
+@pytest.mark.parametrize("arith, ns", [("flint", range(2, AUTO_SPLIT_MAX_N + 1)), ("gmpy2", (2, 5, 6))])
 def test_auto_takes_split_from_the_start(monkeypatch, arith, ns):
     """Every step of an auto orbit from a low point is a split solve where auto splits
-    (flint: n ≤ AUTO_SPLIT_MAX_N; gmpy2: every n < 16), and the orbit is the dense orbit exactly;
+    (n ≤ AUTO_SPLIT_MAX_N), and the orbit is the dense orbit exactly;
     with flint at n = 11 (a factor of degree 10) auto does not split."""
     calls, real = [], split_mod.SplitSystem.__init__
 

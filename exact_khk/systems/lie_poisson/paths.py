@@ -15,9 +15,8 @@ generic solver they tune: the Dixon row in :mod:`exact_khk.kahan.map`, the κ an
 ``cyclo:N`` rows in :mod:`exact_khk.linalg.dense` and :mod:`exact_khk.linalg.floating`.
 
 =============================  ==================================================
-circulant blocks, kernel gmpy2  split for n in :data:`SPLIT_N` (GMPY2_SPLIT)
-circulant blocks, kernel flint  split for n ≤ :data:`AUTO_SPLIT_MAX_N` (SPLIT_SMALL_N);
-                                structured for every larger n
+circulant blocks, integer       split for n ≤ :data:`AUTO_SPLIT_MAX_N` (SPLIT, GMPY2_SPLIT);
+kernel flint or gmpy2           then structured (flint) or dense (gmpy2)
 no structure, or other kernels  dense
 dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 8 ≤ N < 16) once an answer grew by < 2× and
@@ -60,12 +59,11 @@ docs/benchmarks.md that justify them.
 
 from exact_khk.linalg import dense
 
-#: the n for which the split step exists (the generated code grows like the cube of the
-#: largest degree φ(d)); auto takes it at every n of it with gmpy2, whose dense step is Bareiss
-#: elimination: GMPY2_SPLIT
+#: the n for which the split step exists (``method='split'``; the generated code grows like
+#: the cube of the largest degree φ(d))
 SPLIT_N = tuple(range(1, 16))
-#: flint: the split step at every height up to this n, the structured step above it
-#: (SPLIT_SMALL_N)
+#: auto takes the split step at every height up to this n (rows SPLIT, GMPY2_SPLIT), the
+#: structured step (flint) or the dense one (gmpy2) above it
 AUTO_SPLIT_MAX_N = 6
 #: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
 #: down the tower (``CirculantRing.norm``, which keeps N and the adjugate A in lowest terms
@@ -108,6 +106,6 @@ def auto_path(n: int, kernel: str, splits: bool, circulant: bool):
     """``(split, structured)`` of ``method='auto'`` for an exact step with integer
     kernel ``kernel`` ('flint', 'gmpy2', …) of a field of dimension 2n whose blocks
     split (``splits``) / are circulant (``circulant``): the rows of the table above."""
-    if splits and circulant and (kernel != "flint" or n <= AUTO_SPLIT_MAX_N):
+    if splits and circulant and n <= AUTO_SPLIT_MAX_N:
         return True, False
     return False, circulant and kernel == "flint"
