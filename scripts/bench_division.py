@@ -1,13 +1,12 @@
 #!/usr/bin/env python3
-"""The structured exact step's two division routes, measured: the fixed-point division and Cramer's rule down the tower.
+"""The structured exact step's division rule of ``systems.lie_poisson.paths``, measured: its two division routes.
 
 Divisions (``--ns``, ``--bits``): along the orbit of ``random_point(n, 1)`` (field f of
 ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10), at the first point whose height reaches each
 target, every division the step makes over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is recorded and
 timed both ways: Cramer's rule down the tower (``CirculantRing._solve_norm``) and the fixed-point
-division (``CirculantRing.solve``, from the hint the ring had).  H is
-Cramer's bound on the answer (bits); the library takes the fixed-point division (the norm is its
-fallback).
+division (``CirculantRing.solve`` with the tower ruled out, from the hint the ring had).  H is
+Cramer's bound on the answer (bits); "rule" is what ``circulant.by_norm`` picks.
 
 Norm (``--norm-ns``, odd n only; ``--norm-bits``): where the tower ends at an odd b, the norm by
 the Galois conjugates (``CirculantRing.norm``) against d⁻¹ over Q by ``fmpq_poly.xgcd`` (FLINT's
@@ -59,7 +58,12 @@ def fixed_point(ring, hint, d, rhs):
     """The fixed-point division of d by a fresh ring with the hint ``ring`` had."""
     fresh = C.CirculantRing(ring.n, ring.sign)
     fresh.height_ratio = hint
-    return fresh.solve(d, rhs)
+    saved = C.by_norm
+    C.by_norm = lambda n, bound: False
+    try:
+        return fresh.solve(d, rhs)
+    finally:
+        C.by_norm = saved
 
 
 def division_rows(n, targets, rounds):
@@ -89,7 +93,7 @@ def division_rows(n, targets, rounds):
                         rounds=rounds)
             factor = f"t^{ring.n} {'+' if ring.sign < 0 else '-'} 1"
             yield (f"| {n} | {k} | {height(x)} | {factor} | {H} | {fmt(t['norm'])} | {fmt(t['fixed'])} | "
-                   f"{t['norm'] / t['fixed']:.2f} |")
+                   f"{t['norm'] / t['fixed']:.2f} | {'norm' if C.by_norm(ring.n, H) else 'fixed point'} |")
 
 
 def norm_rows(ns, bits_list, rounds):
@@ -121,7 +125,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     if args.ns:
         table(["n", "step", "height (bits)", "factor", "Cramer's bound H (bits)", "norm", "fixed point",
-               "norm / fixed point"], (line for n in args.ns for line in division_rows(n, args.bits, args.rounds)))
+               "norm / fixed point", "rule"], (line for n in args.ns for line in division_rows(n, args.bits, args.rounds)))
     if args.norm_ns:
         if any(n % 2 == 0 or n < 3 for n in args.norm_ns):
             ap.error("--norm-ns: odd n >= 3 only (the tower's end)")

@@ -35,12 +35,13 @@ def _dense_reference(R, d, rhs):
 
 @pytest.fixture(params=["norm", "fixed point"])
 def route(request, monkeypatch):
-    """Every division of the test by the fixed-point division (but at n = 1), or by Cramer's
-    rule down the tower (its fallback)."""
+    """Every division of the test by Cramer's rule down the tower, or (but at n = 1) by the
+    fixed-point division."""
     from exact_khk.systems.lie_poisson import circulant as C
 
-    if request.param == "norm":
-        monkeypatch.setattr(C.CirculantRing, "solve", lambda self, d, rhs: self._solve_norm(d, rhs))
+    bits = 0 if request.param == "fixed point" else 10 ** 9
+    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK"):
+        monkeypatch.setattr(C, name, bits)
     return request.param
 
 
@@ -105,6 +106,7 @@ def test_fixed_point_division_over_the_negacyclic_ring(monkeypatch):
     n = 16
     d = _poly(rng, n, 4600) + flint.fmpz_poly([2 ** 4610])  # a unit: |d(ζ)| ≈ 2^4610 everywhere
     rhs = [_poly(rng, n, 2300), _poly(rng, n, 1500)]
+    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 2300))
     monkeypatch.setattr(C.CirculantRing, "_solve_norm", None)  # the fallback is not taken
     answers = []
     for ratio in (0.0, 1.0, 1e9, None):
@@ -142,7 +144,7 @@ def test_precision_search_does_not_depend_on_the_hint(route):
 
 
 def test_fixed_point_division_with_hints_far_off(monkeypatch):
-    """The same on the fixed-point path.
+    """The same on the fixed-point path (Cramer's bound above the rule of ``by_norm``).
     A hint that is too small fails its first attempt, which then asks d's values at the
     roots of unity for a bound (``answer_bits``) and tries again.  Along an orbit the hint
     holds and the bound is never asked for."""
@@ -156,6 +158,7 @@ def test_fixed_point_division_with_hints_far_off(monkeypatch):
     n = 16
     d = _poly(rng, n, 4600) + flint.fmpz_poly([2 ** 4610])  # a unit: d(ω) ≈ 2^4610 everywhere
     rhs = [_poly(rng, n, 2300), _poly(rng, n, 1500)]
+    assert not C.by_norm(n, C._hadamard_bits(n, d.height_bits(), 2300))
     bounds = []
     answer_bits = C._Reciprocal.answer_bits
     monkeypatch.setattr(C._Reciprocal, "answer_bits", lambda self, hr: bounds.append(hr) or answer_bits(self, hr))
@@ -236,8 +239,9 @@ def test_rational_reconstruction():
 @pytest.mark.parametrize("n", [256, 320])
 def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     """Along an orbit the fixed-point division answers on its own: Cramer's rule down the
-    tower is a fallback for numerics out of reach (and the route of scalar divisions, the
-    factors t ± 1), and a precision search that gives up early (as a first step with
+    tower is a fallback for numerics out of reach (and the route of small Cramer bounds,
+    :func:`~exact_khk.systems.lie_poisson.circulant.by_norm`: here the first step, whose small point
+    is solved unsplit, and the small factors of tⁿ − 1 the later steps split off), and a precision search that gives up early (as a first step with
     answers of ~n·hd bits once did for n ≥ 32) would send every first step there.  The
     first answer is checked against the fallback's."""
     from fractions import Fraction
@@ -253,8 +257,9 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     calls = []
 
     def refuse(self, d, rhs):
-        if self.n != 1:
-            calls.append((self.n, self.sign))  # a fallback, not the route of scalars
+        hr = max(r.height_bits() for r in rhs)
+        if not C.by_norm(self.n, C._hadamard_bits(self.n, d.height_bits(), hr)):
+            calls.append((self.n, self.sign))  # a fallback, not the route of small bounds
         return fallback(self, d, rhs)
 
     monkeypatch.setattr(C.CirculantRing, "_solve_norm", refuse)
@@ -263,8 +268,10 @@ def test_orbit_steps_need_no_dense_fallback(n, monkeypatch):
     for _ in range(2):
         x = C.exact_step(st, x, eps, ar)
     assert calls == []
-    # control: the first step again with every fixed-point division made to miss, so that
-    # it falls back
+    # control: the first step again with every division sent to the fixed-point one
+    # (no route of small bounds) and made to miss, so that it falls back
+    for name in ("DIVISION_BY_NORM_MAX_BITS", "DIVISION_BY_NORM_MAX_WORK"):
+        monkeypatch.setattr(C, name, 0)
     monkeypatch.setattr(C.CirculantRing, "_attempt", lambda *args: None)
     C.circulant_ring.cache_clear()
     x0 = [ar(t) for t in random_point(n, 3)]
@@ -314,3 +321,16 @@ def test_split_divide_equals_dense_circulant_solve(n):
     # control: a non-unit (d(1) = 0 for d = t − 1) is refused, by the part over t − 1
     with pytest.raises(SingularMatrix):
         split_divide(R, flint.fmpz_poly([-1, 1]), [flint.fmpz_poly([1])])
+
+
+def test_division_rule_as_documented():
+    """``by_norm`` is the rule of the table in ``systems.lie_poisson.paths``: the tower while
+    H ≤ DIVISION_BY_NORM_MAX_BITS and b·H ≤ DIVISION_BY_NORM_MAX_WORK, b the odd part of m,
+    always at m = 1."""
+    from exact_khk.systems.lie_poisson.circulant import by_norm
+    from exact_khk.systems.lie_poisson.paths import DIVISION_BY_NORM_MAX_BITS as BITS, DIVISION_BY_NORM_MAX_WORK as WORK
+
+    assert by_norm(1, 10 ** 9) and by_norm(256, BITS) and not by_norm(256, BITS + 1)
+    assert by_norm(2, BITS) and not by_norm(8, BITS + 1) and WORK >= BITS
+    assert by_norm(12, WORK // 3) and not by_norm(12, WORK // 3 + 1) and by_norm(3, WORK // 3)
+    assert by_norm(11, WORK // 11) and not by_norm(88, WORK // 11 + 1) and not by_norm(15, WORK // 15 + 1)

@@ -58,6 +58,7 @@ from math import gcd, lcm
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.numtheory import ramanujan_sum
+from exact_khk.systems.lie_poisson.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
@@ -298,7 +299,7 @@ class CirculantRing:
     the check passes, up to twice a bound on the answer's height read off d's
     values at the roots of unity (δ divides Π_ω d(ω)); if the attempt at that
     bound fails, Cramer's rule down the tower answers (:meth:`norm`), as it does
-    for scalar divisions (n = 1).  A division costs a few polynomial
+    when Cramer's bound is small (:func:`by_norm`).  A division costs a few polynomial
     products at the size of the answer, all in FLINT (no p-adic reductions:
     a reduction modulo a big p^k costs about two products, a shift nearly
     nothing).
@@ -402,7 +403,7 @@ class CirculantRing:
         """
         n, hd = self.n, max(d.height_bits(), 1)
         hr = max(max(r.height_bits() for r in rhs), 1)
-        if n == 1:  # a scalar: Cramer's rule is one quotient
+        if by_norm(n, _hadamard_bits(n, hd, hr)):
             return self._remember(self._solve_norm(d, rhs), hd)
         self._check_unit(d)
         inverse = _Reciprocal(self, d, hd)
@@ -674,6 +675,14 @@ def _galois_data(n):
         weights = [(g % n, sum(c[i] for i in range(n) if gcd(i, n) == g)) for g in divisors]
         components.append((c[0], weights, flint.fmpz_poly(c)))  # c_q(0) = φ(q)
     return tuple(tower), tuple(components)
+
+
+def by_norm(n, bound) -> bool:
+    """Whether a division over Z[t]/(tⁿ ∓ 1) whose answer has at most ``bound`` bits
+    (Cramer's) is Cramer's rule down the tower (the rule of ``systems.lie_poisson.paths``: b·bound bounded,
+    b the odd part of n, where the tower ends in the Galois conjugates)."""
+    b = n >> ((n & -n).bit_length() - 1)
+    return n == 1 or (bound <= DIVISION_BY_NORM_MAX_BITS and b * bound <= DIVISION_BY_NORM_MAX_WORK)
 
 
 def _hadamard_bits(n, hd, hr) -> int:

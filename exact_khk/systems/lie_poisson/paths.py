@@ -25,9 +25,12 @@ dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
 exact H̃ (flint, rational)       structured at every n
 a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``circulant.
                                 split_solve``)
-a structured step's division    the fixed-point division (``CirculantRing.solve``);
-by d in Z[t]/(tᵐ ∓ 1)           Cramer's rule (``CirculantRing.norm``) for m = 1 and
-                                where the numerics are out of reach
+a structured step's division    Cramer's rule down the tower (``CirculantRing.norm``)
+by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is small:
+                                H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` and
+                                b·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` (b the odd
+                                part of m), or m = 1; otherwise the fixed-point
+                                division (``CirculantRing.solve``) (NORM)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
                                 binary64 where N·κ ≤ :data:`~exact_khk.linalg.floating.BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
@@ -62,6 +65,22 @@ SPLIT_N = tuple(range(1, 16))
 #: auto takes the split step at every height up to this n (rows SPLIT, GMPY2_SPLIT), the
 #: structured step (flint) or the dense one (gmpy2) above it
 AUTO_SPLIT_MAX_N = 6
+#: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
+#: down the tower (``CirculantRing.norm``, which keeps N and the adjugate A in lowest terms
+#: at every level) while Cramer's bound H (bits) is at most this ...
+DIVISION_BY_NORM_MAX_BITS = 2 ** 16
+#: ... and b·H is at most this, b the odd part of m (where the tower ends in the Galois
+#: conjugates, whose cost grows with b); scalar divisions, m = 1, always.  With the norm
+#: in lowest terms (along orbits gcd(N, content A) is most of N: 6 234 of 7 149 bits over
+#: t¹⁶ + 1 at n = 32, 434 bits), norm / fixed-point along orbits crosses 1 near
+#: H = 70 000 at m = 8, 16, 100 000 at m = 32, 200 000 at m = 64, but near 13 000 at
+#: m = 11, 13, 22 000 at m = 9, 15, 45 000 at m = 5·2ᵏ (scripts/bench_division.py at n =
+#: 12..256 to 12 000 bits); over 299 divisions this rule's choices cost 1.024× the faster
+#: route's (the simpler H ≤ 8192 or m·H ≤ 2¹⁷ 1.064×, 3.3× on single divisions at m = 16,
+#: 24, H ≈ 16 500); first steps off small points (Cramer-sized answers) 0.05–0.16 at every
+#: m measured
+DIVISION_BY_NORM_MAX_WORK = 2 ** 17
+
 #: degree growth (``diagnostics.degrees.line_run``): from this dimension N the degrees come
 #: from values at points of the line (one N×N solve per point and step) instead of
 #: polynomial arithmetic (O(N³) products of degree ~N·d_k per step).  20 steps of the
