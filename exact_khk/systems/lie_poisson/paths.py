@@ -1,10 +1,11 @@
 """The one table of rules by which ``method='auto'`` picks how a step is solved.
 
 A rule stays only where it makes a user-visible command (``orbit``, ``certify``,
-``scale``, sweep tasks) at least 1.5× faster than the simpler route without it,
-measured as whole commands, both routes side by side (docs/benchmarks.md, "Rules
-of the auto path, measured as whole commands"); every route gives the same
-rational point as the dense solve (tested with ``==``).  The rules depend on what
+``scale``, sweep tasks) at least 1.5× faster than the simpler route without it:
+CPU time of whole commands in two source trees, with the rule and without,
+alternating, medians of 3 rounds (docs/benchmarks.md, "Rules of the auto path,
+measured as whole commands"; the figure after each row is without / with there).
+Every route gives the same rational point as the dense solve (tested with ``==``).  The rules depend on what
 the field *declares* — whether its step's 2×2 blocks are circulant
 (``field.circulant_structure()``, n = dim/2) — on the arithmetic's integer kernel
 (``flint``: python-flint; ``gmpy2``: Bareiss elimination) and on n; never on a
@@ -15,13 +16,17 @@ generic solver they tune: the Dixon row in :mod:`exact_khk.kahan.map`, the κ an
 ``cyclo:N`` rows in :mod:`exact_khk.linalg.dense` and :mod:`exact_khk.linalg.floating`.
 
 =============================  ==================================================
-circulant blocks, integer       split for n ≤ :data:`AUTO_SPLIT_MAX_N` (SPLIT, GMPY2_SPLIT);
-kernel flint or gmpy2           then structured (flint) or dense (gmpy2)
+circulant blocks, integer       split for n ≤ :data:`AUTO_SPLIT_MAX_N` (against the
+kernel flint or gmpy2           structured step: ``orbit --n 3 --steps 1000`` 3.72×,
+                                n = 4, 5, 6 1.76×, 1.52×, 1.58×; gmpy2 against
+                                Bareiss: ``orbit --n 3 --steps 300`` 1.85×); above it
+                                structured (flint) or dense (gmpy2)
 no structure, or other kernels  dense
 dense steps along an orbit      Dixon's output-sensitive solve (python-flint,
                                 8 ≤ N < 16) once an answer grew by < 2× and
                                 :data:`~exact_khk.kahan.map.SMALL_ANSWER_MIN_BITS` ≤ h <
-                                :data:`~exact_khk.kahan.map.DIXON_BITS` · (N − 6) (DIXON)
+                                :data:`~exact_khk.kahan.map.DIXON_BITS` · (N − 6)
+                                (``orbit --n 5 --method dense --steps 150`` 2.55×)
 exact H̃ (flint, rational)       structured at every n
 a structured step (and H̃)       2×2 solves over the factors of tⁿ − 1 (``circulant.
                                 split_solve``)
@@ -30,12 +35,13 @@ by d in Z[t]/(tᵐ ∓ 1)           where Cramer's bound H on the answer is smal
                                 H ≤ :data:`DIVISION_BY_NORM_MAX_BITS` and
                                 b·H ≤ :data:`DIVISION_BY_NORM_MAX_WORK` (b the odd
                                 part of m), or m = 1; otherwise the fixed-point
-                                division (``CirculantRing.solve``) (NORM)
+                                division (``CirculantRing.solve``) (``certify --n 8
+                                --seed 1`` 1.67×)
 floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ in
                                 binary64 where N·κ ≤ :data:`~exact_khk.linalg.floating.BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
                                 N ≤ :data:`~exact_khk.linalg.dense.EXACT_INVERSE_MAX_N`, else estimated
-                                (``linalg.dense.solve``)
+                                (``linalg.dense.solve``) (KAPPA)
 exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.systems.lie_poisson.circulant_dft`:
 (n | N) and gf:P (n | P − 1)    n 2×2 systems over Q(ζ_N) or F_P, the fields over
                                 Q(ω) included), at every n within the memory
@@ -51,10 +57,8 @@ degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly`
                                 over to polynomial arithmetic once the degrees
                                 grow geometrically (``degrees._geometric``) below
                                 dimension :data:`DEGREES_HAND_OVER_BELOW_DIM`
+                                (DEGREES)
 =============================  ==================================================
-
-The names in parentheses are the rows of the whole-command table of
-docs/benchmarks.md that justify them.
 """
 
 from exact_khk.linalg import dense
@@ -62,15 +66,20 @@ from exact_khk.linalg import dense
 #: the n for which the split step exists (``method='split'``; the generated code grows like
 #: the cube of the largest degree φ(d))
 SPLIT_N = tuple(range(1, 16))
-#: auto takes the split step at every height up to this n (rows SPLIT, GMPY2_SPLIT), the
-#: structured step (flint) or the dense one (gmpy2) above it
+#: auto takes the split step at every height up to this n, the structured step (flint) or the
+#: dense one (gmpy2) above it.  Whole commands, without / with the split step: flint
+#: ``orbit --n 3 --steps 1000`` 3.72×, ``--n 4, 5, 6 --seed 1`` to 13 000–30 000 bits 1.76×,
+#: 1.52×, 1.58× (n = 2: 1.22–1.36×); gmpy2 ``orbit --n 3 --steps 300`` 1.85×.  Above it no
+#: command gained 1.5×: flint n = 7..15 0.89–1.07× (n = 12 0.90×), gmpy2 n = 8, 15 1.08×, 0.67×
 AUTO_SPLIT_MAX_N = 6
 #: a structured step's division by d over a factor Z[t]/(tᵐ ∓ 1) of tⁿ − 1 is Cramer's rule
 #: down the tower (``CirculantRing.norm``, which keeps N and the adjugate A in lowest terms
 #: at every level) while Cramer's bound H (bits) is at most this ...
 DIVISION_BY_NORM_MAX_BITS = 2 ** 16
 #: ... and b·H is at most this, b the odd part of m (where the tower ends in the Galois
-#: conjugates, whose cost grows with b); scalar divisions, m = 1, always.  With the norm
+#: conjugates, whose cost grows with b); scalar divisions, m = 1, always.  Whole commands,
+#: without / with the rule (the fixed-point division for every m > 1): ``certify --n 8 --seed
+#: 1`` 1.67×, ``certify --n 16 --seed 1 --steps 2`` 1.38×.  Per division, with the norm
 #: in lowest terms (along orbits gcd(N, content A) is most of N: 6 234 of 7 149 bits over
 #: t¹⁶ + 1 at n = 32, 434 bits), norm / fixed-point along orbits crosses 1 near
 #: H = 70 000 at m = 8, 16, 100 000 at m = 32, 200 000 at m = 64, but near 13 000 at
