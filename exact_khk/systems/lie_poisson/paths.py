@@ -41,7 +41,9 @@ floating arithmetics            dense (genuine p-bit arithmetic); ``mp:P``: κ i
                                 binary64 where N·κ ≤ :data:`~exact_khk.linalg.floating.BINARY64_CONDITION_MAX`,
                                 else κ's ‖M⁻¹‖₁ in p bits from the inverse for
                                 N ≤ :data:`~exact_khk.linalg.dense.EXACT_INVERSE_MAX_N`, else estimated
-                                (``linalg.dense.solve``) (KAPPA)
+                                (``linalg.dense.solve``) (``orbit --n 16 --arith
+                                mp:100 --steps 100`` 1.45×, under 1.5×; kept because it
+                                also sets how exact the κ of the warnings is)
 exact steps and H̃ in cyclo:N    the exact DFT (:mod:`~exact_khk.systems.lie_poisson.circulant_dft`:
 (n | N) and gf:P (n | P − 1)    n 2×2 systems over Q(ζ_N) or F_P, the fields over
                                 Q(ω) included), at every n within the memory
@@ -57,7 +59,7 @@ degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly`
                                 over to polynomial arithmetic once the degrees
                                 grow geometrically (``degrees._geometric``) below
                                 dimension :data:`DEGREES_HAND_OVER_BELOW_DIM`
-                                (DEGREES)
+                                (values: ``degrees --n 4``, ``--n 6`` 1.92×, 6.97×)
 =============================  ==================================================
 """
 
@@ -94,7 +96,8 @@ DIVISION_BY_NORM_MAX_WORK = 2 ** 17
 #: from values at points of the line (one N×N solve per point and step) instead of
 #: polynomial arithmetic (O(N³) products of degree ~N·d_k per step).  20 steps of the
 #: Lie–Poisson family (linear growth), polynomials / values: 0.3×, 0.9×, 2.5×, 5.6×, 10×,
-#: 34×, > 23× at N = 4, 6, 8, 10, 12, 16, 32 (scripts/bench_degrees.py, docs/benchmarks.md) ...
+#: 34×, > 23× at N = 4, 6, 8, 10, 12, 16, 32 (scripts/bench_degrees.py, docs/benchmarks.md); whole
+#: commands without / with values: ``degrees --n 4 --seed 1`` 1.92×, ``--n 6`` 6.97× ...
 DEGREES_BY_VALUES_MIN_DIM = 8
 #: ... but for geometric growth (the cyclic fields, d_k = N^k to max_degree 20 000) values
 #: are slower below this dimension: polynomials / values 0.6×, 0.6× at N = 8, 12, 1.1× at
