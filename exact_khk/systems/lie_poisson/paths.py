@@ -53,6 +53,7 @@ linear algebra over Q(ζ_N)      FLINT on the coefficients for φ(N) ≤
                                 rational system up to size
                                 :data:`~exact_khk.linalg.dense.CYCLO_REGULAR_MAX_SIZE`; else the generic loops
                                 and elimination; a rational matrix solved over Q
+                                (FLINT: ``certify --n 3 --arith cyclo:3`` 2.75×)
 degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly``)
 (``diagnostics.degrees``)       below dimension :data:`DEGREES_BY_VALUES_MIN_DIM`;
                                 values at points of the line from it, handing
