@@ -49,9 +49,8 @@ import sympy  # noqa: E402
 from exact_khk import Htilde, KahanMap, LiePoissonSystem, get_arith  # noqa: E402
 from exact_khk.systems.lie_poisson.circulant import exact_step  # noqa: E402
 from exact_khk.systems.lie_poisson.system import structure_from_system  # noqa: E402
-from exact_khk.systems.lie_poisson.paths import DENSE_BELOW  # noqa: E402
 from exact_khk.studies.output import write_atomic  # noqa: E402
-from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, SPLIT_N  # noqa: E402
+from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_MAX_N, SPLIT_N  # noqa: E402
 from exact_khk.systems.lie_poisson.system import random_point  # noqa: E402
 
 EPS = Fraction(1, 10)
@@ -409,12 +408,8 @@ def write(path, info, args, res, elapsed):
     over = [f"n = {r['n']}, {r['bits']} bits ({ratio(r['auto'], r['bare'])})" for r in exact
             if r["auto"] > 1.3 * r["bare"]]
     L += ["", "Library steps (auto) more than 1.3× the bare solve: " + ("; ".join(over) if over else "none") + "."]
-    L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for n = "
-          + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + ", and for n = "
-          + ", ".join(f"{n} below {b} bits" for n, b in AUTO_SPLIT_BELOW.items()) + "; "
-          "structured above those heights, for n = "
-          + ", ".join(f"{n} from points of {b} bits on" for n, b in DENSE_BELOW.items())
-          + " (dense below) and for every other n from the start). \"split\": one 2×2 system per cyclotomic factor "
+    L += ["", "\"library auto\" is the method `KahanMap` picks (exact flint steps are split for "
+          f"n ≤ {AUTO_SPLIT_MAX_N} and structured for every larger n). \"split\": one 2×2 system per cyclotomic factor "
           "of tⁿ − 1. Random points of height h have no special structure, so "
           "the exact solution is as large as Cramer's rule allows (about 2n·h bits). "
           "\"—\": not run (a smaller case already took more than "
@@ -422,23 +417,18 @@ def write(path, info, args, res, elapsed):
           "### The split step against the dense one", "",
           "dense / split time (above 1: split faster) for 8 steps of `KahanMap.orbit` from points of the orbit "
           "of `random_point(n, 1)` (by the start point's height), and for one step at random points of height h "
-          "(answers of Cramer size). `auto` takes the split step at these n from the start: for flint at "
-          "n = " + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 1) + ", for gmpy2 at every n < 16 "
-          "(its dense step is Bareiss elimination).", "",
+          "(answers of Cramer size). `auto` takes the split step from the start at "
+          f"n ≤ {AUTO_SPLIT_MAX_N}, with flint and gmpy2 (whose dense step is Bareiss elimination).", "",
           "| arith | n | along the orbit | random points |", "|---|---|---|---|"]
     L += [f"| {a} | {n} | " + ", ".join(f"{h} bits: {q:.2f}" for h, q in orbit) + " | "
           + ", ".join(f"{h} bits: {q:.2f}" for h, q in rand) + " |" for a, n, orbit, rand in res["split"]]
     L += ["", "### Where the structured step overtakes the dense and the split one (exact orbits)", "",
           "dense / structured and split / structured time (above 1: structured faster) of 4 steps of "
           "`KahanMap.orbit` from points of the orbit of `random_point(n, 1)`, by the start point's height, "
-          "for n = 7..15 except 8 (`auto` splits at n = "
-          + ", ".join(str(n) for n in AUTO_SPLIT_N if n > 8) + " at every height; the others are the n where "
-          "it switches). The dense map solves output-sensitively "
+          "for n = 7..15 except 8 (`auto` takes the structured step there from the first point). "
+          "The dense map solves output-sensitively "
           "once its answers are known to be small; the timed calls repeat one orbit, so after the warm-up "
-          "call it does so from the first step. `auto` (flint) switches to the structured step at "
-          + ", ".join(f"{b} bits for n = {n}" for n, b in AUTO_SPLIT_BELOW.items())
-          + " (split below), and at " + ", ".join(f"{b} bits for n = {n}" for n, b in DENSE_BELOW.items())
-          + " (dense below).", "",
+          "call it does so from the first step.", "",
           *crossover_table(res["crossover"])]
     L += ["", "### Structured against dense along one exact orbit", "",
           "| n | step | height (bits) | structured | dense | dense / structured |", "|---|---|---|---|---|---|"]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The structured exact step's two rules of ``systems.lie_poisson.paths``, measured: its division routes and its split.
+"""The structured exact step's division rule of ``systems.lie_poisson.paths``, measured: its two division routes.
 
 Divisions (``--ns``, ``--bits``): along the orbit of ``random_point(n, 1)`` (field f of
 ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10), at the first point whose height reaches each
@@ -8,10 +8,6 @@ timed both ways: Cramer's rule down the tower (``CirculantRing._solve_norm``) an
 division (``CirculantRing.solve`` with the tower ruled out, from the hint the ring had).  H is
 Cramer's bound on the answer (bits); "rule" is what ``circulant.by_norm`` picks.
 
-Split (``--split-ns``, ``--point-bits``): one step at random points whose coordinates have
-``--point-bits`` bits (numerators and a common denominator), over Z[t]/(tⁿ − 1) unsplit and
-over the factors of tⁿ − 1 (``paths.UNSPLIT_MAX_WORK`` forced either way).
-
 Norm (``--norm-ns``, odd n only; ``--norm-bits``): where the tower ends at an odd b, the norm by
 the Galois conjugates (``CirculantRing.norm``) against d⁻¹ over Q by ``fmpq_poly.xgcd`` (FLINT's
 multimodular gcd, the route before it), for random d with coefficients of each height.
@@ -19,8 +15,8 @@ multimodular gcd, the route before it), for random d with coefficients of each h
 Times are medians of ``--rounds`` interleaved rounds (each a loop of about 2 ms of calls); both routes give the same answer (asserted).
 Nothing about speed is asserted.  Prints Markdown tables.
 
-    python3 scripts/bench_division.py [--ns 16,32,64] [--bits 0,1000,3000] [--split-ns 16,24,32,64] [--point-bits 1,4,16,64]
-    python3 scripts/bench_division.py --ns "" --split-ns "" --norm-ns 5,9,11,15 --norm-bits 10,100,1000
+    python3 scripts/bench_division.py [--ns 16,32,64] [--bits 0,1000,3000]
+    python3 scripts/bench_division.py --ns "" --norm-ns 5,9,11,15 --norm-bits 10,100,1000
 """
 
 from __future__ import annotations
@@ -29,7 +25,6 @@ import argparse
 import random
 import sys
 import time
-from fractions import Fraction
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -101,28 +96,6 @@ def division_rows(n, targets, rounds):
                    f"{t['norm'] / t['fixed']:.2f} | {'norm' if C.by_norm(ring.n, H) else 'fixed point'} |")
 
 
-def split_rows(n, bits_list, rounds):
-    ar, rng = get_arith("flint"), random.Random(n)
-    st = C.circulant_structure(LiePoissonSystem.random(n, seed=1).field("f"))
-    eps = ar(EPS)
-    saved = C.UNSPLIT_MAX_WORK
-
-    def step(limit, x):
-        C.UNSPLIT_MAX_WORK = limit
-        try:
-            return C.exact_step(st, x, eps, ar)
-        finally:
-            C.UNSPLIT_MAX_WORK = saved
-
-    for bits in bits_list:
-        den = rng.getrandbits(bits) | 1
-        x = [ar(Fraction(rng.getrandbits(bits), den)) for _ in range(2 * n)]
-        assert step(10 ** 12, x) == step(-1, x), "split and unsplit steps differ"
-        t = per_call({"unsplit": lambda: step(10 ** 12, x), "split": lambda: step(-1, x)}, rounds=rounds)
-        yield (f"| {n} | {height(x)} | {fmt(t['unsplit'])} | {fmt(t['split'])} | {t['unsplit'] / t['split']:.2f} | "
-               f"{'unsplit' if n * n * height(x) <= saved else 'split'} |")
-
-
 def norm_rows(ns, bits_list, rounds):
     """The norm at odd n (the Galois conjugates) against d⁻¹ over Q by ``fmpq_poly.xgcd``, for
     random d with coefficients of each height; both give d·A = N (asserted)."""
@@ -146,8 +119,6 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ns", type=ints, default=ints("16,32,64"))
     ap.add_argument("--bits", type=ints, default=ints("0,1000,3000"), help="orbit heights of the division table")
-    ap.add_argument("--split-ns", type=ints, default=ints("16,24,32,64"))
-    ap.add_argument("--point-bits", type=ints, default=ints("1,4,16,64"), help="heights of the split table's points")
     ap.add_argument("--norm-ns", type=ints, default=[], help="odd n of the norm table (none by default)")
     ap.add_argument("--norm-bits", type=ints, default=ints("10,100,1000"), help="heights of the norm table's d")
     ap.add_argument("--rounds", type=int, default=5)
@@ -155,10 +126,6 @@ def main(argv=None):
     if args.ns:
         table(["n", "step", "height (bits)", "factor", "Cramer's bound H (bits)", "norm", "fixed point",
                "norm / fixed point", "rule"], (line for n in args.ns for line in division_rows(n, args.bits, args.rounds)))
-    if args.split_ns:
-        print()
-        table(["n", "point height (bits)", "unsplit", "split", "unsplit / split", "rule"],
-              (line for n in args.split_ns for line in split_rows(n, args.point_bits, args.rounds)))
     if args.norm_ns:
         if any(n % 2 == 0 or n < 3 for n in args.norm_ns):
             ap.error("--norm-ns: odd n >= 3 only (the tower's end)")

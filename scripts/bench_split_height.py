@@ -1,9 +1,8 @@
 #!/usr/bin/env python3
 """The split step against the structured one high up exact orbits (n < 16), as a Markdown table.
 
-Where ``method='auto'`` splits at every height (``systems.lie_poisson.paths.AUTO_SPLIT_N``) or below a
-height (``AUTO_SPLIT_BELOW``), the split step should stay faster than the structured one
-up to the heights users reach.  Along the orbit of ``random_point(n, 1)`` (field f of
+Where ``method='auto'`` splits (n ≤ ``systems.lie_poisson.paths.AUTO_SPLIT_MAX_N``), the split step
+should stay faster than the structured one up to the heights users reach.  Along the orbit of ``random_point(n, 1)`` (field f of
 ``LiePoissonSystem.random(n, seed=1)``, ε = 1/10), at the first point whose height reaches
 each target, one step of each method is timed ``--rounds`` times, the two alternating
 (medians; the split system is built before the timing).  Nothing is asserted.

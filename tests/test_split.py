@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from exact_khk import (InputError, KahanMap, LiePoissonSystem, QuadraticField, SingularStepError,
                        get_arith, rational_sign_patterns)
 from exact_khk.systems.lie_poisson import split as split_mod
-from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_BELOW, AUTO_SPLIT_N, DENSE_BELOW, SPLIT_N
+from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_MAX_N, SPLIT_N
 from exact_khk.systems.lie_poisson.split import split_system
 from exact_khk.systems.lie_poisson.system import random_point
 
@@ -139,28 +139,16 @@ def test_split_refuses_what_it_cannot_do():
 
 
 @pytest.mark.parametrize("n, flint_path, gmpy2_path", [
-    (2, "split", "split"), (12, "split", "split"),
-    (9, "split below 3584 bits, then structured", "split"),
-    (7, "split below 2048 bits, then structured", "split"),
-    (8, "split below 2048 bits, then structured", "split"),
-    (15, "split below 768 bits, then structured", "split"),
-    (11, "dense below 512 bits, then structured", "split"),
-    (14, "structured", "split"),
+    (2, "split", "split"), (6, "split", "split"), (7, "structured", "dense"),
+    (11, "structured", "dense"), (12, "structured", "dense"), (15, "structured", "dense"),
     (16, "structured", "dense"),
 ])
 def test_auto_paths(n, flint_path, gmpy2_path):
-    """The auto rule as documented (paths.AUTO_SPLIT_N, AUTO_SPLIT_BELOW, DENSE_BELOW)."""
+    """The auto rule as documented (paths.AUTO_SPLIT_MAX_N, SPLIT_N)."""
     fld = LiePoissonSystem.random(n, 1).field("f")
     assert KahanMap(fld, "1/10", "flint").path == flint_path
     assert KahanMap(fld, "1/10", "gmpy2").path == gmpy2_path
     assert KahanMap(fld, "1/10", "fraction").path == "dense"
-
-
-def test_auto_split_tables_cover_split_n():
-    """Every n of SPLIT_N but 11, 13 (factors of degree 10, 12: dense below a height) and 14
-    (structured from the start) is split by auto with python-flint, always or below a height."""
-    assert set(AUTO_SPLIT_N).isdisjoint(AUTO_SPLIT_BELOW) and set(DENSE_BELOW) == {11, 13}
-    assert set(AUTO_SPLIT_N) | set(AUTO_SPLIT_BELOW) == set(SPLIT_N) - {11, 13, 14}
 
 
 def test_split_rejects_non_circulant_blocks():
@@ -174,10 +162,10 @@ def test_split_rejects_non_circulant_blocks():
         KahanMap(fld, "1/3", "flint", method="split")
 
 
-@pytest.mark.parametrize("arith, ns", [("flint", AUTO_SPLIT_N[1:]), ("gmpy2", (2, 7, 11, 13, 15))])
+@pytest.mark.parametrize("arith, ns", [("flint", range(2, AUTO_SPLIT_MAX_N + 1)), ("gmpy2", (2, 5, 6))])
 def test_auto_takes_split_from_the_start(monkeypatch, arith, ns):
     """Every step of an auto orbit from a low point is a split solve where auto splits
-    (flint: AUTO_SPLIT_N; gmpy2: every n < 16), and the orbit is the dense orbit exactly;
+    (n ≤ AUTO_SPLIT_MAX_N), and the orbit is the dense orbit exactly;
     with flint at n = 11 (a factor of degree 10) auto does not split."""
     calls, real = [], split_mod.SplitSystem.__init__
 
@@ -267,10 +255,10 @@ def test_structure_rows_are_the_integer_system_rows(n):
 
 
 def test_auto_builds_the_split_system_only_when_it_steps():
-    """Choosing the path costs nothing: at n = 11, 13 (dense, then structured) the split
-    system is never built; at n = 12 (split) by the first step."""
+    """Choosing the path costs nothing: at n = 7 (structured) the split system is never
+    built; at n = 6 (split) by the first step."""
     built = lambda fld: any(isinstance(k, tuple) and k[0] == "split" for k in fld._cache)  # noqa: E731
-    for n, used in ((11, False), (12, True)):
+    for n, used in ((7, False), (6, True)):
         fld = LiePoissonSystem.random(n, seed=1).field("f")
         phi = KahanMap(fld, "1/10", "flint")
         assert not built(fld)

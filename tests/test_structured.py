@@ -19,11 +19,6 @@ from exact_khk import (InputError, KahanMap, LiePoissonSystem, NearSingularWarni
 from exact_khk.systems.lie_poisson.circulant import circulant_structure, exact_htilde, exact_step, numeric_step
 from exact_khk.systems.lie_poisson.system import structure_from_system
 from exact_khk.systems.lie_poisson.invariants import Htilde
-from exact_khk.systems.lie_poisson import circulant
-from exact_khk.arith import point_height as _height
-from exact_khk.systems.lie_poisson.paths import DENSE_BELOW
-from exact_khk.systems.lie_poisson import split as split_mod
-from exact_khk.systems.lie_poisson.paths import AUTO_SPLIT_BELOW
 from exact_khk.systems.lie_poisson.system import random_point
 
 from .conftest import EXACT
@@ -34,37 +29,6 @@ def _fields(n):
     out = [s.field("f"), s.field("f", power=1), s.field("control")]
     out += [s.field("g", sg) for sg in rational_sign_patterns(n)[:3]]
     return out
-
-
-@pytest.fixture(params=["split", "unsplit"])
-def split_route(request, monkeypatch):
-    """Every exact structured solve of the test over the factors of tⁿ − 1, or over
-    Z[t]/(tⁿ − 1) unsplit, whatever the point's height (``paths.UNSPLIT_MAX_WORK``)."""
-    monkeypatch.setattr(circulant, "UNSPLIT_MAX_WORK", -1 if request.param == "split" else 10 ** 12)
-    return request.param
-
-
-def test_small_points_solve_unsplit(monkeypatch):
-    """The rule of ``paths.UNSPLIT_MAX_WORK``: at n = 16 a point of height h with 16²·h at
-    most that is solved over Z[t]/(t¹⁶ − 1) in one division, a higher one over the five
-    factors t⁸ + 1, t⁴ + 1, t² + 1, t + 1, t − 1 (the same point either way)."""
-    from exact_khk.systems.lie_poisson.paths import UNSPLIT_MAX_WORK
-
-    n, ar = 16, get_arith("flint")
-    fld = LiePoissonSystem.random(n, seed=1).field("f")
-    st = circulant_structure(fld)
-    rings, solve = [], circulant.CirculantRing.solve
-    monkeypatch.setattr(circulant.CirculantRing, "solve",
-                        lambda self, d, rhs: rings.append((self.n, self.sign)) or solve(self, d, rhs))
-    eps = ar(Fraction(1, 10))
-    dense = KahanMap(fld, eps, "flint", method="dense")
-    factors = [(8, -1), (4, -1), (2, -1), (1, -1), (1, 1)]
-    top = UNSPLIT_MAX_WORK // n ** 2
-    for bits, expected in ((top, [(16, 1)]), (top + 1, factors)):
-        x = [ar(Fraction(2 ** bits - 1 - i, 2 ** bits - 3)) for i in range(2 * n)]
-        rings.clear()
-        y = exact_step(st, x, eps, ar)
-        assert rings == expected and y == dense.step(x)
 
 
 def _point(rng, n, den=5):
@@ -86,7 +50,7 @@ def test_structured_equals_dense_exact(n):
 
 
 @pytest.mark.parametrize("n", [16, 20, 32])
-def test_structured_equals_dense_at_larger_n(n, split_route):
+def test_structured_equals_dense_at_larger_n(n):
     """The structured step (closed-form Cramer, fixed-point division checked exactly) gives
     the dense flint point along an orbit, beyond the heights where auto switches."""
     from exact_khk.systems.lie_poisson.system import random_point
@@ -98,7 +62,7 @@ def test_structured_equals_dense_at_larger_n(n, split_route):
 
 
 @pytest.mark.parametrize("n", [4, 8, 12])
-def test_structured_step_at_points_with_vanishing_parts(n, split_route):
+def test_structured_step_at_points_with_vanishing_parts(n):
     """The exact step splits x along tⁿ − 1 = (tᵏ − 1)(tᵏ + 1), k = n/2 (recursively): points
     whose part mod tᵏ + 1 or mod tᵏ − 1 vanishes (u_{i+k} = ±u_i) — including the zero
     point and a point with one nonzero coordinate — step as the dense solve says."""
@@ -125,7 +89,7 @@ def test_structure_from_vectors_matches_field():
                 circulant_structure(s.field(kind, signs, power)), (n, kind, signs, power)
 
 
-def test_htilde_structured_equals_dense(split_route):
+def test_htilde_structured_equals_dense():
     rng = random.Random(2)
     ar = get_arith("flint")
     for n in range(2, 8):
@@ -263,43 +227,6 @@ def test_auto_choice_and_fallbacks():
         KahanMap(small.field("f"), "1/3", "flint", method="fast")
 
 
-@pytest.mark.parametrize("n, low, switch, steps", [(11, "dense", DENSE_BELOW[11], 8),
-                                                   (15, "split", AUTO_SPLIT_BELOW[15], 8),
-                                                   (10, "split", AUTO_SPLIT_BELOW[10], 42),
-                                                   (9, "split", AUTO_SPLIT_BELOW[9], 40),
-                                                   (8, "split", AUTO_SPLIT_BELOW[8], 30)])
-def test_auto_switches_to_structured_with_height(monkeypatch, n, low, switch, steps):
-    """Where ``auto`` does not split at every height (flint, n = 7..11, 13, 15), it
-    steps dense (n = 11, 13) or split (n = 7, 8, 9, 10, 15) from low points and structured
-    from points of height ≥ ``switch_bits``; the orbit is the dense orbit exactly.
-    Heights n = 11: 2, 113, 268, 417, …; n = 15: 2, 167, 361, 558, …; n = 9: about
-    100 bits a step, 3560 after 34 steps; n = 10: 5011 after 39;
-    n = 8: 2034 after 27."""
-    calls, solves = [], []
-    real_init = split_mod.SplitSystem.__init__
-
-    def spy(self, *args):  # count the split solves (the system is built with the map)
-        real_init(self, *args)
-        solve = self.solve
-        self.solve = lambda xi, d: solves.append(d) or solve(xi, d)
-
-    monkeypatch.setattr(split_mod.SplitSystem, "__init__", spy)
-    fld = LiePoissonSystem.random(n, 1).field("f")
-    auto, dense = KahanMap(fld, "1/10", "flint"), KahanMap(fld, "1/10", "flint", method="dense")
-    assert auto.structure is not None and auto.switch_bits == switch and auto.split == (low == "split")
-    real = circulant.exact_step
-    monkeypatch.setattr(circulant, "exact_step", lambda st, x, *a: calls.append(x) or real(st, x, *a))
-    pts = auto.orbit(random_point(n, 1), steps)
-    assert pts == dense.orbit(random_point(n, 1), steps)
-    tall = [p for p in pts[:-1] if _height(auto.arith, p) >= switch]
-    assert 0 < len(tall) < steps  # the orbit crosses the threshold
-    assert calls == tall  # structured exactly from the tall points on
-    assert len(solves) == (steps - len(tall) if low == "split" else 0)
-    calls.clear()
-    assert auto.step(pts[0]) == pts[1] and calls == []
-    assert auto.step(pts[-2]) == pts[-1] and calls == [pts[-2]]
-
-
 def test_structured_step_at_n_256():
     """Exact step at n = 256 (the structure from the vectors: building the dense field
     would need (2n)³ tensor entries), checked against the equivalent form (docs/conventions.md)
@@ -332,7 +259,7 @@ def test_large_n_structured_step_never_builds_the_dense_tensor():
     s = LiePoissonSystem.random(16, 3)
     fld = s.field("f")
     phi = KahanMap(fld, "1/10", "flint")
-    assert phi.structure is not None and phi.switch_bits == 0
+    assert phi.structure is not None and phi.path == "structured"
     x = random_point(16, 3)
     y = phi.step(x)
     assert list(phi.inverse(y)) == [phi.arith(t) for t in x]   # the step is undone exactly
@@ -363,7 +290,7 @@ def _cyclo_fields(n, rng):
 @pytest.mark.parametrize("n", [2, 3, 4, 5, 6])
 def test_cyclotomic_dft_step_and_htilde_equal_dense(n):
     """At points of Q(ζ_N) with ε in Q(ζ_N) (N = n and 2n), the DFT step and H̃ equal the dense
-    solve over Q(ζ_N), for fields over Q and over Q(ω); ``auto`` takes the DFT step from n = 3."""
+    solve over Q(ζ_N), for fields over Q and over Q(ω); ``auto`` takes the DFT step at every n."""
     from exact_khk.systems.lie_poisson import circulant_dft
 
     rng = random.Random(n)
@@ -375,7 +302,7 @@ def test_cyclotomic_dft_step_and_htilde_equal_dense(n):
             x = [ar(rng.randint(-3, 3)) + ar.gen * rng.randint(-2, 2) for _ in range(2 * n)]
             eps = ar(Fraction(1, rng.randint(3, 9))) + ar.gen / 11
             auto, dense = (KahanMap(fld, eps, ar, method=m) for m in ("auto", "dense"))
-            assert auto.path == ("structured" if n >= 3 else "dense") and dense.path == "dense"
+            assert auto.path == "structured" and dense.path == "dense"
             assert auto.orbit(x, 2) == dense.orbit(x, 2), (n, N, fld.label)
             assert circulant_dft.exact_step(st, x, eps, ar) == dense.step(x)
             assert Htilde(fld, x, eps, ar) == Htilde(fld, x, eps, ar, method="dense"), (n, N, fld.label)
@@ -397,7 +324,7 @@ def test_finite_field_dft_step_and_htilde_equal_dense(n):
         x = [ar(rng.randint(-10 ** 12, 10 ** 12)) for _ in range(2 * n)]
         eps = ar(Fraction(rng.randint(1, 9), rng.randint(2, 20)))
         auto, dense = (KahanMap(fld, eps, ar, method=m) for m in ("auto", "dense"))
-        assert auto.path == ("structured" if n >= 3 else "dense")
+        assert auto.path == "structured"
         assert auto.orbit(x, 3) == dense.orbit(x, 3), (n, fld.label)
         assert circulant_dft.exact_step(st, x, eps, ar) == dense.step(x)
         assert Htilde(fld, x, eps, ar) == Htilde(fld, x, eps, ar, method="dense"), (n, fld.label)

@@ -78,7 +78,8 @@ from exact_khk.parsing import MAX_STEPS, _short, parse_rational
 from exact_khk.systems.quadratic import QuadraticField
 
 METHODS = ("auto", "dense", "structured", "split")
-#: dense exact orbit steps (python-flint, 8 ≤ N < 16): Dixon's solve from this height (crossover measured for N = 8..14) ...
+#: dense exact orbit steps (python-flint, 8 ≤ N < 16): Dixon's solve from this height (crossover measured for N = 8..14;
+#: as a whole command, without / with Dixon: ``orbit --n 5 --seed 1 --method dense --steps 150`` 2.55×) ...
 SMALL_ANSWER_MIN_BITS = 128
 #: ... up to DIXON_BITS·(N − 6) bits (fmpz_mat.solve overtakes it near 16 000,
 #: 40 000, 60 000 bits for N = 8, 10, 12)
@@ -126,9 +127,8 @@ class KahanMap:
     (see the module docstring).  ``steps`` is what the field answered when asked for its
     fast steps (:meth:`~exact_khk.systems.quadratic.QuadraticField.structured_steps`), or
     None: every step dense.  ``structure`` is the structure the structured step uses, or
-    None; ``split`` whether exact steps take the split step instead of the dense one;
-    ``switch_bits`` the point height in bits from which the structured step takes over
-    (0: the structured step, if any, everywhere).  See :attr:`path`.
+    None (with one, every step is structured); ``split`` whether exact steps take the
+    split step instead of the dense one.  See :attr:`path`.
     """
 
     method, steps = "dense", None  # for maps built without __init__
@@ -161,17 +161,9 @@ class KahanMap:
         return None if self.steps is None else self.steps.structure
 
     @property
-    def switch_bits(self) -> int:
-        return 0 if self.steps is None else self.steps.switch_bits
-
-    @property
     def path(self) -> str:
-        """How the steps are solved: ``'dense'``, ``'structured'``, ``'split'``, or
-        e.g. ``'split below 2048 bits, then structured'``."""
-        low = "split" if self.split else "dense"
-        if self.structure is None:
-            return low
-        return f"{low} below {self.switch_bits} bits, then structured" if self.switch_bits else "structured"
+        """How the steps are solved: ``'dense'``, ``'structured'`` or ``'split'``."""
+        return self._kind()
 
     def point(self, x, name="x"):
         """``x`` as a tuple of elements of this map's arithmetic."""
@@ -313,18 +305,18 @@ class KahanMap:
         with self.arith.local():  # e.g. the working precision of ball:P
             return self._step(self.point(x))
 
-    def _kind_at(self, x) -> str:
-        """How the step at x is solved: ``'structured'``, ``'split'`` or ``'dense'``."""
+    def _kind(self) -> str:
+        """How every step is solved: ``'structured'``, ``'split'`` or ``'dense'``."""
         steps = self.steps
         if steps is None:
             return "dense"
-        if steps.structure is not None and (not steps.switch_bits or _height(self.arith, x) >= steps.switch_bits):
+        if steps.structure is not None:
             return "structured"
         return "split" if steps.split else "dense"
 
     def _step(self, x):
         ar, eps = self.arith, self.eps
-        kind = self._kind_at(x)
+        kind = self._kind()
         if kind == "structured":
             return self._structured_step(x)
         if kind == "split":
@@ -356,21 +348,13 @@ class KahanMap:
 
     def _steps(self, x):
         """Φ(x), Φ²(x), … (endless); the exact dense and split paths keep their
-        integer state between steps instead of re-reading the point, until the
-        height makes the structured path pay (``switch_bits``)."""
+        integer state between steps instead of re-reading the point."""
+        kind = self._kind()
+        if kind != "structured" and self.arith.integers is not None:
+            yield from self._split_steps(x) if kind == "split" else self._integer_steps(x)
         while True:
-            kind = self._kind_at(x)
-            if kind == "structured" or self.arith.integers is None:
-                x = self._step(x)
-                yield x
-                continue
-            steps = self._split_steps(x) if kind == "split" else self._integer_steps(x)
-            if not self.switch_bits:
-                yield from steps  # endless: this path at every height
-            for x in steps:
-                yield x
-                if self._kind_at(x) != kind:
-                    break
+            x = self._step(x)
+            yield x
 
     def inverse(self, x):
         """Φ_f(x, −ε) = Φ_f^{-1}(x, ε)."""

@@ -28,7 +28,8 @@ EXACT_INVERSE_MAX_N = 5
 #: over Q(ζ_N) for m·φ ≤ 32, 13× at 160, 45× at 240, 84× at 400, random systems).  Memory
 #: bounds, not tuned ones: that system has (m·φ)² entries and the companion powers φ³
 #: (``orbit --arith cyclo:10000``: m·φ = 24 000, tens of GB); beyond them elimination over
-#: Q(ζ_N), and a rational matrix is solved over Q at any N
+#: Q(ζ_N), and a rational matrix is solved over Q at any N.  Whole commands without / with
+#: FLINT: ``certify --n 3 --arith cyclo:3`` 2.75×, ``orbit --n 4 --seed 1 --arith cyclo:8`` 1.64×
 CYCLO_REGULAR_MAX_DEGREE = 128
 CYCLO_REGULAR_MAX_SIZE = 1024
 

@@ -108,7 +108,7 @@ class QuadraticField:
     def structured_steps(self, ar, method, eps):
         """What a :class:`~exact_khk.kahan.map.KahanMap` solves its steps by besides the dense
         solve, for ``method`` 'auto', 'structured' or 'split' and ε = ``eps`` (an element of
-        ``ar``): an object with ``split``, ``structure``, ``switch_bits``, ``step(x, eps, ar)``
+        ``ar``): an object with ``split``, ``structure``, ``step(x, eps, ar)``
         and ``split_system(kernel, p, q)`` (a family's fast steps, e.g.
         :class:`~exact_khk.systems.lie_poisson.steps.CirculantSteps`), or None: every step
         dense.  A field without such steps (this default) refuses 'structured' and 'split'."""

@@ -58,7 +58,7 @@ from math import gcd, lcm
 from exact_khk.arith import _as_fraction
 from exact_khk.linalg.dense import SingularMatrix
 from exact_khk.linalg.numtheory import ramanujan_sum
-from exact_khk.systems.lie_poisson.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK, UNSPLIT_MAX_WORK
+from exact_khk.systems.lie_poisson.paths import DIVISION_BY_NORM_MAX_BITS, DIVISION_BY_NORM_MAX_WORK
 
 try:  # python-flint is optional: without it the dense path is used
     import flint
@@ -771,8 +771,7 @@ def point_polys(vals, reflected=False):
 def split_solve(R, u, v, dx, solve_part):
     """``(W, δ)``: a 2×2 solve over R for the point with integer polynomials (u, v) and
     denominator dx, one solve over each factor of tⁿ − 1 (:meth:`CirculantRing.factors`;
-    the caller's per-factor data: :meth:`CirculantRing.parts`), joined; one solve over R
-    itself for points of height h with n²·h ≤ :data:`~exact_khk.systems.lie_poisson.paths.UNSPLIT_MAX_WORK`.
+    the caller's per-factor data: :meth:`CirculantRing.parts`), joined.
 
     Every product in R is one at each n-th root of unity, so a system whose entries are
     products of the point's polynomials with fixed ones is one system over each factor,
@@ -783,9 +782,6 @@ def split_solve(R, u, v, dx, solve_part):
     returns ``(W_part, δ_part)``; the parts join by W = (a + b + tᵏ(a − b))/2 from
     W ≡ a mod tᵏ − 1 and W ≡ b mod tᵏ + 1.
     """
-    if R.n ** 2 * max(u.height_bits(), v.height_bits(), dx.bit_length()) <= UNSPLIT_MAX_WORK:
-        return solve_part(R, u, v, dx)
-
     def reduced(ring, parts):
         pu, pv = parts
         g = pu.content().gcd(pv.content()).gcd(dx)  # the part's own denominator is dx/g

@@ -24,7 +24,6 @@ from exact_khk.systems.lie_poisson import circulant, circulant_dft
 from exact_khk.arith import get_arith, as_point, to_element
 from exact_khk.errors import InputError, NearSingularWarning, NumericalError, PoleError
 from exact_khk.linalg.dense import SingularMatrix, matmul, matvec, solve, transpose
-from exact_khk.systems.lie_poisson.paths import HTILDE_STRUCTURED_MIN_N
 
 
 def _eps(ar, eps):
@@ -67,10 +66,10 @@ def Htilde(field, x, eps, arith=None, method="auto"):
 
     Exact rational arithmetics with python-flint solve the 2n×2n system as a
     2×2 system over circulants (:func:`exact_khk.systems.lie_poisson.circulant.exact_htilde`) when
-    the Hessian blocks are cyclic Hankel and n ≥ :data:`~exact_khk.systems.lie_poisson.paths.HTILDE_STRUCTURED_MIN_N`
-    (measured at orbit points, docs/benchmarks.md: n = 3, 8, 16 about 10×,
-    164×, 567× faster than the dense solve); the result is the same rational
-    number.  In ``cyclo:N`` with n | N and ``gf:P`` with n | P − 1 (fields over Q(ω)
+    the Hessian blocks are cyclic Hankel (measured at orbit points, docs/benchmarks.md:
+    n = 3, 8, 16 about 10×, 164×, 567× faster than the dense solve; as whole commands
+    see the rule table of :mod:`~exact_khk.systems.lie_poisson.paths`); the result is
+    the same rational number.  In ``cyclo:N`` with n | N and ``gf:P`` with n | P − 1 (fields over Q(ω)
     included) it is n 2×2 systems over Q(ζ_N) or F_P by the exact DFT
     (:func:`exact_khk.systems.lie_poisson.circulant_dft.exact_htilde`).
     ``method='dense'`` forces the 2n×2n solve.
@@ -85,7 +84,7 @@ def Htilde(field, x, eps, arith=None, method="auto"):
     n, st = field.system.n, None
     if method == "auto" and ar.exact and circulant_dft.applies(ar, n):
         st, structured = field.circulant_structure(cyclotomic=True), circulant_dft.exact_htilde
-    elif method == "auto" and ar.rational and circulant.flint is not None and n >= HTILDE_STRUCTURED_MIN_N:
+    elif method == "auto" and ar.rational and circulant.flint is not None:
         st, structured = circulant.circulant_structure(field), circulant.exact_htilde
     if st is not None:
         try:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from exact_khk.errors import InputError
 from exact_khk.systems.lie_poisson import circulant, circulant_dft
-from exact_khk.systems.lie_poisson.paths import EXACT_DFT_STEP_MIN_N, SPLIT_N, auto_path
+from exact_khk.systems.lie_poisson.paths import SPLIT_N, auto_path
 from exact_khk.systems.lie_poisson.split import split_system
 
 
@@ -26,16 +26,14 @@ from exact_khk.systems.lie_poisson.split import split_system
 class CirculantSteps:
     """How a map's exact or floating steps are solved besides the dense solve.
 
-    ``split``: exact steps below ``switch_bits`` (or at every height) take the split
-    step (:meth:`split_system`) instead of the dense one; ``structure``: the
+    ``split``: exact steps take the split step (:meth:`split_system`) instead of the
+    dense one; ``structure``: the
     :class:`~exact_khk.systems.lie_poisson.circulant.CirculantStructure` of the
-    structured step (:meth:`step`), taken from the point height ``switch_bits`` on
-    (0: everywhere), or None for none."""
+    structured step (:meth:`step`), taken at every step, or None for none."""
 
     field: object
     split: bool
     structure: object
-    switch_bits: int
 
     def step(self, x, eps, ar):
         """``(z, κ)``: the structured step z = Φ(x) and, in floating arithmetics, the
@@ -63,7 +61,7 @@ def circulant_steps(field, ar, method, eps):
             raise InputError("method: 'split' needs a rational arithmetic with an integer kernel (flint, "
                              "gmpy2) and a field of dimension 2n, n < 16, whose Jacobian "
                              "blocks are circulant (Lie–Poisson fields)")
-        return CirculantSteps(field, True, None, 0)
+        return CirculantSteps(field, True, None)
     n = field.dim // 2
     dft = ar.exact and circulant_dft.applies(ar, n)  # cyclo:N with n | N, gf:P with n | P − 1
     usable = ar.rational or ar.fourier or dft
@@ -71,17 +69,17 @@ def circulant_steps(field, ar, method, eps):
     if method == "structured":
         if st is None:
             raise structured_refused(ar, n)
-        return CirculantSteps(field, False, st, 0)
+        return CirculantSteps(field, False, st)
     if dft:
-        return CirculantSteps(field, False, st, 0) if n >= EXACT_DFT_STEP_MIN_N and st is not None else None
+        return CirculantSteps(field, False, st) if st is not None else None
     if not ar.exact or K is None:
         return None  # floating arithmetics: dense, i.e. genuine p-bit arithmetic
     # a declared structure splits for every n of SPLIT_N: built by the first split step, not here
     splits = st is not None and n in SPLIT_N
-    split, structured, bits = auto_path(n, K.name, splits, st is not None)
+    split, structured = auto_path(n, K.name, splits, st is not None)
     if not split and not structured:
         return None
-    return CirculantSteps(field, split, st if structured else None, bits)
+    return CirculantSteps(field, split, st if structured else None)
 
 
 def structured_refused(ar, n):
