@@ -151,3 +151,14 @@ def test_a_singular_orbit_from_a_seeded_point_says_where_the_point_came_from(cap
     assert main(["orbit", "--n", "2", "--seed", "4", "--steps", "6", "--x0", "-3,2,3,-3"]) == 3
     err = capsys.readouterr().err
     assert "step 5" in err and "--seed" not in err
+
+
+def test_orbit_table_in_gmpy2_equals_flint(capsys):
+    """The table shows gmpy2's mpz rationals as it shows flint's (a seeded n = 8 orbit has an entry
+    below the float range: shown by the leading digits, which took only fmpz)."""
+    tables = []
+    for arith in ("gmpy2", "flint"):
+        assert main(["orbit", "--n", "8", "--seed", "1", "--arith", arith, "--steps", "2"]) == 0
+        out = capsys.readouterr().out
+        tables.append([ln for ln in out.splitlines() if ln.strip()[:1].isdigit()])
+    assert tables[0] == tables[1] and len(tables[0]) == 3

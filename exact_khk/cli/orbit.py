@@ -137,8 +137,9 @@ def _leading(p, q) -> str:
     """p/q to 8 significant digits by a 64-bit arb ball (p, q integers of any size)."""
     import flint
 
+    p, q = (t if isinstance(t, flint.fmpz) else flint.fmpz(int(t)) for t in (p, q))  # gmpy2's mpz: by int
     with flint.ctx.workprec(64):
-        text = (flint.arb(flint.fmpz(p)) / flint.arb(flint.fmpz(q))).mid().str(8, radius=False)
+        text = (flint.arb(p) / flint.arb(q)).mid().str(8, radius=False)
     mantissa, e, exponent = text.partition("e")
     if "." in mantissa:
         mantissa = mantissa.rstrip("0").rstrip(".") if e else mantissa
