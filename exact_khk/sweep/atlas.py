@@ -225,6 +225,9 @@ def _figure(curves, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from exact_khk.diagnostics.heights import plot_format
+    from exact_khk.studies.output import write_atomic
+
     colours = {"integrable": "tab:blue", "non-integrable": "tab:red", "undetermined": "tab:gray"}
     fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
     seen = set()
@@ -238,7 +241,7 @@ def _figure(curves, path):
     ax.legend()
     ax.grid(True, which="both", alpha=0.3)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    write_atomic(path, lambda fh: fig.savefig(fh, format=plot_format(path, "--figure")), "--figure")
     plt.close(fig)
 
 
