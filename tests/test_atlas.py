@@ -51,6 +51,20 @@ def test_default_report_outside_the_repository_is_refused_before_work(tmp_path, 
     assert "--markdown PATH" in err and "Traceback" not in err and not (tmp_path / "o").exists()
 
 
+def test_figure_is_checked_before_the_sweeps_and_its_new_folder_removed_on_failure(folder, tmp_path, capsys):
+    """--figure in a new folder is prepared before the work; when the run then fails (here --out
+    cannot be created), the empty folder is removed and no report or figure is left."""
+    md, fig = tmp_path / "a.md", tmp_path / "new" / "sub" / "f.png"
+    assert main(["atlas", "--quick", "--systems", str(folder), "--markdown", str(md), "--figure", str(fig),
+                 "--out", "/proc/x"]) == 5
+    err = capsys.readouterr().err
+    assert "--out" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not (tmp_path / "new").exists() and not md.exists()
+    assert main(["atlas", "--quick", "--systems", str(folder), "--markdown", str(md), "--figure",
+                 str(tmp_path / "f.jpg"), "--out", str(tmp_path / "o")]) == 2  # not a figure format: before any work
+    assert "--figure" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
 ROOT = Path(__file__).parent.parent
 ATLAS = ROOT / "docs" / "atlas.md"
 #: the documented command that writes docs/atlas.md (docs/atlas.md's header names it)
