@@ -54,6 +54,8 @@ TOMLS = {
                   '[poisson]\nmatrix = [["0"]]\n',
     "ok": 'format = 1\nname = "x"\nvariables = ["x","y"]\n[field]\nx = "y*x"\ny = "-x*y"\n',
     "onevar": 'format = 1\nname = "x"\nvariables = ["x"]\n[field]\nx = "x*x"\n',
+    "zerodensity": 'format = 1\nname = "x"\nvariables = ["x","y"]\n[field]\nx = "y*x"\ny = "-x*y"\n'
+                   '[measure]\ndensity = "x - x"\n',
 }
 GARBAGE = bytes(random.Random(0).randrange(256) for _ in range(3000))
 
