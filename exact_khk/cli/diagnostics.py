@@ -166,6 +166,9 @@ def cmd_find_integrals(args):
             res = find_integrals(system, **kw, progress=progress)
     except InputError as exc:
         msg = str(exc)
+        if msg.startswith("fit_degree:") and args.fit_degree is None:  # the default, twice the candidates' degree
+            raise InputError(f"--fit-degree: not given, and its default (twice the candidates' degree) is beyond the "
+                             f"limit ({msg.partition(': ')[2]}); give --fit-degree D (0: no fit)") from None
         for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0", "fit_degree",
                      "symbolic", "max_degree", "toml", "seed"):
             if msg.startswith(name + ":"):
