@@ -65,6 +65,23 @@ def test_figure_is_checked_before_the_sweeps_and_its_new_folder_removed_on_failu
     assert "--figure" in capsys.readouterr().err and not (tmp_path / "o").exists()
 
 
+def test_a_system_that_cannot_be_classified_is_a_finding_with_its_error(tmp_path, capsys):
+    """A folder's system beyond classify's dimension limit (64): its row and its finding give the
+    task's error, not 'ERROR ... no result' counted as going beyond the literature."""
+    d = tmp_path / "systems"
+    d.mkdir()
+    v = [f"x{i}" for i in range(70)]
+    (d / "big.toml").write_text('format = 1\nname = "big"\nvariables = [' + ", ".join(f'"{x}"' for x in v)
+                                + "]\n[field]\n" + "".join(f'{v[i]} = "{v[(i + 1) % 70]}*{v[(i + 2) % 70]}"\n'
+                                                            for i in range(70)))
+    md = tmp_path / "a.md"
+    assert main(["atlas", "--quick", "--systems", str(d), "--out", str(tmp_path / "o"), "--workers", "0",
+                 "--markdown", str(md)]) == 0
+    findings = md.read_text().split("## Findings")[1].split("## Times")[0]
+    assert "- **big**: not classified: InputError: system: dimension 70 exceeds 64" in findings
+    assert "goes beyond" not in findings
+
+
 ROOT = Path(__file__).parent.parent
 ATLAS = ROOT / "docs" / "atlas.md"
 #: the documented command that writes docs/atlas.md (docs/atlas.md's header names it)
