@@ -82,6 +82,16 @@ def test_a_system_that_cannot_be_classified_is_a_finding_with_its_error(tmp_path
     assert "goes beyond" not in findings
 
 
+def test_two_files_naming_one_system_are_refused_before_work(folder, tmp_path, capsys):
+    """A second file named 'euler-top' would have replaced the first's row without a word."""
+    shutil.copy(CAT / "euler-top.toml", folder / "copy.toml")
+    assert main(["atlas", "--quick", "--systems", str(folder), "--out", str(tmp_path / "o"),
+                 "--markdown", str(tmp_path / "a.md")]) == 2
+    err = capsys.readouterr().err
+    assert "'euler-top'" in err and "copy.toml" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
 ROOT = Path(__file__).parent.parent
 ATLAS = ROOT / "docs" / "atlas.md"
 #: the documented command that writes docs/atlas.md (docs/atlas.md's header names it)

@@ -55,7 +55,22 @@ def atlas_specs(systems_dir=None, quick=False):
                     + f"[options]\nexact = {opts['exact']}\nno_discover = {str(opts['no_discover']).lower()}\n")
             parts.append((f"{tag}-{kind}", parse_spec(text, origin=f"atlas ({tag}, {kind})")))
         specs += parts
+    _distinct_names(files, cat)
     return specs, opts
+
+
+def _distinct_names(files, catalogue):
+    """InputError when two system files, or a file and a catalogue entry, share a name: the report
+    has one row per name, and one of them would be dropped without a word."""
+    from exact_khk.systems.catalogue import resolve
+
+    seen = {name: f"the catalogue entry {name!r}" for name in catalogue}
+    for path in files:
+        name = resolve(path).name
+        if name in seen:
+            raise InputError(f"--systems: {path!r} names its system {name!r}, as does {seen[name]}: the atlas has "
+                             "one row per name (give the files distinct names)")
+        seen[name] = repr(path)
 
 
 def run_atlas(out_dir, systems_dir=None, quick=False, workers=None, dask=None, echo=None):
