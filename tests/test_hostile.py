@@ -200,6 +200,7 @@ ROWS += [
     row(["classify", "--system", "euler-top", "--line-seed", BIG], 2, id="classify 5000-digit --line-seed"),
     row(["find-measure", "--system", "euler-top", "--line-seed", BIG], 2, id="find-measure 5000-digit --line-seed"),
     row(["find-integrals", "--system", "euler-top", "--toml", ""], 2, id="find-integrals --toml ''"),
+    row(["find-integrals", "--system", "euler-top", "--toml", "-"], 2, id="find-integrals --toml - (no file named '-')"),
     row(["find-integrals", "--system", "euler-top", "--monomials", "x1^4*x2^4"], 2,
         id="find-integrals: the default --fit-degree beyond its limit is named as a default"),
     row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", ""], 2,

@@ -145,6 +145,8 @@ def cmd_find_integrals(args):
 
     check_output(args.json)
     system, x0, eps = system_from_args(args)
+    if args.toml == "-":  # check_output takes '-' for stdout; a file named '-' would surprise
+        raise InputError("--toml: expected a file name ('-' for stdout is not supported: the table goes there)")
     if args.toml:
         check_output(args.toml, "--toml")
     kw = dict(field=field_name(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
