@@ -205,6 +205,7 @@ ROWS += [
         id="find-integrals: the default --fit-degree beyond its limit is named as a default"),
     row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", ""], 2,
         id="atlas --figure ''"),
+    row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "-"], 2, id="atlas --markdown - (no file named '-')"),
     row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", "{tmp}/f.txt"], 2,
         id="atlas --figure of no image format"),
     row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", "/proc/x.png"], 5,

@@ -38,6 +38,8 @@ def cmd_atlas(args):
     if args.markdown == "docs/atlas.md" and not Path("docs").is_dir():
         raise InputError("--markdown: the default report docs/atlas.md needs a docs/ folder in the current "
                          "directory (the repository's); pass --markdown PATH elsewhere")
+    if args.markdown == "-":  # check_output takes '-' for stdout; the report is a file beside its figure
+        raise InputError("--markdown: expected a file name ('-' for stdout is not supported)")
     check_output(args.markdown, "--markdown")
     figure = args.figure or str(Path(args.markdown).parent / "figures" / "atlas_degrees.png")
     # the figure, like the report, is refused before the sweeps: its format, then its folder
