@@ -166,7 +166,8 @@ def poly_text(coeffs, var: str = "x", ascending: bool = True) -> str:
         k = i if ascending else deg - i
         mono = "" if k == 0 else (var if k == 1 else f"{var}^{k}")
         mag = abs(c)
-        body = str(mag) if not mono else (mono if mag == 1 else f"{mag}*{mono}")
+        with any_int_digits():  # coefficients of any size (a recurrence fitted to huge terms)
+            body = str(mag) if not mono else (mono if mag == 1 else f"{mag}*{mono}")
         parts.append(("-" if c < 0 else "+", body))
     if not parts:
         return "0"

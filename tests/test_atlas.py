@@ -51,6 +51,47 @@ def test_default_report_outside_the_repository_is_refused_before_work(tmp_path, 
     assert "--markdown PATH" in err and "Traceback" not in err and not (tmp_path / "o").exists()
 
 
+def test_figure_is_checked_before_the_sweeps_and_its_new_folder_removed_on_failure(folder, tmp_path, capsys):
+    """--figure in a new folder is prepared before the work; when the run then fails (here --out
+    cannot be created), the empty folder is removed and no report or figure is left."""
+    md, fig = tmp_path / "a.md", tmp_path / "new" / "sub" / "f.png"
+    assert main(["atlas", "--quick", "--systems", str(folder), "--markdown", str(md), "--figure", str(fig),
+                 "--out", "/proc/x"]) == 5
+    err = capsys.readouterr().err
+    assert "--out" in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert not (tmp_path / "new").exists() and not md.exists()
+    assert main(["atlas", "--quick", "--systems", str(folder), "--markdown", str(md), "--figure",
+                 str(tmp_path / "f.jpg"), "--out", str(tmp_path / "o")]) == 2  # not a figure format: before any work
+    assert "--figure" in capsys.readouterr().err and not (tmp_path / "o").exists()
+
+
+def test_a_system_that_cannot_be_classified_is_a_finding_with_its_error(tmp_path, capsys):
+    """A folder's system beyond classify's dimension limit (64): its row and its finding give the
+    task's error, not 'ERROR ... no result' counted as going beyond the literature."""
+    d = tmp_path / "systems"
+    d.mkdir()
+    v = [f"x{i}" for i in range(70)]
+    (d / "big.toml").write_text('format = 1\nname = "big"\nvariables = [' + ", ".join(f'"{x}"' for x in v)
+                                + "]\n[field]\n" + "".join(f'{v[i]} = "{v[(i + 1) % 70]}*{v[(i + 2) % 70]}"\n'
+                                                            for i in range(70)))
+    md = tmp_path / "a.md"
+    assert main(["atlas", "--quick", "--systems", str(d), "--out", str(tmp_path / "o"), "--workers", "0",
+                 "--markdown", str(md)]) == 0
+    findings = md.read_text().split("## Findings")[1].split("## Times")[0]
+    assert "- **big**: not classified: InputError: system: dimension 70 exceeds 64" in findings
+    assert "goes beyond" not in findings
+
+
+def test_two_files_naming_one_system_are_refused_before_work(folder, tmp_path, capsys):
+    """A second file named 'euler-top' would have replaced the first's row without a word."""
+    shutil.copy(CAT / "euler-top.toml", folder / "copy.toml")
+    assert main(["atlas", "--quick", "--systems", str(folder), "--out", str(tmp_path / "o"),
+                 "--markdown", str(tmp_path / "a.md")]) == 2
+    err = capsys.readouterr().err
+    assert "'euler-top'" in err and "copy.toml" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
 ROOT = Path(__file__).parent.parent
 ATLAS = ROOT / "docs" / "atlas.md"
 #: the documented command that writes docs/atlas.md (docs/atlas.md's header names it)

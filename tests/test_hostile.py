@@ -53,6 +53,9 @@ TOMLS = {
     "badpoisson": 'format = 1\nname = "x"\nvariables = ["x","y"]\n[field]\nx = "y*x"\ny = "-x*y"\n'
                   '[poisson]\nmatrix = [["0"]]\n',
     "ok": 'format = 1\nname = "x"\nvariables = ["x","y"]\n[field]\nx = "y*x"\ny = "-x*y"\n',
+    "onevar": 'format = 1\nname = "x"\nvariables = ["x"]\n[field]\nx = "x*x"\n',
+    "zerodensity": 'format = 1\nname = "x"\nvariables = ["x","y"]\n[field]\nx = "y*x"\ny = "-x*y"\n'
+                   '[measure]\ndensity = "x - x"\n',
 }
 GARBAGE = bytes(random.Random(0).randrange(256) for _ in range(3000))
 
@@ -184,9 +187,33 @@ ROWS += [
     row(["orbit", "--eps", "1 / 10", "--steps", "1"], 0, id="orbit --eps '1 / 10'"),
     row(["certify", "--steps", "1", "--arith", "cyclo:3", "--signs", "--+"], 0, id="certify --signs --+"),
 ]
+# from a hostile review of the discovery and atlas commands (each was an internal error, a hang,
+# a misleading message, a silently ignored option or a late failure before it was mended)
+ROWS += [
+    row(["degrees", "--map", "\u03b1*\u03b2,\u03b2*\u03b3,\u03b3*\u03b1", "--variables", "\u03b1,\u03b2,\u03b3"], 2,
+        id="degrees --map with non-ASCII variable names"),
+    row(["degrees", "--map", "(X+Y)**64, Y**64, Z**64", "--variables", "X,Y,Z", "--steps", "8"], 0,
+        id="degrees --map of degree 64 stops before degree 262144"),
+    row(["degrees", "--map", "X*Y,Y*Z,Z*X", "--variables", "X,Y,Z", "--confirm", "0"], 2),
+    row(["find-poisson", "TOML:onevar"], 2, id="find-poisson in dimension 1"),
+    row(["find-integrals", "--system", "euler-top", "--line-seed", BIG], 2, id="find-integrals 5000-digit --line-seed"),
+    row(["classify", "--system", "euler-top", "--line-seed", BIG], 2, id="classify 5000-digit --line-seed"),
+    row(["find-measure", "--system", "euler-top", "--line-seed", BIG], 2, id="find-measure 5000-digit --line-seed"),
+    row(["find-integrals", "--system", "euler-top", "--toml", ""], 2, id="find-integrals --toml ''"),
+    row(["find-integrals", "--system", "euler-top", "--toml", "-"], 2, id="find-integrals --toml - (no file named '-')"),
+    row(["find-integrals", "--system", "euler-top", "--monomials", "x1^4*x2^4"], 2,
+        id="find-integrals: the default --fit-degree beyond its limit is named as a default"),
+    row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", ""], 2,
+        id="atlas --figure ''"),
+    row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "-"], 2, id="atlas --markdown - (no file named '-')"),
+    row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", "{tmp}/f.txt"], 2,
+        id="atlas --figure of no image format"),
+    row(["atlas", "--quick", "--systems", "{tmp}", "--markdown", "{tmp}/a.md", "--figure", "/proc/x.png"], 5,
+        id="atlas --figure /proc/x.png"),
+]
 # malformed system files
 for name in TOMLS:
-    if name != "ok":
+    if name not in ("ok", "onevar"):
         ROWS.append(row(["certify", "--system", f"TOML:{name}", "--steps", "2"], 2, id=f"--system {name}.toml"))
 ROWS += [row(["orbit", "--system", "TOML:garbage"], 2, id="--system garbage bytes"),
          row(["certify", "--system", "TOML:ok", "--steps", "2"], 0),

@@ -8,9 +8,12 @@ it was mended); each must now raise the typed error named.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import sys
 from fractions import Fraction
 
+import flint
 import gmpy2
 import pytest
 
@@ -19,6 +22,11 @@ from exact_khk import InputError, KahanMap, LiePoissonSystem, System, certify, r
 from exact_khk.errors import NumericalError
 from exact_khk.certification.records import Check
 from exact_khk.diagnostics import degree_sequence, find_integrals, height_growth
+from exact_khk.diagnostics.classify import classify
+from exact_khk.diagnostics.map_degrees import MapDegrees, map_degrees
+from exact_khk.diagnostics.measures import find_measure
+from exact_khk.diagnostics.poisson import find_poisson
+from exact_khk.systems.expressions import ExpressionSystem
 from exact_khk.systems.lie_poisson.system import b0_signs
 
 S3 = LiePoissonSystem.from_vectors("1,0,2", "0,1,0", "3,1,1")
@@ -105,6 +113,71 @@ ROWS = [
     ("arith mp:5_3", lambda: KahanMap(F3, "1/10", "mp:5_3")),
     ("arith gf:full-width 7", lambda: KahanMap(F3, "1/10", "gf:\uff17")),
 ]
+
+
+# from a hostile review of the discovery entry points (each raised a raw error from deep inside,
+# or took a float as exact, or searched forever)
+ROWS += [
+    ("map variables not ASCII", lambda: MapDegrees(["Z**2", "X*Y", "Y**2"], ["\u03b1", "\u03b2", "\u03b3"])),
+    ("map components None", lambda: MapDegrees(None, ["X", "Y", "Z"])),
+    ("map variables None", lambda: MapDegrees(["Z**2", "X*Y", "Y**2"], None)),
+    ("map confirm 0", lambda: MapDegrees(["Z**2", "X*Y", "Y**2"], ["X", "Y", "Z"], confirm=0)),
+    ("measure x0 nan", lambda: find_measure(TOP, x0=[float("nan"), 1, 2])),
+    ("measure x0 0.5", lambda: find_measure(TOP, x0=[0.5, 1, 2])),
+    ("measure x0 of 2", lambda: find_measure(TOP, x0=[1, 2])),
+    ("measure seed None", lambda: find_measure(TOP, seed=None)),
+    ("measure seed 'abc'", lambda: find_measure(TOP, seed="abc")),
+    ("poisson x0 '1,2'", lambda: find_poisson(TOP, x0="1,2")),
+    ("poisson measure_degree None", lambda: find_poisson(TOP, measure_degree=None)),
+    ("poisson in dimension 1", lambda: find_poisson(ExpressionSystem.from_expressions(["x"], field=["x**2"]))),
+    ("classify discover None", lambda: classify(TOP, steps=8, discover=None)),
+    ("classify discover 5", lambda: classify(TOP, steps=8, discover=5)),
+]
+BIG_INT_ROWS = [
+    ("degree_sequence seed 10^5000", lambda: degree_sequence(TOP, steps=6, seed=10 ** 5000)),
+    ("classify seed 10^5000", lambda: classify(TOP, steps=8, seed=10 ** 5000)),
+    ("measure seed 10^5000", lambda: find_measure(TOP, seed=10 ** 5000)),
+    ("poisson seed 10^5000", lambda: find_poisson(TOP, seed=10 ** 5000)),
+    ("map seed 10^5000", lambda: map_degrees(["Z**2", "X*Y", "Y**2"], ["X", "Y", "Z"], seed=10 ** 5000)),
+    ("integrals primes 10^5000", lambda: find_integrals(TOP, degree=2, primes=10 ** 5000)),
+    ("integrals primes [10^5000]", lambda: find_integrals(TOP, degree=2, primes=[10 ** 5000])),
+]
+
+
+@contextlib.contextmanager
+def python_digit_limit():
+    """Python's default 4300-digit int<->str limit (the command line, run in-process by other
+    tests, lifts it for the whole process)."""
+    old = sys.get_int_max_str_digits()
+    sys.set_int_max_str_digits(4300)
+    try:
+        yield
+    finally:
+        sys.set_int_max_str_digits(old)
+
+
+@pytest.mark.parametrize("name, call", BIG_INT_ROWS, ids=[r[0] for r in BIG_INT_ROWS])
+def test_huge_integers_are_refused_under_pythons_digit_limit(name, call):
+    with python_digit_limit(), pytest.raises(InputError):
+        call()
+
+
+def test_polynomial_texts_print_coefficients_beyond_pythons_digit_limit():
+    from exact_khk.diagnostics.kernels import poly_text as mpoly_text
+    from exact_khk.parsing import poly_text
+
+    big = Fraction(10 ** 5000 + 1, 3)
+    with python_digit_limit():
+        text, text1 = mpoly_text({(1, 0): big}, ["x", "y"]), poly_text([0, big], "k")
+    expected = str(flint.fmpq(10 ** 5000 + 1, 3))  # FLINT's printer: no digit limit
+    assert text == expected + "*x" and text1 == expected + "*k"
+
+
+def test_map_degrees_stop_before_an_iterate_past_the_degree_limit():
+    res = MapDegrees(["(X+Y)**64", "Y**64", "Z**64"], ["X", "Y", "Z"], steps=8, primes=1)
+    # d_k <= 64^k; 4096 * 64 > MAX_DEGREE = 100000: the third step is not taken, and the summary says so
+    assert len(res.degrees) == 3 and max(res.degrees) <= 64 ** 2
+    assert "stopped after k = 2 of 8" in res.summary()
 
 
 @pytest.mark.parametrize("name, call", ROWS, ids=[r[0] for r in ROWS])

@@ -30,14 +30,23 @@ def cmd_atlas(args):
     from pathlib import Path
 
     from exact_khk.cli.options import check_output
+    from exact_khk.diagnostics.heights import plot_format
     from exact_khk.errors import InputError
+    from exact_khk.studies.output import prepare_folder
     from exact_khk.sweep.atlas import run_atlas, write_report
 
     if args.markdown == "docs/atlas.md" and not Path("docs").is_dir():
         raise InputError("--markdown: the default report docs/atlas.md needs a docs/ folder in the current "
                          "directory (the repository's); pass --markdown PATH elsewhere")
+    if args.markdown == "-":  # check_output takes '-' for stdout; the report is a file beside its figure
+        raise InputError("--markdown: expected a file name ('-' for stdout is not supported)")
     check_output(args.markdown, "--markdown")
     figure = args.figure or str(Path(args.markdown).parent / "figures" / "atlas_degrees.png")
+    # the figure, like the report, is refused before the sweeps: its format, then its folder
+    # (created now; removed again if the command fails while it is empty)
+    plot_format(figure, "--figure")
+    prepare_folder(Path(figure).absolute().parent, "--figure")
+    check_output(figure, "--figure")
     rows, timing, opts = run_atlas(args.out, args.systems, args.quick, args.workers, args.dask,
                                     echo=lambda line: print(line, file=sys.stderr))
     given = [("--systems", args.systems, None), ("--out", args.out, "atlas-results"), ("--workers", args.workers, None),

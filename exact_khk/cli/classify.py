@@ -54,9 +54,9 @@ def cmd_classify(args):
                            fit_degree=args.fit_degree)
     except InputError as exc:
         msg = str(exc)
-        for name in ("steps", "degree", "fit_degree", "exact", "discover"):
+        for name in ("steps", "degree", "fit_degree", "exact", "discover", "seed"):
             if msg.startswith(name + ":"):
-                msg = "--" + name.replace("_", "-") + msg[len(name):]
+                msg = "--" + {"seed": "line-seed"}.get(name, name.replace("_", "-")) + msg[len(name):]
                 break
         raise InputError(msg) from None
     if report(system, res, args.json):

@@ -77,6 +77,12 @@ def _primes(text):
         raise InputError(f"--primes: expected a count or a comma-separated list of primes, got {text!r}") from None
 
 
+def _option(match) -> str:
+    """The command-line option of a parameter name matched in an API error (``seed`` is ``--line-seed``)."""
+    name = match.group(1)
+    return "--" + {"seed": "line-seed"}.get(name, name.replace("_", "-")) + ":"
+
+
 def cmd_map_degrees(args):
     """``degrees --map``: the degrees of a map of P^N and their recurrence fit."""
     from exact_khk.diagnostics.map_degrees import MapDegrees
@@ -93,8 +99,7 @@ def cmd_map_degrees(args):
         res = MapDegrees(args.map.split(","), args.variables.split(","), steps=args.steps,
                          primes=_primes(args.primes), seed=args.line_seed, confirm=args.confirm)
     except InputError as exc:
-        raise InputError(re.sub(r"^(steps|primes|confirm|variables|map):", lambda m: "--" + m.group(1) + ":",
-                                str(exc))) from None
+        raise InputError(re.sub(r"^(steps|primes|confirm|variables|map|seed):", _option, str(exc))) from None
     if args.json is not None:
         write_json(res.to_json(), args.json)
     if args.json != "-":
@@ -124,8 +129,8 @@ def cmd_degrees(args):
                                   confirm=args.confirm, heights=not args.no_heights, x0=x0, max_bits=args.max_bits,
                                   progress=progress)
     except InputError as exc:  # name the command-line options
-        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits|confirm):",
-                                lambda m: "--" + m.group(1).replace("_", "-") + ":", str(exc))) from None
+        raise InputError(re.sub(r"(?<![-\w])(steps|primes|lines|exact|max_bits|confirm|seed):", _option,
+                                str(exc))) from None
     if args.plot:
         plot_growth(args.plot, degrees=res, heights=res.heights,
                     title=f"{res.label}, ε = {eps}, x0 = ({', '.join(map(str, x0))})")
@@ -140,6 +145,8 @@ def cmd_find_integrals(args):
 
     check_output(args.json)
     system, x0, eps = system_from_args(args)
+    if args.toml == "-":  # check_output takes '-' for stdout; a file named '-' would surprise
+        raise InputError("--toml: expected a file name ('-' for stdout is not supported: the table goes there)")
     if args.toml:
         check_output(args.toml, "--toml")
     kw = dict(field=field_name(system, args), eps=eps, homogeneous=args.homogeneous, orbits=args.orbits,
@@ -161,10 +168,14 @@ def cmd_find_integrals(args):
             res = find_integrals(system, **kw, progress=progress)
     except InputError as exc:
         msg = str(exc)
+        if msg.startswith("fit_degree:") and args.fit_degree is None:  # the default, twice the candidates' degree
+            raise InputError(f"--fit-degree: not given, and its default (twice the candidates' degree) is beyond the "
+                             f"limit ({msg.partition(': ')[2]}); give --fit-degree D (0: no fit)") from None
         for name in ("degree", "monomials", "orbits", "steps", "primes", "verify_steps", "x0", "fit_degree",
-                     "symbolic", "max_degree", "toml"):
+                     "symbolic", "max_degree", "toml", "seed"):
             if msg.startswith(name + ":"):
-                msg = "--" + {"max_degree": "symbolic-degree"}.get(name, name.replace("_", "-")) + msg[len(name):]
+                msg = "--" + {"max_degree": "symbolic-degree", "seed": "line-seed"}.get(name, name.replace("_", "-")) \
+                    + msg[len(name):]
                 break
         raise InputError(msg) from None
     if args.toml:

@@ -41,7 +41,7 @@ import sys
 from functools import lru_cache
 
 from exact_khk.errors import InputError, SingularStepError
-from exact_khk.parsing import MAX_N, MAX_STEPS, parse_rational, parse_vector  # noqa: F401 (limits: the CLI's too)
+from exact_khk.parsing import MAX_N, MAX_STEPS, _short, parse_rational, parse_vector  # noqa: F401 (limits: the CLI's too)
 
 # The rest of the library is imported inside the functions that use it: ``exact-khk
 # --help`` imports this module (for :class:`Parser`) and nothing else of the library.
@@ -49,7 +49,7 @@ from exact_khk.parsing import MAX_N, MAX_STEPS, parse_rational, parse_vector  # 
 
 #: the options that name an output file or folder, in every command (an empty one is refused:
 #: it would be silently ignored, or fail only when the results are written)
-OUTPUT_OPTIONS = ("--out", "--plot", "--json")
+OUTPUT_OPTIONS = ("--out", "--plot", "--json", "--toml", "--markdown", "--figure")
 
 
 class Parser(argparse.ArgumentParser):
@@ -355,7 +355,7 @@ def check_n(n, option="--n"):
 
 def check_steps(steps):
     if steps > MAX_STEPS:
-        raise InputError(f"--steps: {steps} is beyond the limit of {MAX_STEPS:,} steps (MAX_STEPS; the orbit "
+        raise InputError(f"--steps: {_short(steps)} is beyond the limit of {MAX_STEPS:,} steps (MAX_STEPS; the orbit "
                          f"alone would hold more than 10^7 points)")
 
 

@@ -276,6 +276,9 @@ def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6
     if fit_degree is not None:
         check_count(fit_degree, "fit_degree", 0, 12)
     check_count(exact, "exact", 0, 50)
+    seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
+    if isinstance(discover, str) or not isinstance(discover, (list, tuple, set, frozenset)):
+        raise InputError(f"discover: expected a list of discoveries ({', '.join(DISCOVERIES)}), got {discover!r}"[:300])
     unknown = set(discover) - set(DISCOVERIES)
     if unknown:
         raise InputError(f"discover: unknown discovery {sorted(unknown)[0]!r} (known: {', '.join(DISCOVERIES)})")

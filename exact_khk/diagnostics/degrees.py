@@ -74,7 +74,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count, parse_rational
+from exact_khk.parsing import _short, check_count, parse_rational
 from exact_khk.systems.quadratic import QuadraticField
 
 MAX_STEPS = 100_000
@@ -96,7 +96,7 @@ def check_primes(primes, name="primes", count_default=2, seed=0) -> tuple:
         primes = [t for t in primes.replace(" ", "").split(",") if t]
     if isinstance(primes, int):
         if not 1 <= primes <= 64:
-            raise InputError(f"{name}: expected between 1 and 64 primes, got {primes}")
+            raise InputError(f"{name}: expected between 1 and 64 primes, got {_short(primes)}")
         return random_primes(primes, seed)
     try:
         out = tuple(int(p) for p in primes)
@@ -106,7 +106,7 @@ def check_primes(primes, name="primes", count_default=2, seed=0) -> tuple:
         raise InputError(f"{name}: the list of primes is empty")
     for p in out:
         if not 2 < p < 2 ** 63 or not flint.fmpz(p).is_prime():
-            raise InputError(f"{name}: {p} is not an odd prime below 2^63")
+            raise InputError(f"{name}: {_short(p)} is not an odd prime below 2^63")
     return out
 
 
@@ -606,6 +606,7 @@ def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, se
                          f"exponential growth; raise steps instead")
     check_count(confirm, "confirm", MIN_CONFIRM, 1000)
     check_count(exact_terms, "exact_terms", 0, 10 ** 8)
+    seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
     if fld.dim > MAX_DIM:
         raise InputError(f"system: dimension {fld.dim} exceeds {MAX_DIM}")
     primes = check_primes(primes, seed=seed)

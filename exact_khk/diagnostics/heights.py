@@ -223,11 +223,11 @@ def plot_growth(path, degrees=None, heights=None, title=""):
 PLOT_FORMATS = ("png", "pdf", "svg")
 
 
-def plot_format(path) -> str:
+def plot_format(path, what: str = "--plot") -> str:
     """The image format of ``path`` from its suffix (checked before any work: InputError
-    unless one of :data:`PLOT_FORMATS`)."""
+    naming the option ``what`` unless one of :data:`PLOT_FORMATS`)."""
     suffix = os.path.splitext(str(path))[1].lower().lstrip(".")
     if suffix not in PLOT_FORMATS:
-        raise InputError(f"--plot: {str(path)!r}: expected a file name ending in "
+        raise InputError(f"{what}: {str(path)!r}: expected a file name ending in "
                          f"{', '.join('.' + f for f in PLOT_FORMATS)}")
     return suffix

@@ -18,7 +18,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import _short
+from exact_khk.parsing import _short, any_int_digits
 
 
 # --- candidate monomials --------------------------------------------------------------
@@ -112,7 +112,8 @@ def poly_text(poly: dict, variables) -> str:
             continue
         mono = monomial_text(e, variables)
         mag = abs(c)
-        body = str(mag) if mono == "1" else mono if mag == 1 else f"{mag}*{mono}"
+        with any_int_digits():  # coefficients of any size (e.g. at an eps of 5000 digits)
+            body = str(mag) if mono == "1" else mono if mag == 1 else f"{mag}*{mono}"
         parts.append((" - " if c < 0 else " + ") + body)
     if not parts:
         return "0"

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import random
+import re
 
 import flint
 
@@ -29,6 +30,8 @@ from exact_khk.errors import InputError
 from exact_khk.parsing import check_count
 
 MAX_STEPS = 10_000
+#: the largest degree of an iterate on a line (nmod_poly of 10^5 terms: seconds per step)
+MAX_DEGREE = 100_000
 
 
 def parse_map(components, variables) -> list:
@@ -37,10 +40,13 @@ def parse_map(components, variables) -> list:
     scaled alike (a common factor does not change the projective map)."""
     from exact_khk.systems.expression_parser import Parser, ring
 
-    variables = [str(v).strip() for v in variables]
+    variables = [str(v).strip() for v in _sequence(variables, "variables")]
     if len(variables) < 2 or len(set(variables)) != len(variables):
-        raise InputError(f"variables: expected at least two distinct names, got {variables!r}")
-    comps = [str(c) for c in components]
+        raise InputError(f"variables: expected at least two distinct names, got {variables!r}"[:300])
+    bad = [v for v in variables if not _NAME.match(v)]
+    if bad:  # the names of a FLINT ring: ASCII identifiers
+        raise InputError(f"variables: {bad[0]!r} is not a name (a letter or '_', then letters, digits or '_')"[:300])
+    comps = [str(c) for c in _sequence(components, "map")]
     if len(comps) != len(variables):
         raise InputError(f"map: {len(comps)} component(s) for {len(variables)} variable(s): a map of P^N "
                          f"has one component per homogeneous coordinate")
@@ -71,6 +77,19 @@ def parse_map(components, variables) -> list:
     return [[(e, int(c * den)) for e, c in terms] for terms in polys]
 
 
+#: a variable name: an ASCII identifier (the rule of system files, exact_khk/systems/expressions.py)
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+
+
+def _sequence(value, name) -> list:
+    """A list or tuple of texts, or a comma-separated text (InputError naming ``name`` otherwise)."""
+    if isinstance(value, str):
+        return value.split(",")
+    if not isinstance(value, (list, tuple)):
+        raise InputError(f"{name}: expected a list of texts, got {type(value).__name__}")
+    return list(value)
+
+
 def _apply(polys, vec, p):
     ctx_zero = flint.nmod_poly([], p)
     out = []
@@ -96,12 +115,15 @@ def _reduce(vec):
     return [v // g for v in vec] if g.degree() > 0 else vec
 
 
-def map_degrees(components, variables, steps=10, primes=2, seed=0, max_degree=100_000) -> tuple:
+def map_degrees(components, variables, steps=10, primes=2, seed=0, max_degree=MAX_DEGREE) -> tuple:
     """d_0..d_steps of the iterates of the homogeneous polynomial map (module docstring), the
-    maximum over one random line per prime; stops once a degree exceeds ``max_degree``."""
+    maximum over one random line per prime; stops before a step whose iterate, before its common
+    factor is removed, could exceed degree ``max_degree`` (d_k times the degree of the map)."""
     check_count(steps, "steps", 1, MAX_STEPS)
     check_count(max_degree, "max_degree", 1, 10 ** 7)
+    seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
     polys = parse_map(components, variables)
+    degree = sum(polys[0][0][0])
     primes = check_primes(primes, seed=seed)
     runs = []
     for p in primes:
@@ -110,6 +132,8 @@ def map_degrees(components, variables, steps=10, primes=2, seed=0, max_degree=10
             vec = [flint.nmod_poly([rng.randrange(p), rng.randrange(p)], p) for _ in polys]
             degs = [max(v.degree() for v in vec)]
             for _ in range(steps):
+                if degs[-1] * degree > max_degree:  # the next iterate is computed at up to this degree
+                    break
                 vec = _reduce(_apply(polys, vec, p))
                 if vec is None:
                     break
@@ -135,12 +159,16 @@ class MapDegrees:
     """
 
     def __init__(self, components, variables, steps=20, primes=2, seed=0, confirm=3):
+        from exact_khk.diagnostics.degrees import MIN_CONFIRM
         from exact_khk.diagnostics.recurrence import fit_recurrence, too_short
 
-        self.components = [str(c).strip() for c in components]
-        self.variables = [str(v).strip() for v in variables]
+        check_count(confirm, "confirm", MIN_CONFIRM, 1000)  # as for Kahan maps (degree_sequence)
+        self.components = [str(c).strip() for c in _sequence(components, "map")]
+        self.variables = [str(v).strip() for v in _sequence(variables, "variables")]
         self.primes = check_primes(primes, seed=seed)
-        self.degrees = map_degrees(self.components, self.variables, steps=steps, primes=list(self.primes), seed=seed)
+        self.degrees = map_degrees(self.components, self.variables, steps=steps, primes=list(self.primes), seed=seed,
+                                   max_degree=MAX_DEGREE)
+        self.steps = steps
         # as for Kahan maps (degrees.py): 2 d (d + 1)/p per line at a good prime, one line per prime
         self.undercount_bound = max(math.prod(min(1.0, 2 * d * (d + 1) / p) for p in self.primes)
                                     for d in self.degrees)
@@ -162,4 +190,6 @@ class MapDegrees:
             "  " + ", ".join(map(str, self.degrees)),
             f"  over F_p on random lines (never an overcount); P(undercount) <= {self.undercount_bound:.3g} at good "
             "primes (Schwartz-Zippel, 2d(d+1)/p per run)",
-            "  " + self.fit.summary().replace("\n", "\n  ")])
+            "  " + self.fit.summary().replace("\n", "\n  ")]
+            + ([f"  note: stopped after k = {len(self.degrees) - 1} of {self.steps}: the next iterate could pass "
+                f"degree {MAX_DEGREE} (MAX_DEGREE)"] if len(self.degrees) <= self.steps else []))

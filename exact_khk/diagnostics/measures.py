@@ -52,7 +52,7 @@ from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, cofactor,
 from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import monomials, poly_text, rational_reconstruction
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count
+from exact_khk.parsing import check_count, parse_vector
 
 #: random points of the identity check over F_p
 SZ_POINTS = 8
@@ -194,6 +194,8 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
     N = fld.dim
     check_count(degree, "degree", 1, 12)
     check_count(verify_steps, "verify_steps", 1, 100)
+    seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
+    x0 = None if x0 is None else parse_vector(x0, "x0", N)  # exact rationals only, as everywhere
     variables = _variables(sysobj, N)
     exps = monomials(N, degree)
     m = len(exps)

@@ -47,7 +47,8 @@ from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import independent_count, monomials
 from exact_khk.diagnostics.measures import (SZ_POINTS, Check, _fresh_orbit, _variables, expr, find_measure,
                                             verified)
-from exact_khk.parsing import check_count
+from exact_khk.errors import InputError
+from exact_khk.parsing import check_count, parse_vector
 
 #: the largest dimension of the preserved-tensor space on which the Jacobi identity is solved
 MAX_JACOBI_DIM = 4
@@ -141,6 +142,12 @@ def find_poisson(system, degree=2, field="f", eps=None, seed=0, verify_steps=3, 
     check_count(degree, "degree", 0, 8)
     check_count(casimir_degree, "casimir_degree", 1, 8)
     check_count(verify_steps, "verify_steps", 1, 100)
+    check_count(measure_degree, "measure_degree", 1, 12)
+    seed = check_count(seed, "seed", -2 ** 63, 2 ** 63)
+    x0 = None if x0 is None else parse_vector(x0, "x0", N)  # exact rationals only, as everywhere
+    if N < 2:  # no unknowns: the search for rows would never end
+        raise InputError(f"system: dimension {N}: a Poisson tensor needs dimension >= 2 (the only 1 x 1 "
+                         "skew-symmetric matrix is 0)")
     variables = _variables(sysobj, N)
     exps = monomials(N, degree)
     m = len(exps)

@@ -55,7 +55,22 @@ def atlas_specs(systems_dir=None, quick=False):
                     + f"[options]\nexact = {opts['exact']}\nno_discover = {str(opts['no_discover']).lower()}\n")
             parts.append((f"{tag}-{kind}", parse_spec(text, origin=f"atlas ({tag}, {kind})")))
         specs += parts
+    _distinct_names(files, cat)
     return specs, opts
+
+
+def _distinct_names(files, catalogue):
+    """InputError when two system files, or a file and a catalogue entry, share a name: the report
+    has one row per name, and one of them would be dropped without a word."""
+    from exact_khk.systems.catalogue import resolve
+
+    seen = {name: f"the catalogue entry {name!r}" for name in catalogue}
+    for path in files:
+        name = resolve(path).name
+        if name in seen:
+            raise InputError(f"--systems: {path!r} names its system {name!r}, as does {seen[name]}: the atlas has "
+                             "one row per name (give the files distinct names)")
+        seen[name] = repr(path)
 
 
 def run_atlas(out_dir, systems_dir=None, quick=False, workers=None, dask=None, echo=None):
@@ -189,15 +204,21 @@ def write_report(rows, timing, opts, markdown, figure, command, quick=False):
         va = a["verdict"] if a else rows[name].get("default", {}).get("verdict", "missing")
         vb = b["verdict"] if b else rows[name].get("second", {}).get("verdict", "missing")
         dim = a["dim"] if a else "?"
+        errors = [r.get("error") for r in (rows[name].get("default"), rows[name].get("second")) if r and r.get("error")]
+        evidence = _summary(a) if a or not errors else f"no result: {errors[0]}".replace("|", "/")
         lines.append(f"| {name} | {dim} | {lit} ({ref}) | {va} (ε = {a['eps'] if a else '?'}) | {vb} | "
-                     f"{_summary(a)} |")
-        if a and b and va != vb:
+                     f"{evidence} |")
+        if errors:  # a task that failed says nothing about integrability: its error is the finding
+            findings.append(f"- **{name}**: not classified: {errors[0]}")
+        elif a and b and va != vb:
             findings.append(f"- **{name}**: the verdict differs between ε = {a['eps'] if a else '?'} ({va}) and "
                             f"ε = {SECOND_EPS} ({vb}).")
         expect = {"yes": "integrable", "no": "non-integrable"}.get(lit)
         notes = _literature_notes(name)
         both = f"{va} (default ε), {vb} (ε = {SECOND_EPS}): {_summary(a)}."
-        if expect and (va != expect or vb != expect):
+        if errors:
+            pass  # its finding is the error, above
+        elif expect and (va != expect or vb != expect):
             findings.append(f"- **{name}**: literature says {lit} ({ref}); the tool says {both}"
                             + (f" Literature notes: {notes}" if notes else ""))
         elif not expect and (va != "undetermined" or vb not in ("undetermined", "missing")):
@@ -225,6 +246,9 @@ def _figure(curves, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from exact_khk.diagnostics.heights import plot_format
+    from exact_khk.studies.output import write_atomic
+
     colours = {"integrable": "tab:blue", "non-integrable": "tab:red", "undetermined": "tab:gray"}
     fig, ax = plt.subplots(figsize=(9, 6), dpi=110)
     seen = set()
@@ -235,10 +259,11 @@ def _figure(curves, path):
     ax.set_xlabel("iterate k")
     ax.set_ylabel("degree d_k (log scale)")
     ax.set_title("Degree sequences of the Kahan maps of the atlas (colour: verdict)")
-    ax.legend()
+    if curves:  # no curve (every system failed): no legend to draw
+        ax.legend()
     ax.grid(True, which="both", alpha=0.3)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
+    write_atomic(path, lambda fh: fig.savefig(fh, format=plot_format(path, "--figure")), "--figure")
     plt.close(fig)
 
 

@@ -331,6 +331,9 @@ class ExpressionSystem(System):
             raise InputError(self._at("measure: expected exactly one key, 'density'"))
         text = _spec_value(table["density"], self._at("measure density"))
         self._spec["measure"] = {"density": text}
+        if self._parse(text, "measure density").value[0].is_zero():  # m = 0 would "hold" at every point
+            raise InputError(self._at("measure density: 0 is not the density of a measure (a nonzero function is "
+                                      "needed)"))
         return self._function(text, "measure density", "m")
 
     def _read_hamiltonian(self, table):
