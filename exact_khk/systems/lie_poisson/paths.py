@@ -61,7 +61,7 @@ degrees on a line over F_p      polynomial arithmetic (Bareiss over ``nmod_poly`
                                 grow geometrically (``degrees._geometric``) below
                                 dimension :data:`DEGREES_HAND_OVER_BELOW_DIM`
                                 (values: ``degrees --n 4``, ``--n 6`` 1.92×, 6.97×; the
-                                hand-over: 0.99× on a cyclic map at N = 8)
+                                hand-over: 1.59× on a cyclic map at N = 8)
 =============================  ==================================================
 """
 
@@ -104,8 +104,8 @@ DEGREES_BY_VALUES_MIN_DIM = 8
 #: ... but for geometric growth (the cyclic fields, d_k = N^k to max_degree 20 000) values
 #: are slower below this dimension: polynomials / values 0.6×, 0.6× at N = 8, 12, 1.1× at
 #: 13, 1.8× at 14 (a separate run), 3.3× at 16; below it the run hands over (then
-#: polynomials / the rule: 1.0× and 0.9× at N = 8, 12).  As a whole command the hand-over buys
-#: nothing: ``degrees`` of the cyclic map B*C, C*D, …, A*B (N = 8) without / with it 0.99×
+#: polynomials / the rule: 1.0× and 0.9× at N = 8, 12).  The whole command ``degrees`` of the cyclic
+#: Kahan map of dimension 8, without / with it: 1.59× (docs/benchmarks.md, rules of the auto path)
 DEGREES_HAND_OVER_BELOW_DIM = 13
 
 
