@@ -72,22 +72,27 @@ def _vector(rows, cols, p):
 
 
 def _degrees(ts, values, p, top):
-    """(deg N, deg D) of the univariate rational function with the given values mod p, both
-    ≤ ``top`` and determined by the points (one reduced solution), or None."""
-    for d in range(top + 1):
-        if 2 * d + 4 > len(ts):
-            return None
+    """(deg N, deg D) of the univariate rational function with the given values mod p, both ≤ ``top``,
+    or None.  At the bound d the pairs (N, D) matching the values are the multiples of the reduced
+    pair by polynomials of degree ≤ d − d0 (d0 = its larger degree), given enough points: one solve at
+    ``top`` gives d0, one at d0 the pair."""
+    def solve(d):
         M = flint.nmod_mat(len(ts), 2 * d + 2, [w for t, g in zip(ts, values) for w in
                                                 [pow(t, k, p) for k in range(d + 1)]
                                                 + [(-g * pow(t, k, p)) % p for k in range(d + 1)]], p)
-        X, nul = M.nullspace()
-        if nul == 1:
-            v = [int(X[i, 0]) for i in range(2 * d + 2)]
-            return (max((k for k in range(d + 1) if v[k]), default=0),
-                    max((k for k in range(d + 1) if v[d + 1 + k]), default=0))
-        if nul > 1:
-            return None
-    return None
+        return M.nullspace()
+
+    if 2 * top + 4 > len(ts):
+        return None
+    d0 = top + 1 - solve(top)[1]
+    if d0 < 0:
+        return None
+    X, nul = solve(d0)
+    if nul != 1:
+        return None
+    v = [int(X[i, 0]) for i in range(2 * d0 + 2)]
+    return (max((k for k in range(d0 + 1) if v[k]), default=0),
+            max((k for k in range(d0 + 1) if v[d0 + 1 + k]), default=0))
 
 
 def _candidates(job, ref, mod_rows, p, seed):
@@ -159,6 +164,39 @@ def _symmetries(job, cols, i, j, p, seed):
     return [s for s in flips if ratio([t * c for t, c in zip(x, s)]) == r0]
 
 
+class _Products:
+    """Values mod p of monomials (sorted by degree) at a point, each one product of an earlier one and a
+    monomial of degree ≤ 2 (a sign-invariant set holds few parents e − x_j; it holds e − x_j x_k)."""
+
+    def __init__(self, exps):
+        N = len(exps[0]) if exps else 0
+        self.small = [e for e in monomials(N, 2) if any(e)]
+        pos = {e: i for i, e in enumerate(exps)}
+        self.plan = []
+        for k, e in enumerate(exps):
+            for s, q in enumerate(self.small):
+                f = tuple(a - b for a, b in zip(e, q))
+                if min(f) >= 0 and pos.get(f, k) < k:
+                    self.plan.append((pos[f], s))
+                    break
+            else:
+                self.plan.append((None, e))
+        self.ev = _Evaluator(self.small)
+
+    def __call__(self, x, p):
+        sm = self.ev(x, 1, p)
+        vals = []
+        for f, s in self.plan:
+            if f is None:
+                v = 1
+                for t, k in zip(x, s):
+                    v = v * pow(t, k, p) % p
+                vals.append(v)
+            else:
+                vals.append(vals[f] * sm[s] % p)
+        return vals
+
+
 def _invariant(exps, flips):
     return [e for e in exps if all(sum(k for k, s in zip(e, f) if s < 0) % 2 == 0 for f in flips)]
 
@@ -178,7 +216,7 @@ class _Fit:
         """Rows [φ_N(x) | −r·φ_D(x)] of the first ``count`` pool orbits mod p; the first prime draws the
         starting points (replacing any whose orbit is singular or degenerate), later primes reuse
         them (None where one is unusable mod that prime)."""
-        ev, evn, evd = _Evaluator(self.sub), _Evaluator(self.nb), _Evaluator(self.db)
+        ev, evn, evd = _Evaluator(self.sub), _Products(self.nb), _Products(self.db)
         first = self.first in (None, p)
         self.first = p if self.first is None else self.first
         out, k, tries = [], 0, 0
@@ -197,7 +235,7 @@ class _Fit:
                 continue
             r = v[self.pos]
             for q in pts:
-                out.append(evn(q, 1, p) + [(-r * t) % p for t in evd(q, 1, p)])
+                out.append(evn(q, p) + [(-r * t) % p for t in evd(q, p)])
             k += 1
         return out
 
