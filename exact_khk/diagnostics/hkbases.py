@@ -50,6 +50,8 @@ MAX_HK_UNKNOWNS = 2500
 MAX_HK_CIRCUITS = 200
 #: pool orbits added while the fit's nullspace has more than one vector, at most
 MAX_HK_EXTRA = 10
+#: fits tried in one search, at most (each a few seconds to half a minute in 6 variables)
+MAX_HK_FITS = 6
 #: points of each pool orbit (rows of the fit per orbit)
 POOL_STEPS = 40
 
@@ -278,35 +280,29 @@ class _Fit:
 
 
 def hk_basis_integrals(job, ref, mod_rows, primes, seed, wanted):
-    """Yield (num, den, note) for integrals from the ratios of HK bases (module docstring), at most
-    ``wanted()`` more (re-read after each: the caller's acceptance updates ``mod_rows``)."""
-    p = primes[0]
-    tried = set()
-    while wanted() > 0:
+    """Yield (num, den, note) for integrals from the ratios of HK bases (module docstring) while
+    ``wanted()`` > 0 (re-read after each: the caller's acceptance updates ``mod_rows``); at most
+    MAX_HK_FITS fits in all."""
+    p, N = primes[0], job.fld.dim
+    tried, budget = set(), MAX_HK_FITS
+    while wanted() > 0 and budget > 0:
         cands = [c for c in _candidates(job, ref, mod_rows, p, seed) if (c[2], c[3], c[4]) not in tried]
-        if not cands:
-            return
-        found = False
-        for size, (dn, dd), S, i, j in cands:
+        pair = None
+        for _, (dn, dd), S, i, j in cands:
             tried.add((S, i, j))
             flips = _symmetries(job, S, i, j, p, seed)
-            N = job.fld.dim
             shapes = [(_invariant(monomials(N, dn), flips), _invariant(monomials(N, dd), flips))] if flips else []
-            shapes.append((monomials(N, dn), monomials(N, dd)))
-            for nb, db in shapes:
-                if len(nb) + len(db) > MAX_HK_UNKNOWNS:
-                    continue
-                pair = _Fit(job, S, i, j, nb, db, seed).run(primes)
-                if pair is None:
-                    continue
-                names = ", ".join(monomial_text(job.exps[c], job.variables) for c in S)
-                yield pair[0], pair[1], (
-                    f"fitted (degree {dn}/{dd}, {len(nb) + len(db)} unknowns) as the ratio c_"
-                    f"{monomial_text(job.exps[S[i]], job.variables)}/c_{monomial_text(job.exps[S[j]], job.variables)}"
-                    f" of the HK basis {names} (one kernel vector on it)")
-                found = True
+            for nb, db in shapes + [(monomials(N, dn), monomials(N, dd))]:
+                if len(nb) + len(db) <= MAX_HK_UNKNOWNS and budget > 0:
+                    budget -= 1
+                    pair = _Fit(job, S, i, j, nb, db, seed).run(primes)
+                    if pair is not None:
+                        break
+            if pair is not None or budget <= 0:
                 break
-            if found:
-                break
-        if not found:
+        if pair is None:
             return
+        text = lambda c: monomial_text(job.exps[c], job.variables)  # noqa: E731
+        yield pair[0], pair[1], (f"fitted (degree {dn}/{dd}, {len(nb) + len(db)} unknowns) as the ratio c_{text(S[i])}"
+                                 f"/c_{text(S[j])} of the HK basis {', '.join(map(text, S))} (one kernel vector "
+                                 f"on it)")
