@@ -15,11 +15,15 @@ project's convention x~ = x + 2 eps (I - eps f'(x))^{-1} f(x).
    reconstruction), and its gradient mod p (dual numbers x0 + delta e_l along the orbit); the rank of
    the gradients, cumulated by degree, says which degree first shows 1, 2, 3, 4 independent integrals.
 4. ``--prove FILE.json`` (the JSON of ``exact-khk find-integrals --json``, or any list of
-   {"numerator", "denominator"} with ** or ^): each I = N/D is conserved, proven by Schwartz–Zippel:
-   R = (N(x~) D(x) - N(x) D(x~)) times the denominators, cleared, is a polynomial of degree at most
-   B = 8 (deg N + deg D) + 6 (x~ = X/Delta with deg X <= 7, deg Delta <= 6); if R were not zero it would
-   vanish at a uniform random point of [-S, S]^6 with probability <= B / (2S + 1), so k points where it
-   vanishes leave probability <= (B / (2S + 1))^k; and the exact rank of the Jacobian of all of them at
+   {"numerator", "denominator"} with ** or ^): each I = N/D (degrees n, d) is conserved, proven by
+   Schwartz–Zippel.  With x~ = X/Delta (Delta = det(I - eps f'(x)) of degree <= 6, X = Delta x +
+   2 eps adj(I - eps f') f of degree <= 7) and P^h the homogenisation, I(x~) = I(x) where defined iff
+   R0 = N^h(X, Delta) Delta^d D(x) - N(x) D^h(X, Delta) Delta^n = 0, a polynomial of degree <= 7(n + d).
+   R = R0 Delta D(x) D^h(X, Delta) (degree <= B = 7(n + d) + 6 + 8d) vanishes at every point drawn: there
+   either a denominator vanishes or I(x~) = I(x) is checked exactly.  If I were not conserved, R0 and so
+   R would be nonzero polynomials (Delta, D and D o Phi are nonzero, Phi being birational), and R would
+   vanish at a uniform random point of [-S, S]^6 with probability <= B / (2S + 1) (Schwartz–Zippel):
+   k draws leave probability <= (B / (2S + 1))^k.  Then the exact rank of the Jacobian of all of them at
    a rational point (SymPy).
 
     python scripts/check_clebsch_integrals.py [--omega 1,2,5] [--eps 1/10] [--prove FILE.json]
@@ -244,7 +248,7 @@ def circuit_vector(rows_, S, kind):
     # c' with c'_last = 0: ra[:, :-1] c' = rhs (consistent, full column rank)
     aug = [row[:-1] + [b] for row, b in zip(ra, rhs)]
     n = len(S) - 1
-    R, piv, r0 = [r[:] for r in aug], [], 0
+    R, r0 = [r[:] for r in aug], 0
     for col in range(n):
         r = next((r for r in range(r0, len(R)) if R[r][col]), None)
         R[r0], R[r] = R[r], R[r0]
@@ -343,9 +347,11 @@ if args.prove:
     prng = random.Random(41)
     for k, (N, D) in enumerate(pairs, 1):
         Nt, Dt = terms(N.as_expr()), terms(D.as_expr())
-        B = 8 * (N.total_degree() + D.total_degree()) + 6
-        ok = 0
+        n, d = N.total_degree(), D.total_degree()
+        B = 7 * (n + d) + 6 + 8 * d
+        ok = draws = 0
         while ok < args.points:
+            draws += 1
             x = [F(prng.randint(-S_BOX, S_BOX)) for _ in range(6)]
             try:
                 y = exact.step(x)
@@ -356,9 +362,9 @@ if args.prove:
                 continue
             assert exact.ev(Nt, x) / dx == exact.ev(Nt, y) / dy, f"I{k} is NOT conserved at {x}"
             ok += 1
-        print(f"4. I{k} (degrees {N.total_degree()}/{D.total_degree()}, {len(N.terms())}/{len(D.terms())} terms): "
-              f"I(x~) = I(x) exactly at {ok} random integer points of [-10^12, 10^12]^6; a nonzero R of degree "
-              f"<= {B} vanishes at all of them with probability <= ({B}/(2*10^12 + 1))^{ok}")
+        print(f"4. I{k} (degrees {n}/{d}, {len(N.terms())}/{len(D.terms())} terms): I(x~) = I(x) exactly at {ok} "
+              f"random integer points of [-10^12, 10^12]^6 ({draws} drawn); a nonzero R of degree <= {B} vanishes "
+              f"at all the points drawn with probability <= ({B}/(2*10^12 + 1))^{draws}")
     pt = {s: sp.Rational(prng.randint(-30, 30), prng.randint(1, 7)) for s in X}
     J = sp.Matrix([[sp.diff(N.as_expr() / D.as_expr(), s).subs(pt) for s in X] for N, D in pairs])
     print(f"   exact Jacobian rank of the {len(pairs)} integrals at {[str(v) for v in pt.values()]}: {J.rank()}")
