@@ -44,7 +44,7 @@ from exact_khk.errors import InputError, SingularStepError
 
 #: the highest degree of a fitted numerator or denominator read along the line
 MAX_HK_DEGREE = 12
-#: unknowns of one fit at most (Clebsch: 1925; the nullspace of a 2000 x 1925 matrix mod p, ~10 s)
+#: unknowns of one fit at most (Clebsch: 1925; the nullspace of its 2009 x 1925 matrix mod p, about 4 s)
 MAX_HK_UNKNOWNS = 2500
 #: circuits whose ratios are examined, at most
 MAX_HK_CIRCUITS = 200
