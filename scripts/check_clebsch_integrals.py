@@ -27,6 +27,19 @@ project's convention x~ = x + 2 eps (I - eps f'(x))^{-1} f(x).
    a rational point (SymPy).
 
     python scripts/check_clebsch_integrals.py [--omega 1,2,5] [--eps 1/10] [--prove FILE.json]
+
+Findings (eps = 1/10, Omega = diag(1, 2, 5) and diag(1, 2, 4), the same at both; about 3 min):
+* the kernel at degree <= 2 has dimension 4 and lives on 1, p_k^2, m_k p_k, m_k^2 (10 monomials);
+* 93 HK bases: {1, p1^2, p2^2, p3^2}; four of size 6 inside {1, p_k^2, m_k p_k}; 88 of size 7, each with two
+  or three m_k^2.  The ratios of the first have degrees (2, 2) and Jacobian rank 1 (one integral,
+  (1/eps^2 + (w3 - w1) p1^2 + (w3 - w2) p2^2)/(p1^2 + p2^2 + p3^2) up to a Moebius map, as find-integrals
+  reports it at both Omega); those inside {1, p_k^2, m_k p_k} rank 3;
+* cumulated by degree, the ratios' rank is 1 at degree 2, 2 at 6 (c_{m3p3}/c_{m2p2}, degrees (6, 6)), 3 at 8,
+  and 4 only at 10: c_1/c_{m3p3} of {1, p3^2, m1p1, m2p2, m3p3, m1^2, m2^2}, degrees (10, 8); higher ratios
+  have degrees 12 to 20;
+* --prove on `exact-khk find-integrals --system clebsch --json` (Omega = (1, 2, 4)): its 4 integrals, of
+  degrees 2/2, 8/8, 8/8, 10/8 (the last three over one denominator of degree 8), are conserved (12 points
+  each, failure probability <= (196/(2*10^12 + 1))^12) with exact Jacobian rank 4.
 """
 import argparse
 import itertools
