@@ -253,12 +253,10 @@ def test_clebsch_what_is_extracted_is_right():
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 3 of the 4 integrals the kernel shows are "
-                   "extracted. The kernel (dimension 4) spans the 10 monomials 1, p_k^2, m_k p_k, m_k^2 over 4 "
-                   "orbits, not <= 8: not 4 pencils; the first entry of each of the sparse vectors with m_k^2 "
-                   "among the first 30 has numerator and denominator of degree 12-20 along a random line mod p, "
-                   "beyond the fits' limits")
 def test_clebsch_four():
+    """All 4: I1 from the HK basis {1, p_k^2}, I2 and I3 fitted from circuits inside {1, p_k^2, m_k p_k}, and
+    the fourth from the HK-basis route (hkbases.py): a ratio of degree 10/8 on a circuit with two m_k^2
+    (scripts/check_clebsch_integrals.py: no ratio of lower degree raises the rank to 4)."""
     res = clebsch()
     assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4
     assert check_found(CLEBSCH, res, "1/10", points=2) == 4

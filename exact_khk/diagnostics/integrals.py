@@ -67,6 +67,7 @@ import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.fitting import MAX_FIT_UNKNOWNS, EntryFitter, circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.hkbases import hk_basis_integrals
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim, KernelTooLarge, kernel_bytes)
@@ -580,6 +581,9 @@ class _Job:
                                      + ", ".join(f"I{i + 1}" for i in T) if J else "")
                                   + ") from the kernel vector supported on "
                                   f"{', '.join(monomial_text(e, self.variables) for e in sub)}")
+        for num, den, note in hk_basis_integrals(self, ref, mod_rows, primes, seed, lambda: visible - len(kept)):
+            if accepted(self.integral(*canonical_pair(num, den), vx, verify_steps)):
+                self.notes.append(f"I{len(kept)} {note}")
         if len(kept) < visible:
             self.warnings.append(f"the kernel shows {visible} independent integrals (rank of its entries' Jacobian "
                                  f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "

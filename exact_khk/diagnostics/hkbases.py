@@ -1,0 +1,308 @@
+"""Integrals from Hirota–Kimura bases: a ratio of two entries of a sparse kernel vector, fitted whole.
+
+A *Hirota–Kimura basis* (Petrera, Pfadler, Suris, Experimental Math. 18 (2009), arXiv:0808.3345) is a
+set S of candidate monomials whose orbit kernel K_S(x_0) is one-dimensional for a generic x_0: a
+circuit of the orbit kernel (:func:`.fitting.circuits`).  Its vector c(x_0), unique up to a factor,
+depends only on the orbit, so every ratio c_i/c_j of two of its entries is an integral.
+:mod:`.fitting` fits one entry per circuit, c_i/c_free, at degree ≤ ``fit_degree`` over all
+monomials; this route takes the ratio the kernel makes simplest and fits it at its own degree:
+
+* **Which ratio.**  For each circuit (one :func:`.fitting.entry_jacobian` call: the gradients of
+  e_i = c_i/c_last mod p) and each pair (i, j), the gradient of c_i/c_j = e_i/e_j says whether it
+  raises the rank of the integrals kept.  Of those that do, the degrees (d_N, d_D) of numerator
+  and denominator are read along a random line x_0 = a + t·b (the restriction of a rational
+  function to a generic line keeps its total degrees): values at t = 1, 2, … from one orbit per t
+  (all circuits read the same orbits), univariate rational reconstruction over F_p.  The pair with
+  the fewest fit unknowns is fitted.
+* **Fit.**  N − r(x_s)·D vanishes at the points of every pool orbit s, with N and D over the
+  monomials of degree ≤ d_N, d_D: one nullspace over F_p, one vector at the measured degrees (N/D
+  reduced), lifted to Q over several primes (:func:`.kernels.lift`).  Coordinate sign changes σ
+  under which r is invariant (single and paired flips, tested mod p on one orbit each) shrink the
+  fit: r = N/D reduced and r∘σ = r give N∘σ = χ(σ)N and D∘σ = χ(σ)D with χ = ±1, and the invariant
+  monomials (χ = 1) are tried first, then all monomials when within MAX_HK_UNKNOWNS.
+* The caller verifies each integral exactly on a fresh orbit and keeps it only if it raises the
+  exact rank of the Jacobian (``_Job.complete``).
+
+Measured on the Clebsch system (ω = (1, 2, 5), ε = 1/10, degree 2; scripts/check_clebsch_integrals.py
+recomputes it with SymPy): the orbit kernel (dimension 4) lives on 1, p_k², m_k p_k, m_k²; the circuit
+{1, p1², p2², p3²} gives one integral (its three ratios have Jacobian rank 1), the circuits inside
+{1, p_k², m_k p_k} two more (entries of degree 8); every ratio that raises the rank to 4 involves an
+m_k² and has degree ≥ (10, 8): c_1/c_{m1p1} on {1, p1², m1p1, m2p2, m3p3, m2², m3²}.  Invariant under
+the flips of (m_k, p_k), its fit has 1372 + 553 unknowns (8008 + 3003 over all monomials); two
+primes lift it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import random
+import flint
+
+from exact_khk.diagnostics.fitting import circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.kernels import _Evaluator, _point, canonical_nullspace, lift, monomial_text, monomials
+from exact_khk.errors import InputError, SingularStepError
+
+#: the highest degree of a fitted numerator or denominator read along the line
+MAX_HK_DEGREE = 12
+#: unknowns of one fit at most (Clebsch: 1925; the nullspace of its 2009 x 1925 matrix mod p, about 4 s)
+MAX_HK_UNKNOWNS = 2500
+#: circuits whose ratios are examined, at most
+MAX_HK_CIRCUITS = 200
+#: pool orbits added while the fit's nullspace has more than one vector, at most
+MAX_HK_EXTRA = 10
+#: fits tried in one search, at most (each a few seconds to half a minute in 6 variables)
+MAX_HK_FITS = 6
+#: points of each pool orbit (rows of the fit per orbit)
+POOL_STEPS = 40
+
+
+def _orbit(fld, eps, x0, steps, p):
+    from exact_khk.kahan.map import KahanMap
+    try:
+        return [[int(t) for t in q] for q in KahanMap(fld, eps, f"gf:{p}").orbit(x0, steps)]
+    except (SingularStepError, ZeroDivisionError, InputError):
+        return None
+
+
+def _vector(rows, cols, p):
+    """The kernel vector of the evaluation ``rows`` restricted to ``cols`` (a list of column
+    indices), normalised to 1 at the last column; None unless the kernel is that one line."""
+    pivots, free, basis = canonical_nullspace([[r[c] for c in cols] for r in rows], len(cols), p)
+    if len(basis) != 1 or free[0] != len(cols) - 1:
+        return None
+    return basis[0]
+
+
+def _degrees(ts, values, p, top):
+    """(deg N, deg D) of the univariate rational function with the given values mod p, both ≤ ``top``,
+    or None.  At the bound d the pairs (N, D) matching the values are the multiples of the reduced
+    pair by polynomials of degree ≤ d − d0 (d0 = its larger degree), given enough points: one solve at
+    ``top`` gives d0, one at d0 the pair."""
+    def solve(d):
+        M = flint.nmod_mat(len(ts), 2 * d + 2, [w for t, g in zip(ts, values) for w in
+                                                [pow(t, k, p) for k in range(d + 1)]
+                                                + [(-g * pow(t, k, p)) % p for k in range(d + 1)]], p)
+        return M.nullspace()
+
+    if 2 * top + 4 > len(ts):
+        return None
+    d0 = top + 1 - solve(top)[1]
+    if d0 < 0:
+        return None
+    X, nul = solve(d0)
+    if nul != 1:
+        return None
+    v = [int(X[i, 0]) for i in range(2 * d0 + 2)]
+    return (max((k for k in range(d0 + 1) if v[k]), default=0),
+            max((k for k in range(d0 + 1) if v[d0 + 1 + k]), default=0))
+
+
+def _candidates(job, ref, mod_rows, p, seed):
+    """[(unknowns, (dN, dD), circuit columns, i, j)] for the ratios c_i/c_j of circuits that raise the
+    rank of ``mod_rows`` mod p, fewest fit unknowns first."""
+    N, m = job.fld.dim, len(job.exps)
+    base = rank_mod(mod_rows, N, p)
+    raising = []
+    for S in circuits(ref.basis, m, p, seed)[:MAX_HK_CIRCUITS]:
+        data = entry_jacobian(job.fld, job.eps, ref.x0, [job.exps[c] for c in S], job.steps, p, seed)
+        if data is None or len(data[1]) != 1:
+            continue
+        last = data[1][0]
+        val = {c: v for (c, _), v in data[2].items()}
+        grad = {c: g for (c, _), g in data[3].items()}
+        val[last], grad[last] = 1, [0] * N
+        pairs = []
+        for i, j in itertools.permutations(range(len(S)), 2):
+            if not val.get(i) or not val.get(j) or (j, i) in pairs:
+                continue
+            inv = pow(val[j], -2, p)
+            g = [((gi * val[j] - val[i] * gj) * inv) % p for gi, gj in zip(grad[i], grad[j])]
+            if rank_mod(mod_rows + [g], N, p) > base:
+                pairs.append((i, j))
+        if pairs:
+            raising.append((S, pairs))
+    if not raising:
+        return []
+    rng = random.Random(f"hk-line-{seed}")
+    a, b = _point(rng, N), _point(rng, N)
+    ts = list(range(1, 2 * MAX_HK_DEGREE + 6))
+    support = sorted({c for S, _ in raising for c in S})
+    ev = _Evaluator([job.exps[c] for c in support])
+    col = {c: k for k, c in enumerate(support)}
+    lines = []
+    for t in ts:
+        pts = _orbit(job.fld, job.eps, [x + t * y for x, y in zip(a, b)], job.steps, p)
+        lines.append(None if pts is None else [ev(q, 1, p) for q in pts])
+    out = []
+    for S, pairs in raising:
+        vecs = [None if rows is None else _vector(rows, [col[c] for c in S], p) for rows in lines]
+        good = [(t, v) for t, v in zip(ts, vecs) if v is not None]
+        for i, j in pairs:
+            pts = [(t, v[i] * pow(v[j], -1, p) % p) for t, v in good if v[j]]
+            deg = _degrees([t for t, _ in pts], [g for _, g in pts], p, MAX_HK_DEGREE)
+            if deg is not None:
+                size = len(monomials(N, deg[0])) + len(monomials(N, deg[1]))
+                out.append((size, deg, S, i, j))
+    return sorted(out, key=lambda r: (r[0], r[1], r[2], r[3], r[4]))
+
+
+def _symmetries(job, cols, i, j, p, seed):
+    """The coordinate sign changes (single and paired flips, as tuples of ±1) that leave the ratio
+    c_i/c_j of the circuit ``cols`` invariant, tested mod p on one orbit each."""
+    N = job.fld.dim
+    ev = _Evaluator([job.exps[c] for c in cols])
+    x = _point(random.Random(f"hk-sym-{seed}"), N)
+
+    def ratio(y):
+        pts = _orbit(job.fld, job.eps, y, job.steps, p)
+        v = None if pts is None else _vector([ev(q, 1, p) for q in pts], list(range(len(cols))), p)
+        return None if v is None or not v[j] else v[i] * pow(v[j], -1, p) % p
+
+    r0 = ratio(x)
+    if r0 is None:
+        return []
+    flips = [tuple(-1 if k in ks else 1 for k in range(N))
+             for n in (1, 2) for ks in itertools.combinations(range(N), n)]
+    return [s for s in flips if ratio([t * c for t, c in zip(x, s)]) == r0]
+
+
+class _Products:
+    """Values mod p of monomials (sorted by degree) at a point, each one product of an earlier one and a
+    monomial of degree ≤ 2 (a sign-invariant set holds few parents e − x_j; it holds e − x_j x_k)."""
+
+    def __init__(self, exps):
+        N = len(exps[0]) if exps else 0
+        self.small = [e for e in monomials(N, 2) if any(e)]
+        pos = {e: i for i, e in enumerate(exps)}
+        self.plan = []
+        for k, e in enumerate(exps):
+            for s, q in enumerate(self.small):
+                f = tuple(a - b for a, b in zip(e, q))
+                if min(f) >= 0 and pos.get(f, k) < k:
+                    self.plan.append((pos[f], s))
+                    break
+            else:
+                self.plan.append((None, e))
+        self.ev = _Evaluator(self.small)
+
+    def __call__(self, x, p):
+        sm = self.ev(x, 1, p)
+        vals = []
+        for f, s in self.plan:
+            if f is None:
+                v = 1
+                for t, k in zip(x, s):
+                    v = v * pow(t, k, p) % p
+                vals.append(v)
+            else:
+                vals.append(vals[f] * sm[s] % p)
+        return vals
+
+
+def _invariant(exps, flips):
+    return [e for e in exps if all(sum(k for k, s in zip(e, f) if s < 0) % 2 == 0 for f in flips)]
+
+
+class _Fit:
+    """N − r·D = 0 on pool orbits, N, D over the given monomials (module docstring)."""
+
+    def __init__(self, job, cols, i, j, nb, db, seed):
+        self.job, self.nb, self.db = job, nb, db
+        sub = [c for c in cols if c != cols[j]] + [cols[j]]
+        self.sub = [job.exps[c] for c in sub]
+        self.pos = sub.index(cols[i])
+        self.starts, self.first = [], None
+        self.rng = random.Random(f"hk-pool-{seed}")
+
+    def rows(self, p, count):
+        """Rows [φ_N(x) | −r·φ_D(x)] of the first ``count`` pool orbits mod p; the first prime draws the
+        starting points (replacing any whose orbit is singular or degenerate), later primes reuse
+        them (None where one is unusable mod that prime)."""
+        ev, evn, evd = _Evaluator(self.sub), _Products(self.nb), _Products(self.db)
+        first = self.first in (None, p)
+        self.first = p if self.first is None else self.first
+        out, k, tries = [], 0, 0
+        while k < count:
+            if k == len(self.starts):
+                if not first or tries > 2 * count + 10:
+                    return None
+                tries += 1
+                self.starts.append(_point(self.rng, self.job.fld.dim))
+            pts = _orbit(self.job.fld, self.job.eps, self.starts[k], POOL_STEPS, p)
+            v = None if pts is None else _vector([ev(q, 1, p) for q in pts], list(range(len(self.sub))), p)
+            if v is None:
+                if not first:
+                    return None
+                del self.starts[k]
+                continue
+            r = v[self.pos]
+            for q in pts:
+                out.append(evn(q, p) + [(-r * t) % p for t in evd(q, p)])
+            k += 1
+        return out
+
+    def vector(self, p, count):
+        rows = self.rows(p, count)
+        if rows is None:
+            return None
+        width = len(self.nb) + len(self.db)
+        X, nul = flint.nmod_mat(len(rows), width, [t for r in rows for t in r], p).nullspace()
+        if nul != 1:
+            return nul
+        v = [int(X[k, 0]) for k in range(width)]
+        inv = pow(next(t for t in v if t), -1, p)
+        return [t * inv % p for t in v]
+
+    def run(self, primes):
+        """(N, D) over Q, or None."""
+        width = len(self.nb) + len(self.db)
+        count = -(-(width + 2 * POOL_STEPS) // (POOL_STEPS + 1))
+        per = []
+        for p in primes:
+            vec = self.vector(p, count)
+            extra = 0
+            while not per and isinstance(vec, int) and vec > 1 and extra < MAX_HK_EXTRA:
+                extra += 1
+                count += 1
+                vec = self.vector(p, count)
+            if not isinstance(vec, list):
+                if not per:
+                    return None  # no pair, or not unique, at these degrees and monomials
+                continue
+            per.append((p, [vec]))
+            out = lift(per)
+            if out is not None:
+                vec = out[0]
+                num = {e: c for e, c in zip(self.nb, vec[:len(self.nb)]) if c}
+                den = {e: c for e, c in zip(self.db, vec[len(self.nb):]) if c}
+                return (num, den) if num and den else None
+        return None
+
+
+def hk_basis_integrals(job, ref, mod_rows, primes, seed, wanted):
+    """Yield (num, den, note) for integrals from the ratios of HK bases (module docstring) while
+    ``wanted()`` > 0 (re-read after each: the caller's acceptance updates ``mod_rows``); at most
+    MAX_HK_FITS fits in all."""
+    p, N = primes[0], job.fld.dim
+    tried, budget = set(), MAX_HK_FITS
+    while wanted() > 0 and budget > 0:
+        cands = [c for c in _candidates(job, ref, mod_rows, p, seed) if (c[2], c[3], c[4]) not in tried]
+        pair = None
+        for _, (dn, dd), S, i, j in cands:
+            tried.add((S, i, j))
+            flips = _symmetries(job, S, i, j, p, seed)
+            shapes = [(_invariant(monomials(N, dn), flips), _invariant(monomials(N, dd), flips))] if flips else []
+            for nb, db in shapes + [(monomials(N, dn), monomials(N, dd))]:
+                if len(nb) + len(db) <= MAX_HK_UNKNOWNS and budget > 0:
+                    budget -= 1
+                    pair = _Fit(job, S, i, j, nb, db, seed).run(primes)
+                    if pair is not None:
+                        break
+            if pair is not None or budget <= 0:
+                break
+        if pair is None:
+            return
+        text = lambda c: monomial_text(job.exps[c], job.variables)  # noqa: E731
+        yield pair[0], pair[1], (f"fitted (degree {dn}/{dd}, {len(nb) + len(db)} unknowns) as the ratio c_{text(S[i])}"
+                                 f"/c_{text(S[j])} of the HK basis {', '.join(map(text, S))} (one kernel vector "
+                                 f"on it)")
