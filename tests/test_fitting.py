@@ -126,7 +126,8 @@ def test_fit_memory_is_planned_and_refused_before_any_work():
 
 
 def test_search_with_fits_beyond_the_memory_limit_says_so(monkeypatch, capsys):
-    """Kernels fit in 100 kB (their bases 79 kB), the degree-3 fits in 4 variables (70 unknowns, 109 kB) do not: the search goes on without them and says so; exit 0."""
+    """Kernels fit in 100 kB (their bases 79 kB), the degree-3 fits in 4 variables (70 unknowns, 109 kB) do
+    not: the search goes on without them and says so; exit 0."""
     res = find_integrals(chain(5), degree=2, eps="1/10", max_bytes=100_000)
     assert any("EXACT_KHK_MAX_MEMORY" in w for w in res.warnings)
     assert check_found(chain(5), res, "1/10", points=1) == len(res.integrals) == res.independent
@@ -148,3 +149,17 @@ def test_fits_in_few_variables_have_few_unknowns():
 
     assert fit_shapes(20, 0, 3, {(): 4}) == [((), 1, 0), ((), 2, 0), ((), 3, 0)]
     assert len(monomials(4, 3)) == 35
+
+
+@pytest.mark.slow
+def test_kqv_chain_n10_every_integral_certified(tmp_path, capsys):
+    """KQV N = 10: the kernel shows 9; all 9 extracted, conserved by SymPy's Kahan step, SymPy Jacobian rank 9,
+    and `certify` of the system file --toml writes is VALID (exit 0)."""
+    out = tmp_path / "kqv10.toml"
+    assert main(["find-integrals", "--system", chain(10), "--toml", str(out), "--quiet"]) == 0
+    res = find_integrals(chain(10), degree=2, eps="1/10")
+    assert res.visible == 9 and len(res.integrals) == 9 and res.independent == 9
+    assert check_found(chain(10), res, "1/10", points=1) == 9
+    capsys.readouterr()
+    assert main(["certify", "--system", str(out), "--quiet"]) == 0
+    assert "VALID" in capsys.readouterr().out

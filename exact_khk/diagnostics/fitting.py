@@ -20,11 +20,19 @@ and every conserved function the kernel can see is a function of the entries.
 * **Which formula.**  An entry e that is not a function of the integrals already
   found (its gradient mod p is independent of theirs) is written as N/D with N, D of
   degree ≤ δ, δ = 1, 2, … : N − e(x_s)·D vanishes on the orbit of x_s for every
-  orbit s of a pool, one linear system [φ(x) | −e(x_s)·φ(x)] over F_p whose
-  nullspace at the lowest δ is one vector, lifted to Q over several primes
+  orbit s of a pool, one linear system [R_s | −e(x_s)·R_s] over F_p (R_s the echelon rows
+  of the orbit's evaluation matrix: one row per condition, not per point) filled straight
+  into an ``nmod_mat``, whose nullspace at the lowest δ is one vector, lifted to Q by
+  Chinese remaindering and rational reconstruction over several word-size primes
   (:func:`.kernels.lift`) — :meth:`EntryFitter.fit`.  The caller checks each fitted
   N/D exactly on a fresh orbit and keeps it only if it raises the exact rank of the
   Jacobian of the integrals found (so never a power or product of found ones).
+* **Which fits.**  N and D are sought in the variables e depends on (its gradient mod p):
+  the KQV chain's entries of three-term kernel vectors depend on 4 of N variables, and their
+  degree-3 fits have 70 unknowns whatever N.  A fit is tried only if it can equal e on a
+  random line over F_p (:func:`entry_line`, :meth:`EntryLine.admits`): the restriction of e
+  there, by Cauchy interpolation, has degree at most e's, so a fit that cannot reach it (or
+  whose restriction has no solution beyond the vanishing ones) cannot succeed over Q.
 """
 
 from __future__ import annotations
@@ -285,9 +293,11 @@ class EntryFitter:
     fit's system stacks, for each orbit s of the pool, those rows R_s as [R_s ⊗ c_s^b | −e_s R_s ⊗ c_s^b],
     filled straight into one ``nmod_mat`` (its memory planned first, :func:`fit_bytes`)."""
 
-    def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=(), progress=None, max_bytes=None):
+    def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=(), progress=None, max_bytes=None,
+                 orbits=None):
         self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
         self.margin, self.known = margin, list(known)
+        self.orbits = {} if orbits is None else orbits  # (x0, p) -> orbit mod p, shared by the fitters of a search
         self.say, self.max_bytes = progress or (lambda text: None), max_bytes
         self.rng = random.Random(f"fit-{seed}")
         self.starts = []          # pool starting points (rational) and the known integrals' values there
@@ -299,9 +309,14 @@ class EntryFitter:
         x0, cvals = start
         if any(c.denominator % p == 0 for c in cvals):
             return None
-        try:
-            pts = [[int(t) for t in q] for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
-        except (SingularStepError, ZeroDivisionError, InputError):
+        if (tuple(x0), p) not in self.orbits:
+            try:
+                self.orbits[tuple(x0), p] = [[int(t) for t in q]
+                                             for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
+            except (SingularStepError, ZeroDivisionError, InputError):
+                self.orbits[tuple(x0), p] = None
+        pts = self.orbits[tuple(x0), p]
+        if pts is None:
             return None
         ev = _Evaluator(self.exps)
         pivots, free, basis = canonical_nullspace([ev(q, 1, p) for q in pts], len(self.exps), p)

@@ -91,6 +91,9 @@ MAX_LEVELS = 40
 #: the degree of a fit's coefficients in the integrals already found (the Lagrange top's integrals
 #: beyond m3 have coefficients of degree 3 in m3)
 MAX_KNOWN_DEGREE = 3
+#: the same in all of them together (k of them: C(k + J, J) coefficient monomials, 20 for k = 3 at J = 3; the
+#: Clebsch system's fits at (δ, J) = (2, 3) in I1..I3, 1 120 unknowns, took 12 of its 63 CPU seconds, all failing)
+MAX_ALL_KNOWN_DEGREE = 2
 
 
 # --- exact evaluation and verification -------------------------------------------------
@@ -396,7 +399,8 @@ def fit_shapes(N, k, fit_degree, nvars=None) -> list:
     n = lambda T: N if nvars is None else nvars[T]  # noqa: E731
     size = lambda t: 2 * comb(n(t[0]) + t[1], t[1]) * comb(len(t[0]) + t[2], t[2])  # noqa: E731
     shapes = [((), D, 0) for D in range(1, fit_degree + 1)]
-    shapes += [(T, D, J) for T in sets for D in range(1, fit_degree + 1) for J in range(1, MAX_KNOWN_DEGREE + 1)]
+    shapes += [(T, D, J) for T in sets for D in range(1, fit_degree + 1)
+               for J in range(1, (MAX_KNOWN_DEGREE if len(T) == 1 else MAX_ALL_KNOWN_DEGREE) + 1)]
     return sorted((t for t in shapes if size(t) <= MAX_FIT_UNKNOWNS), key=lambda t: (size(t), t[1], t[2], t[0]))
 
 
@@ -552,11 +556,14 @@ class _Job:
                 continue
             self.notes.append(f"I{len(kept)} from a pencil of the kernel on the level sets {text} = c (candidates "
                               f"free of one of its variables), its coefficients interpolated in c")
-        budget = MAX_FITS
+        budget, orbits = MAX_FITS, {}
         subs = self.level_circuits(kept, ref.x0, p0, seed)
         subs += [[self.exps[c] for c in S] for S in circuits(ref.basis, len(self.exps), p0, seed)]
-        # a support found both on the level sets and in the full kernel carries the same vector: fitted once
+        # a support found both on the level sets and in the full kernel carries the same vector: fitted once;
+        # supports in fewer variables first (KQV N = 20: the three-term vectors in 4 variables give 16 of the 19
+        # integrals, fitted in those 4 variables, while fits of entries depending on all 20 fail for minutes)
         subs = [sub for i, sub in enumerate(subs) if set(sub) not in [set(t) for t in subs[:i]]]
+        subs.sort(key=lambda sub: sum(any(e[j] for e in sub) for j in range(N)))
         for sub in subs[:MAX_CIRCUITS]:
             if len(kept) >= visible or budget <= 0:
                 break
@@ -572,7 +579,8 @@ class _Job:
                     budget -= 1
                     if T not in fitters:
                         fitters[T] = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
-                                                 [kept[i].polynomials() for i in T], self.progress, self.max_bytes)
+                                                 [kept[i].polynomials() for i in T], self.progress, self.max_bytes,
+                                                 orbits)
                     try:
                         pair = fitters[T].fit(key, delta, primes, J, variables)
                     except FitTooLarge as exc:
