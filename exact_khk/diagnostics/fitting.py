@@ -48,9 +48,13 @@ from exact_khk.diagnostics.kernels import (MATRIX_BYTES_PER_ENTRY, PROGRESS_ENTR
                                            canonical_nullspace, evaluation_matrix, lift, monomials, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
-#: the fit of one entry at degree δ solves a system with 2·C(N + δ, N)·C(k + J, J) unknowns (k integrals
-#: found, J the degree in them): not beyond this (1300 admits degree 4 in 6 variables with J = 2, which the
-#: Clebsch system's second integral needs: 2·210·3 = 1260; a few seconds per fit on the shared 2-core machine)
+#: the fit of one entry at degree δ solves a system with 2·C(n + δ, n)·C(k + J, J) unknowns (n the variables
+#: of the entry and of the k integrals used, J the degree in them): not beyond this.  1300 admits degree 4 in
+#: 6 variables with J = 2, which the Clebsch system's second integral needs: 2·210·3 = 1260 unknowns, a
+#: 1305 × 1260 nmod_mat (33 MB by fit_bytes), 1.0-1.5 s CPU per fit on the loaded shared 2-core machine.  The
+#: KQV chain's integrals are fitted in their 4 variables at degree 3 (70 unknowns) whatever N.  Degree 3 in 20
+#: variables, 3 542 unknowns (a 3 613 × 3 542 system, 256 MB planned, 525 MB peak RSS), was stopped after
+#: 126 s CPU on the loaded machine before its first prime was done: not admitted
 MAX_FIT_UNKNOWNS = 1300
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
