@@ -45,7 +45,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.diagnostics.kernels import (MATRIX_BYTES_PER_ENTRY, PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
-                                           canonical_nullspace, evaluation_matrix, lift, monomials, to_mpoly)
+                                           _size, canonical_nullspace, evaluation_matrix, lift, monomials, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
 #: the fit of one entry at degree δ solves a system with 2·C(n + δ, n)·C(k + J, J) unknowns (n the variables
@@ -520,9 +520,8 @@ class EntryFitter:
             return None
         need = width + self.margin
         if self.max_bytes is not None and fit_bytes(width, need) > self.max_bytes:
-            raise FitTooLarge(f"fit_degree: a fit with {width} unknowns needs about "
-                              f"{fit_bytes(width, need) / 2 ** 30:.3g} GiB, beyond the memory limit of "
-                              f"{self.max_bytes / 2 ** 30:.3g} GiB (EXACT_KHK_MAX_MEMORY)")
+            raise FitTooLarge(f"a fit with {width} unknowns needs about {_size(fit_bytes(width, need))}, beyond "
+                              f"the memory limit of {_size(self.max_bytes)} (EXACT_KHK_MAX_MEMORY)")
         count = self._orbits_for(primes[0], mons, need)
         if count is None:
             return None

@@ -583,9 +583,9 @@ class _Job:
                                                  orbits)
                     try:
                         pair = fitters[T].fit(key, delta, primes, J, variables)
-                    except FitTooLarge as exc:
-                        if str(exc) not in self.warnings:
-                            self.warnings.append(f"{exc}: not tried")
+                    except FitTooLarge as exc:  # said once: the larger fits are refused the same way
+                        if not any("EXACT_KHK_MAX_MEMORY" in w for w in self.warnings):
+                            self.warnings.append(f"{exc}: not tried, nor any fit as large")
                         continue
                     if pair is not None:
                         break
