@@ -52,10 +52,13 @@ from exact_khk.errors import InputError, SingularStepError
 #: of the entry and of the k integrals used, J the degree in them): not beyond this.  1300 admits degree 4 in
 #: 6 variables with J = 2, which the Clebsch system's second integral needs: 2·210·3 = 1260 unknowns, a
 #: 1305 × 1260 nmod_mat (33 MB by fit_bytes), 1.0-1.5 s CPU per fit on the loaded shared 2-core machine.  The
-#: KQV chain's integrals are fitted in their 4 variables at degree 3 (70 unknowns) whatever N.  Degree 3 in 20
-#: variables, 3 542 unknowns (a 3 613 × 3 542 system, 256 MB planned, 525 MB peak RSS), was stopped after
-#: 126 s CPU on the loaded machine before its first prime was done: not admitted
+#: KQV chain's integrals are fitted in their 4 variables at degree 3 (70 unknowns) whatever N.
 MAX_FIT_UNKNOWNS = 1300
+#: the same for a fit without the integrals found (J = 0), tried only when the entry's degree on a random line
+#: is at most δ, so that it succeeds unless that line lowered the degree: 3 600 admits degree 3 in 20 variables
+#: (KQV N = 20: the entry x2(x2 + x3)/(x1 x3 (x2 + ... + x20)), 3 542 unknowns, a 3 613 × 3 542 system, 256 MB
+#: planned by fit_bytes, 525 MB peak RSS; more than 126 s CPU per prime on the loaded shared machine)
+MAX_PLAIN_FIT_UNKNOWNS = 3600
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
 #: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
@@ -516,7 +519,7 @@ class EntryFitter:
         cmons = monomials(len(self.known), J) if self.known else [()]
         md = len(mons)
         width = 2 * md * len(cmons)
-        if width > MAX_FIT_UNKNOWNS:
+        if width > (MAX_PLAIN_FIT_UNKNOWNS if J == 0 else MAX_FIT_UNKNOWNS):
             return None
         need = width + self.margin
         if self.max_bytes is not None and fit_bytes(width, need) > self.max_bytes:

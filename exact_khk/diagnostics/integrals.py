@@ -66,8 +66,8 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.fitting import (MAX_FIT_UNKNOWNS, EntryFitter, FitTooLarge, circuits, entry_jacobian,
-                                           entry_line, rank_mod)
+from exact_khk.diagnostics.fitting import (MAX_FIT_UNKNOWNS, MAX_PLAIN_FIT_UNKNOWNS, EntryFitter, FitTooLarge,
+                                           circuits, entry_jacobian, entry_line, rank_mod)
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
                                            trivial_dim, KernelTooLarge, kernel_bytes)
@@ -401,7 +401,8 @@ def fit_shapes(N, k, fit_degree, nvars=None) -> list:
     shapes = [((), D, 0) for D in range(1, fit_degree + 1)]
     shapes += [(T, D, J) for T in sets for D in range(1, fit_degree + 1)
                for J in range(1, (MAX_KNOWN_DEGREE if len(T) == 1 else MAX_ALL_KNOWN_DEGREE) + 1)]
-    return sorted((t for t in shapes if size(t) <= MAX_FIT_UNKNOWNS), key=lambda t: (size(t), t[1], t[2], t[0]))
+    limit = lambda t: MAX_FIT_UNKNOWNS if t[2] else MAX_PLAIN_FIT_UNKNOWNS  # noqa: E731
+    return sorted((t for t in shapes if size(t) <= limit(t)), key=lambda t: (size(t), t[1], t[2], t[0]))
 
 
 def planned_bytes(m, steps) -> int:
