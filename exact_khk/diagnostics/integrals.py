@@ -563,7 +563,8 @@ class _Job:
         # a support found both on the level sets and in the full kernel carries the same vector: fitted once;
         # supports in fewer variables first (KQV N = 20: the three-term vectors in 4 variables give 16 of the 19
         # integrals, fitted in those 4 variables, while fits of entries depending on all 20 fail for minutes)
-        subs = [sub for i, sub in enumerate(subs) if set(sub) not in [set(t) for t in subs[:i]]]
+        seen = set()
+        subs = [sub for sub in subs if not (frozenset(sub) in seen or seen.add(frozenset(sub)))]
         subs.sort(key=lambda sub: sum(any(e[j] for e in sub) for j in range(N)))
         for sub in subs[:MAX_CIRCUITS]:
             if len(kept) >= visible or budget <= 0:
