@@ -122,12 +122,12 @@ def test_fit_memory_is_planned_and_refused_before_any_work():
         fitter.fit(key, 3, random_primes(3, 1), 0)
     assert isinstance(exc.value, InputError)
     assert fitter.starts == []  # refused before any orbit was drawn
-    assert fit_bytes(70, 78) == 20 * 70 * 78
+    assert fit_bytes(70, 78) == 160 * 70 * 78
 
 
 def test_search_with_fits_beyond_the_memory_limit_says_so(monkeypatch, capsys):
-    """Kernels fit in 100 kB (their bases 79 kB), the degree-3 fits in 4 variables (70 unknowns, 109 kB) do
-    not: the search goes on without them and says so; exit 0."""
+    """Kernels fit in 100 kB (their bases 79 kB), the fits do not (70 unknowns at degree 3 in 4 variables:
+    874 kB planned): the search goes on without them and says so; exit 0."""
     res = find_integrals(chain(5), degree=2, eps="1/10", max_bytes=100_000)
     assert any("EXACT_KHK_MAX_MEMORY" in w for w in res.warnings)
     assert check_found(chain(5), res, "1/10", points=1) == len(res.integrals) == res.independent

@@ -44,7 +44,7 @@ from fractions import Fraction
 
 import flint
 
-from exact_khk.diagnostics.kernels import (MATRIX_BYTES_PER_ENTRY, PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
+from exact_khk.diagnostics.kernels import (PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
                                            _size, canonical_nullspace, evaluation_matrix, lift, monomials, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
@@ -56,8 +56,8 @@ from exact_khk.errors import InputError, SingularStepError
 MAX_FIT_UNKNOWNS = 1300
 #: the same for a fit without the integrals found (J = 0), tried only when the entry's degree on a random line
 #: is at most δ, so that it succeeds unless that line lowered the degree: 3 600 admits degree 3 in 20 variables
-#: (KQV N = 20: the entry x2(x2 + x3)/(x1 x3 (x2 + ... + x20)), 3 542 unknowns, a 3 613 × 3 542 system, 256 MB
-#: planned by fit_bytes, 525 MB peak RSS; more than 126 s CPU per prime on the loaded shared machine)
+#: (KQV N = 20: the entry x2(x2 + x3)/(x1 x3 (x2 + ... + x20)), 3 542 unknowns, a 3 567 × 3 542 system:
+#: found in 305 s CPU and 2 161 MB peak RSS over two primes on the loaded shared machine)
 MAX_PLAIN_FIT_UNKNOWNS = 3600
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
@@ -279,10 +279,16 @@ class FitTooLarge(InputError):
     """A fit whose linear system would need more memory than allowed (planned before it is built)."""
 
 
+#: bytes per entry of a fit's system (:func:`fit_bytes`): measured peak RSS 2 161 MB for the 3 567 × 3 542
+#: system of KQV N = 20 (from 283 MB before it: 149 bytes per entry), against 20 for an orbit kernel's
+#: matrix and its echelon form (MATRIX_BYTES_PER_ENTRY); where the rest goes was not found
+FIT_BYTES_PER_ENTRY = 160
+
+
 def fit_bytes(width, rows) -> int:
-    """The planned memory of one fit (:meth:`EntryFitter.fit`): its ``nmod_mat`` of ``rows`` × ``width``
-    and the reduced echelon copy, MATRIX_BYTES_PER_ENTRY an entry (no row is held as Python integers)."""
-    return MATRIX_BYTES_PER_ENTRY * rows * width
+    """The planned memory of one fit (:meth:`EntryFitter.fit`) of ``rows`` × ``width``, FIT_BYTES_PER_ENTRY
+    an entry (the ``nmod_mat``, its echelon form and what else the measured peak held)."""
+    return FIT_BYTES_PER_ENTRY * rows * width
 
 
 class EntryFitter:
