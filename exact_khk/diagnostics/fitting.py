@@ -56,8 +56,8 @@ from exact_khk.errors import InputError, SingularStepError
 MAX_FIT_UNKNOWNS = 1300
 #: the same for a fit without the integrals found (J = 0), tried only when the entry's degree on a random line
 #: is at most δ, so that it succeeds unless that line lowered the degree: 3 600 admits degree 3 in 20 variables
-#: (KQV N = 20: the entry x2(x2 + x3)/(x1 x3 (x2 + ... + x20)), 3 542 unknowns, a 3 567 × 3 542 system:
-#: found in 305 s CPU and 2 161 MB peak RSS over two primes on the loaded shared machine)
+#: (KQV N = 20: an entry depending on all 20 variables, 3 542 unknowns, a 3 567 × 3 542 system: fitted in
+#: 305 s CPU and 2 161 MB peak RSS over two primes on the loaded shared machine)
 MAX_PLAIN_FIT_UNKNOWNS = 3600
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
