@@ -84,10 +84,11 @@ def logged(path):
 
     fit = fitting.EntryFitter.fit
 
-    def traced(self, key, delta, primes, J=0):
+    def traced(self, key, delta, primes, J=0, variables=None):
         t = time.perf_counter()
-        out = fit(self, key, delta, primes, J)
-        log(f"fit of entry {key} at degree {delta}, J = {J}, {len(self.known)} known: "
+        out = fit(self, key, delta, primes, J, variables)
+        log(f"fit of entry {key} at degree {delta}, J = {J}, {len(self.known)} known, "
+            f"{self.fld.dim if variables is None else len(variables)} variables: "
             f"{'found' if out is not None else 'none'} ({time.perf_counter() - t:.1f} s)")
         return out
 

@@ -20,28 +20,45 @@ and every conserved function the kernel can see is a function of the entries.
 * **Which formula.**  An entry e that is not a function of the integrals already
   found (its gradient mod p is independent of theirs) is written as N/D with N, D of
   degree ≤ δ, δ = 1, 2, … : N − e(x_s)·D vanishes on the orbit of x_s for every
-  orbit s of a pool, one linear system [φ(x) | −e(x_s)·φ(x)] over F_p whose
-  nullspace at the lowest δ is one vector, lifted to Q over several primes
+  orbit s of a pool, one linear system [R_s | −e(x_s)·R_s] over F_p (R_s the echelon rows
+  of the orbit's evaluation matrix: one row per condition, not per point) filled straight
+  into an ``nmod_mat``, whose nullspace at the lowest δ is one vector, lifted to Q by
+  Chinese remaindering and rational reconstruction over several word-size primes
   (:func:`.kernels.lift`) — :meth:`EntryFitter.fit`.  The caller checks each fitted
   N/D exactly on a fresh orbit and keeps it only if it raises the exact rank of the
   Jacobian of the integrals found (so never a power or product of found ones).
+* **Which fits.**  N and D are sought in the variables e depends on (its gradient mod p):
+  the KQV chain's entries of three-term kernel vectors depend on 4 of N variables, and their
+  degree-3 fits have 70 unknowns whatever N.  A fit is tried only if it can equal e on a
+  random line over F_p (:func:`entry_line`, :meth:`EntryLine.admits`): the restriction of e
+  there, by Cauchy interpolation, has degree at most e's, so a fit that cannot reach it (or
+  whose restriction has no solution beyond the vanishing ones) cannot succeed over Q.
 """
 
 from __future__ import annotations
 
 import math
 import random
+from dataclasses import dataclass
 from fractions import Fraction
 
 import flint
 
-from exact_khk.diagnostics.kernels import _Evaluator, _point, canonical_nullspace, lift, monomials, to_mpoly
+from exact_khk.diagnostics.kernels import (PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
+                                           _size, canonical_nullspace, evaluation_matrix, lift, monomials, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
-#: the fit of one entry at degree δ solves a system with 2·C(N + δ, N)·C(k + J, J) unknowns (k integrals
-#: found, J the degree in them): not beyond this (1300 admits degree 4 in 6 variables with J = 2, which the
-#: Clebsch system's second integral needs: 2·210·3 = 1260; a few seconds per fit on the shared 2-core machine)
+#: the fit of one entry at degree δ solves a system with 2·C(n + δ, n)·C(k + J, J) unknowns (n the variables
+#: of the entry and of the k integrals used, J the degree in them): not beyond this.  1300 admits degree 4 in
+#: 6 variables with J = 2, which the Clebsch system's second integral needs: 2·210·3 = 1260 unknowns, a
+#: 1305 × 1260 nmod_mat (33 MB by fit_bytes), 1.0-1.5 s CPU per fit on the loaded shared 2-core machine.  The
+#: KQV chain's integrals are fitted in their 4 variables at degree 3 (70 unknowns) whatever N.
 MAX_FIT_UNKNOWNS = 1300
+#: the same for a fit without the integrals found (J = 0), tried only when the entry's degree on a random line
+#: is at most δ, so that it succeeds unless that line lowered the degree: 3 600 admits degree 3 in 20 variables
+#: (KQV N = 20: an entry depending on all 20 variables, 3 542 unknowns, a 3 567 × 3 542 system: fitted in
+#: 305 s CPU and 2 161 MB peak RSS over two primes on the loaded shared machine)
+MAX_PLAIN_FIT_UNKNOWNS = 3600
 #: the tangent route evaluates (orbit length) × candidates × N monomial derivatives in Python: not beyond this
 MAX_TANGENT_WORK = 4_000_000
 #: a fit is accepted when its nullspace kept its dimension while this many more orbits were added
@@ -152,8 +169,126 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
     return out + [S for S in small[len(canonical):] + canonical[len(small):] if S not in out]
 
 
+@dataclass
+class EntryLine:
+    """An entry restricted to the line x = a + t·b over F_p: A/B in lowest terms (``nmod_poly``), or
+    A = B = None when its degree there exceeds the bound it was computed to."""
+
+    p: int
+    a: list
+    b: list
+    A: object = None
+    B: object = None
+
+    @property
+    def degree(self):
+        return None if self.A is None else max(self.A.degree(), self.B.degree())
+
+    def restrict(self, poly: dict):
+        """A polynomial {exponents: Fraction} on the line, as an ``nmod_poly`` in t."""
+        p = self.p
+        lines = [flint.nmod_poly([u, w], p) for u, w in zip(self.a, self.b)]
+        out = flint.nmod_poly([], p)
+        for e, c in poly.items():
+            term = flint.nmod_poly([c.numerator * pow(c.denominator, -1, p) % p], p)
+            for L, k in zip(lines, e):
+                if k:
+                    term *= L ** k
+            out += term
+        return out
+
+    def admits(self, known, delta, J) -> bool:
+        """False when no N/D of degree ≤ δ with coefficients of degree ≤ J in the ``known`` integrals (pairs
+        of ``nmod_poly`` on the line, :meth:`restrict`) equals the entry on the line: the pairs
+        (n_b, d_b) of polynomials in t of degree ≤ δ with Σ n_b P_b · B = Σ d_b P_b · A (P_b the
+        composed products of :meth:`EntryFitter._compose` on the line) are then only those with
+        Σ n_b P_b = Σ d_b P_b = 0.  A fit's N/D, restricted to the line, would be another one unless its
+        denominator vanishes on the whole line: probability ≤ (its degree)/p for a random line."""
+        p = self.p
+        cmons = monomials(len(known), J) if known else [()]
+        P = []
+        for b in cmons:
+            f = flint.nmod_poly([1], p)
+            for (A, B), k in zip(known, b):
+                f *= A ** k * B ** (J - k)
+            P.append(f)
+        cols = [f * flint.nmod_poly([0] * k + [1], p) for f in P for k in range(delta + 1)]
+
+        def nullity(polys):
+            rows = 1 + max(f.degree() for f in polys)
+            M = flint.nmod_mat(rows, len(polys), [int(f[r]) if r <= f.degree() else 0 for r in range(rows)
+                                                 for f in polys], p)
+            return len(polys) - M.rank()
+
+        return nullity([f * self.B for f in cols] + [-f * self.A for f in cols]) > 2 * nullity(cols)
+
+
+def entry_line(fld, eps, exps, steps, pivots, key, p, rng, max_degree):
+    """The kernel entry ``key`` (:func:`entry_jacobian`'s keys) restricted to a random line x = a + t·b over
+    F_p (:class:`EntryLine`): from its values at points of the line (an orbit kernel of ``exps`` each, kept
+    where its pivots are ``pivots``), by Cauchy interpolation at 2D + 1 of them
+    (:func:`.degrees.cauchy_degree`), D doubled up to ``max_degree`` until CHECK_POINTS more confirm it.
+    Its degree max(deg A, deg B) is never above that of the entry over Q (a restriction and a reduction
+    mod p only lower it).  A and B are None when no fraction of degree ≤ ``max_degree`` has these values;
+    the result is None when too few points of the line were usable."""
+    from exact_khk.diagnostics.degrees import CHECK_POINTS, cauchy_degree
+    from exact_khk.kahan.map import KahanMap
+    phi = KahanMap(fld, eps, f"gf:{p}")
+    N = fld.dim
+    line = EntryLine(p, [rng.randrange(p) for _ in range(N)], [rng.randrange(p) for _ in range(N)])
+    ev = _Evaluator(exps)
+    ts, vs, tried = [], [], set()
+
+    def more(count):
+        while len(ts) < count:
+            if len(tried) > 4 * count + 20:
+                return False  # the line meets the bad points too often: no conclusion
+            t = rng.randrange(p)
+            if t in tried:
+                continue
+            tried.add(t)
+            try:
+                pts = phi.orbit([(u + t * w) % p for u, w in zip(line.a, line.b)], steps)
+            except (SingularStepError, ZeroDivisionError, InputError):
+                continue
+            piv, free, basis = canonical_nullspace([ev([int(u) for u in q], 1, p) for q in pts], len(exps), p)
+            if tuple(piv) != tuple(pivots):
+                continue
+            ts.append(t)
+            vs.append(basis[free.index(key[1])][key[0]])
+        return True
+
+    D = 1
+    while True:
+        if not more(2 * D + 1 + CHECK_POINTS):
+            return None
+        got = cauchy_degree(ts[:2 * D + 1], vs[:2 * D + 1], p, D)
+        if got is not None and all(got[1](t) == v * got[2](t) for t, v in zip(ts[2 * D + 1:], vs[2 * D + 1:])):
+            line.A, line.B = got[1], got[2]
+            return line
+        if D >= max_degree:
+            return line
+        D = min(2 * D, max_degree)
+
+
 def rank_mod(rows, N, p) -> int:
     return flint.nmod_mat(len(rows), N, [v % p for r in rows for v in r], p).rank() if rows else 0
+
+
+class FitTooLarge(InputError):
+    """A fit whose linear system would need more memory than allowed (planned before it is built)."""
+
+
+#: bytes per entry of a fit's system (:func:`fit_bytes`): measured peak RSS 2 161 MB for the 3 567 × 3 542
+#: system of KQV N = 20 (from 283 MB before it: 149 bytes per entry), against 20 for an orbit kernel's
+#: matrix and its echelon form (MATRIX_BYTES_PER_ENTRY); where the rest goes was not found
+FIT_BYTES_PER_ENTRY = 160
+
+
+def fit_bytes(width, rows) -> int:
+    """The planned memory of one fit (:meth:`EntryFitter.fit`) of ``rows`` × ``width``, FIT_BYTES_PER_ENTRY
+    an entry (the ``nmod_mat``, its echelon form and what else the measured peak held)."""
+    return FIT_BYTES_PER_ENTRY * rows * width
 
 
 class EntryFitter:
@@ -164,24 +299,37 @@ class EntryFitter:
     on the orbit ("modulo functions of those already found").  Then every vector
     μ·c^b·(A_i − c_i B_i) vanishes on every orbit; these *junk* vectors are spanned explicitly and
     the fit is the nullspace modulo them; the reported integral is N(x, I(x))/D(x, I(x)) with the
-    denominators of the I_i cleared."""
+    denominators of the I_i cleared.
 
-    def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=()):
+    One orbit's conditions on a polynomial P of degree ≤ δ (P = 0 at its points) are the rows of the
+    reduced echelon form of its evaluation matrix (as many as its rank, against one per point); the
+    fit's system stacks, for each orbit s of the pool, those rows R_s as [R_s ⊗ c_s^b | −e_s R_s ⊗ c_s^b],
+    filled straight into one ``nmod_mat`` (its memory planned first, :func:`fit_bytes`)."""
+
+    def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=(), progress=None, max_bytes=None,
+                 orbits=None):
         self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
         self.margin, self.known = margin, list(known)
+        self.orbits = {} if orbits is None else orbits  # (x0, p) -> orbit mod p, shared by the fitters of a search
+        self.say, self.max_bytes = progress or (lambda text: None), max_bytes
         self.rng = random.Random(f"fit-{seed}")
         self.starts = []          # pool starting points (rational) and the known integrals' values there
         self.data = {}            # p -> list of (points mod p, entry values, known values) per pool orbit
-        self.evals = {}           # (p, δ) -> list per pool orbit of rows of monomial values
+        self.blocks = {}          # (p, monomials) -> list per pool orbit of the echelon rows of its evaluation
 
     def _orbit(self, start, p):
         from exact_khk.kahan.map import KahanMap
         x0, cvals = start
         if any(c.denominator % p == 0 for c in cvals):
             return None
-        try:
-            pts = [[int(t) for t in q] for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
-        except (SingularStepError, ZeroDivisionError, InputError):
+        if (tuple(x0), p) not in self.orbits:
+            try:
+                self.orbits[tuple(x0), p] = [[int(t) for t in q]
+                                             for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
+            except (SingularStepError, ZeroDivisionError, InputError):
+                self.orbits[tuple(x0), p] = None
+        pts = self.orbits[tuple(x0), p]
+        if pts is None:
             return None
         ev = _Evaluator(self.exps)
         pivots, free, basis = canonical_nullspace([ev(q, 1, p) for q in pts], len(self.exps), p)
@@ -224,48 +372,82 @@ class EntryFitter:
                 return None
         return data[:count]
 
-    def _rows(self, p, delta, J, key, start, stop):
-        """The rows [φ(x)·c^b | −e(x_s)·φ(x)·c^b] of the pool orbits start..stop-1 mod p (None: pool unusable)."""
-        data = self.pool(p, stop)
+    def _block(self, p, mons, i):
+        """(R, rank): the reduced echelon form of the evaluation of ``mons`` on pool orbit i (its first
+        ``rank`` rows are the orbit's conditions); None when the pool is unusable mod p.  Cached for the
+        monomials of the last fit mod p only."""
+        data = self.pool(p, i + 1)
         if data is None:
             return None
-        cache = self.evals.setdefault((p, delta), [])
-        ev = _Evaluator(monomials(self.fld.dim, delta))
-        while len(cache) < stop:
-            cache.append([ev(q, 1, p) for q in data[len(cache)][0]])
-        cmons = monomials(len(self.known), J) if self.known else [()]
-        rows = []
-        for (_, values, cv), block in zip(data[start:stop], cache[start:stop]):
+        key = (p, tuple(mons))
+        if key not in self.blocks:
+            self.blocks = {k: v for k, v in self.blocks.items() if k[0] != p}
+            self.blocks[key] = []
+        cache = self.blocks[key]
+        while len(cache) <= i:
+            cache.append(evaluation_matrix(mons, data[len(cache)][0], p).rref())
+        return cache[i]
+
+    def _orbits_for(self, p, mons, rows):
+        """The number of pool orbits whose echelon rows first reach ``rows`` (None: pool unusable)."""
+        total, count = 0, 0
+        while total < rows:
+            block = self._block(p, mons, count)
+            if block is None:
+                return None
+            total += block[1]
+            count += 1
+            if count > rows + STABLE_ORBITS + 2:  # orbits of rank 0: nothing to fit against
+                return None
+        return count
+
+    def _system(self, p, mons, cmons, key, start, stop):
+        """The ``nmod_mat`` of the conditions [R_s ⊗ c^b | −e_s·R_s ⊗ c^b] of pool orbits start..stop-1
+        (class docstring), or None when the pool is unusable mod p."""
+        blocks = [self._block(p, mons, i) for i in range(start, stop)]
+        if any(b is None for b in blocks):
+            return None
+        data = self.data[p]
+        md, half = len(mons), len(mons) * len(cmons)
+        A = flint.nmod_mat(sum(rank for _, rank in blocks), 2 * half, p)
+        i = 0
+        for (_, values, cv), (R, rank) in zip(data[start:stop], blocks):
             e = values[key]
             ws = [math.prod(pow(c, k, p) for c, k in zip(cv, b)) % p for b in cmons]
-            for r in block:
-                left = [v * w % p for w in ws for v in r]
-                rows.append(left + [(-e * v) % p for v in left])
-        return rows
+            pairs = [(k * md, w, (-e * w) % p) for k, w in enumerate(ws)]
+            for r in range(rank):
+                nz = [(j, v) for j, v in ((j, int(R[r, j])) for j in range(md)) if v]
+                for off, w, we in pairs:
+                    for j, v in nz:
+                        A[i, off + j] = v * w % p
+                        A[i, half + off + j] = v * we % p
+                i += 1
+        return A
 
-    def _junk(self, delta, J, p):
+    def _junk(self, mons, J, p):
         """Reduced echelon rows (mod p) of the span of the vectors μ·c^b·(A_i − c_i·B_i) in both halves."""
         if not self.known or J == 0:
             return []
-        mons = monomials(self.fld.dim, delta)
-        md, pos = len(mons), {e: i for i, e in enumerate(monomials(self.fld.dim, delta))}
+        md, pos = len(mons), {e: i for i, e in enumerate(mons)}
         cmons = monomials(len(self.known), J)
         cpos = {b: i for i, b in enumerate(cmons)}
         width = 2 * md * len(cmons)
         vecs = []
         for i, (num, den) in enumerate(self.known):
-            deg = max(sum(e) for e in list(num) + list(den))
-            for mu in monomials(self.fld.dim, delta - deg) if deg <= delta else []:
+            for mu in mons:
+                shifted = [(tuple(x + y for x, y in zip(e, mu)), c, bb) for poly, bb in ((num, 0), (den, 1))
+                           for e, c in poly.items()]
+                if any(s not in pos for s, _, _ in shifted):
+                    continue
                 for b in cmons:
                     b1 = tuple(k + (j == i) for j, k in enumerate(b))
                     if b1 not in cpos:
                         continue
                     for half in (0, width // 2):
                         v = [0] * width
-                        for poly, bb, sign in ((num, b, 1), (den, b1, -1)):
-                            for e, c in poly.items():
-                                col = half + cpos[bb] * md + pos[tuple(x + y for x, y in zip(e, mu))]
-                                v[col] = (v[col] + sign * c.numerator * pow(c.denominator, -1, p)) % p
+                        for s, c, bb in shifted:
+                            col = half + cpos[b1 if bb else b] * md + pos[s]
+                            v[col] = (v[col] + (-1 if bb else 1) * c.numerator * pow(c.denominator, -1, p)) % p
                         vecs.append(v)
         if not vecs:
             return []
@@ -288,24 +470,43 @@ class EntryFitter:
                 return _normalised(v, p)
         return None
 
-    def _grown(self, p, delta, J, key, count, width):
+    def _nullspace(self, A, width, p):
+        """The nullspace of A as a width × nul ``nmod_mat`` (canonical basis from the echelon form), or None if 0."""
+        R, rank = A.rref()
+        pivots = _rref_pivots(R, rank, width)
+        piv = set(pivots)
+        free = [c for c in range(width) if c not in piv]
+        if not free:
+            return None
+        B = flint.nmod_mat(width, len(free), p)
+        for j, f in enumerate(free):
+            B[f, j] = 1
+            for i, c in enumerate(pivots):
+                t = int(R[i, f])
+                if t:
+                    B[c, j] = p - t
+        return B
+
+    def _grown(self, p, mons, cmons, key, count, width):
         """(nullspace basis as an nmod_mat, orbits used): the pool grows one orbit at a time until the
         nullspace has kept its dimension for STABLE_ORBITS orbits (a relation between the entry and
         the other integrals' values on few orbits loses a dimension per orbit), or is zero."""
-        rows = self._rows(p, delta, J, key, 0, count)
-        if rows is None:
+        A = self._system(p, mons, cmons, key, 0, count)
+        if A is None:
             return None, count
-        _, _, basis = canonical_nullspace(rows, width, p)
-        if not basis:
-            return None, count
-        B = flint.nmod_mat(width, len(basis), [v[i] for i in range(width) for v in basis], p)
+        if A.nrows() * width > PROGRESS_ENTRIES:
+            self.say(f"fit of a kernel entry: echelon form {A.nrows()} x {width} mod p")
+        B = self._nullspace(A, width, p)
+        del A
         stable = 0
-        while stable < STABLE_ORBITS and count < width + STABLE_ORBITS + 2:
-            block = self._rows(p, delta, J, key, count, count + 1)
+        while B is not None and stable < STABLE_ORBITS and count < width + STABLE_ORBITS + 2:
+            block = self._system(p, mons, cmons, key, count, count + 1)
             if block is None:
                 return None, count
             count += 1
-            X, nul = (flint.nmod_mat(len(block), width, [v for r in block for v in r], p) * B).nullspace()
+            if not block.nrows():
+                continue
+            X, nul = (block * B).nullspace()
             if nul == 0:
                 return None, count
             stable = stable + 1 if nul == B.ncols() else 0
@@ -313,31 +514,45 @@ class EntryFitter:
                 B = B * flint.nmod_mat(X.nrows(), nul, [X[i, j] for i in range(X.nrows()) for j in range(nul)], p)
         return B, count
 
-    def fit(self, key, delta, primes, J=0):
+    def fit(self, key, delta, primes, J=0, variables=None):
         """(N, D) dicts over Q with N/D equal to the entry ``key`` on the pool's orbits, of degree ≤ δ
-        (coefficients of degree ≤ J in the known integrals), or None (no such pair, not unique, or
-        the lift not confirmed)."""
-        mons = monomials(self.fld.dim, delta)
+        in the ``variables`` (indices; default all) with coefficients of degree ≤ J in the known
+        integrals, or None (no such pair, not unique, or the lift not confirmed).  Raises
+        :class:`FitTooLarge` before any work when the system's planned memory exceeds ``max_bytes``."""
+        N = self.fld.dim
+        variables = tuple(range(N)) if variables is None else tuple(variables)
+        mons = [_embedded(e, variables, N) for e in monomials(len(variables), delta)]
         cmons = monomials(len(self.known), J) if self.known else [()]
         md = len(mons)
         width = 2 * md * len(cmons)
-        if width > MAX_FIT_UNKNOWNS:
+        if width > (MAX_PLAIN_FIT_UNKNOWNS if J == 0 else MAX_FIT_UNKNOWNS):
             return None
-        start = max(delta + J + 2, math.ceil((width + 2 * self.margin) / (self.steps + 1)))
-        B, count = self._grown(primes[0], delta, J, key, start, width)
+        need = width + self.margin
+        if self.max_bytes is not None and fit_bytes(width, need) > self.max_bytes:
+            raise FitTooLarge(f"a fit with {width} unknowns needs about {_size(fit_bytes(width, need))}, beyond "
+                              f"the memory limit of {_size(self.max_bytes)} (EXACT_KHK_MAX_MEMORY)")
+        count = self._orbits_for(primes[0], mons, need)
+        if count is None:
+            return None
+        count = max(count, delta + J + 2)
+        B, count = self._grown(primes[0], mons, cmons, key, count, width)
         if B is None:
             return None
         vec = self._representative([[int(B[i, j]) for i in range(width)] for j in range(B.ncols())],
-                                   self._junk(delta, J, primes[0]), primes[0])
+                                   self._junk(mons, J, primes[0]), primes[0])
         if vec is None:
             return None  # no pair of this degree, or not unique: the caller raises δ
         per = [(primes[0], [vec])]
         for p in primes[1:]:
-            rows = self._rows(p, delta, J, key, 0, count)
-            if rows is None:
+            A = self._system(p, mons, cmons, key, 0, count)
+            if A is None:
                 continue
-            _, _, basis = canonical_nullspace(rows, width, p)
-            vec = self._representative(basis, self._junk(delta, J, p), p)
+            B = self._nullspace(A, width, p)
+            del A
+            if B is None:
+                continue
+            vec = self._representative([[int(B[i, j]) for i in range(width)] for j in range(B.ncols())],
+                                       self._junk(mons, J, p), p)
             if vec is None:
                 continue
             per.append((p, [vec]))
@@ -370,6 +585,14 @@ class EntryFitter:
         num, den = num / g, den / g
         return ({tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in num.to_dict().items()},
                 {tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in den.to_dict().items()})
+
+
+def _embedded(e, variables, N) -> tuple:
+    """The exponent tuple in all N variables of a monomial ``e`` in the ``variables`` (indices)."""
+    out = [0] * N
+    for i, k in zip(variables, e):
+        out[i] = k
+    return tuple(out)
 
 
 def _value(poly, x):

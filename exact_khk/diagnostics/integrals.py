@@ -66,7 +66,8 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.fitting import MAX_FIT_UNKNOWNS, EntryFitter, circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.fitting import (MAX_FIT_UNKNOWNS, MAX_PLAIN_FIT_UNKNOWNS, EntryFitter, FitTooLarge,
+                                           circuits, entry_jacobian, entry_line, rank_mod)
 from exact_khk.diagnostics.hkbases import hk_basis_integrals
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
@@ -91,6 +92,9 @@ MAX_LEVELS = 40
 #: the degree of a fit's coefficients in the integrals already found (the Lagrange top's integrals
 #: beyond m3 have coefficients of degree 3 in m3)
 MAX_KNOWN_DEGREE = 3
+#: the same in all of them together (k of them: C(k + J, J) coefficient monomials, 20 for k = 3 at J = 3; the
+#: Clebsch system's fits at (δ, J) = (2, 3) in I1..I3, 1 120 unknowns, took 12 of its 63 CPU seconds, all failing)
+MAX_ALL_KNOWN_DEGREE = 2
 
 
 # --- exact evaluation and verification -------------------------------------------------
@@ -300,7 +304,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     start = [] if x0 is None else [parse_vector(x0, "x0", N)]  # exact rationals only, as everywhere
     starts = start + [_point(rng, N) for _ in range(orbits)]
     job = _Job(fld, eps, exps, steps, margin, variables, [], [])
-    job.max_bytes = max_bytes
+    job.max_bytes, job.progress = max_bytes, progress
     if steps + 1 < m + margin:
         job.warnings.append(f"orbit too short: {steps + 1} points for {m} candidates (+ margin {margin}); "
                             f"the kernel has dimension >= {m - steps - 1} for that reason alone")
@@ -380,7 +384,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     return job.result(sysobj, ks, d, tdim, table, w, integrals, independent, used, t0)
 
 
-def fit_shapes(N, k, fit_degree) -> list:
+def fit_shapes(N, k, fit_degree, nvars=None) -> list:
     """The fits tried for one entry, fewest unknowns first: (T, δ, J) with N/D of degree ≤ δ in x and
     coefficients of degree ≤ J in the integrals I_i, i ∈ T, of the k found (J = 0: T empty).
 
@@ -393,10 +397,13 @@ def fit_shapes(N, k, fit_degree) -> list:
     [((), 1, 0), ((0,), 1, 1), ((0,), 1, 2), ((0,), 1, 3)]
     """
     sets = [(i,) for i in range(k)] + ([tuple(range(k))] if k > 1 else [])
-    size = lambda t: 2 * comb(N + t[1], N) * comb(len(t[0]) + t[2], t[2])  # noqa: E731
+    n = lambda T: N if nvars is None else nvars[T]  # noqa: E731
+    size = lambda t: 2 * comb(n(t[0]) + t[1], t[1]) * comb(len(t[0]) + t[2], t[2])  # noqa: E731
     shapes = [((), D, 0) for D in range(1, fit_degree + 1)]
-    shapes += [(T, D, J) for T in sets for D in range(1, fit_degree + 1) for J in range(1, MAX_KNOWN_DEGREE + 1)]
-    return sorted((t for t in shapes if size(t) <= MAX_FIT_UNKNOWNS), key=lambda t: (size(t), t[1], t[2], t[0]))
+    shapes += [(T, D, J) for T in sets for D in range(1, fit_degree + 1)
+               for J in range(1, (MAX_KNOWN_DEGREE if len(T) == 1 else MAX_ALL_KNOWN_DEGREE) + 1)]
+    limit = lambda t: MAX_FIT_UNKNOWNS if t[2] else MAX_PLAIN_FIT_UNKNOWNS  # noqa: E731
+    return sorted((t for t in shapes if size(t) <= limit(t)), key=lambda t: (size(t), t[1], t[2], t[0]))
 
 
 def planned_bytes(m, steps) -> int:
@@ -437,7 +444,8 @@ def _fmt(x):
 class _Job:
     """The fixed data of one search, and its extraction steps."""
 
-    max_bytes = None  # the memory limit of one orbit kernel's basis (find_integrals' max_bytes)
+    max_bytes = None  # the memory limit of one orbit kernel's basis or one fit (find_integrals' max_bytes)
+    progress = None   # find_integrals' progress(stage)
 
     def __init__(self, fld, eps, exps, steps, margin, variables, warnings, notes):
         self.fld, self.eps, self.exps, self.steps, self.margin = fld, eps, exps, steps, margin
@@ -550,9 +558,15 @@ class _Job:
                 continue
             self.notes.append(f"I{len(kept)} from a pencil of the kernel on the level sets {text} = c (candidates "
                               f"free of one of its variables), its coefficients interpolated in c")
-        budget = MAX_FITS
+        budget, orbits = MAX_FITS, {}
         subs = self.level_circuits(kept, ref.x0, p0, seed)
         subs += [[self.exps[c] for c in S] for S in circuits(ref.basis, len(self.exps), p0, seed)]
+        # a support found both on the level sets and in the full kernel carries the same vector: fitted once;
+        # supports in fewer variables first (KQV N = 20: the three-term vectors in 4 variables give 16 of the 19
+        # integrals, fitted in those 4 variables, while fits of entries depending on all 20 fail for minutes)
+        seen = set()
+        subs = [sub for sub in subs if not (frozenset(sub) in seen or seen.add(frozenset(sub)))]
+        subs.sort(key=lambda sub: sum(any(e[j] for e in sub) for j in range(N)))
         for sub in subs[:MAX_CIRCUITS]:
             if len(kept) >= visible or budget <= 0:
                 break
@@ -564,12 +578,18 @@ class _Job:
             for key, grad in [kg for kg in sorted(data[3].items())
                               if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
                 pair = None
-                for T, delta, J in fit_shapes(N, len(kept), fit_degree):
+                for T, delta, J, variables in self.fit_plan(sub, data[0], key, grad, kept, fit_degree, p0, seed):
                     budget -= 1
                     if T not in fitters:
                         fitters[T] = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
-                                                 [kept[i].polynomials() for i in T])
-                    pair = fitters[T].fit(key, delta, primes, J)
+                                                 [kept[i].polynomials() for i in T], self.progress, self.max_bytes,
+                                                 orbits)
+                    try:
+                        pair = fitters[T].fit(key, delta, primes, J, variables)
+                    except FitTooLarge as exc:  # said once: the larger fits are refused the same way
+                        if not any("EXACT_KHK_MAX_MEMORY" in w for w in self.warnings):
+                            self.warnings.append(f"{exc}: not tried, nor any fit as large")
+                        continue
                     if pair is not None:
                         break
                 if pair is None:
@@ -589,6 +609,33 @@ class _Job:
                                  f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "
                                  f"degree <= {fit_degree} (--fit-degree) that the fit found")
         return tuple(kept), len(rows), ((point, len(rows)) if rows else None), visible
+
+    def fit_plan(self, sub, pivots, key, grad, kept, fit_degree, p, seed) -> list:
+        """The fits (T, δ, J, variables) tried for the entry ``key`` of the kernel of ``sub``, fewest unknowns
+        first (:func:`fit_shapes`), in the variables the entry depends on (``grad``, its gradient mod p at
+        the reference point: N/D free of a variable it does not depend on exists whenever one exists) and
+        those of the integrals I_i, i ∈ T; without those that cannot equal the entry on a random line over
+        F_p (:meth:`.fitting.EntryLine.admits`; none when the entry's degree there, never above its degree
+        over Q, exceeds what every fit can reach: N/D of degree ≤ δ with coefficients of degree ≤ J in the
+        I_i (degrees a_i) has degree ≤ δ + J·Σ a_i)."""
+        N = self.fld.dim
+        own = {l for l in range(N) if grad[l] % p}
+        pairs = [f.polynomials() for f in kept]
+        degs = [max(max(map(sum, num)), max(map(sum, den))) for num, den in pairs]
+        uses = [{l for e in list(num) + list(den) for l in range(N) if e[l]} for num, den in pairs]
+        sets = [()] + [(i,) for i in range(len(kept))] + ([tuple(range(len(kept)))] if len(kept) > 1 else [])
+        variables = {T: tuple(sorted(own.union(*(uses[i] for i in T)))) for T in sets}
+        shapes = fit_shapes(N, len(kept), fit_degree, {T: len(v) for T, v in variables.items()})
+        if not shapes:
+            return []
+        line = entry_line(self.fld, self.eps, sub, min(self.steps, len(sub) + self.margin), pivots, key, p,
+                          random.Random(f"line-{seed}"), max(D + J * sum(degs[i] for i in T) for T, D, J in shapes))
+        if line is None:
+            return [(T, D, J, variables[T]) for T, D, J in shapes]
+        if line.A is None:
+            return []
+        on_line = [(line.restrict(num), line.restrict(den)) for num, den in pairs]
+        return [(T, D, J, variables[T]) for T, D, J in shapes if line.admits([on_line[i] for i in T], D, J)]
 
     def linear_integral(self, kept):
         """(j, L, text) for the first linear integral L kept (num or den of degree 1, the other
