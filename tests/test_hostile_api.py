@@ -233,3 +233,11 @@ def test_a_step_size_that_is_zero_in_the_arithmetic_is_named(eps, arith, match):
     with pytest.raises(InputError, match=match):
         KahanMap(F3, eps, arith)
     KahanMap(F3, "1/10", arith)  # control: a nonzero step size in the same arithmetic
+
+
+@pytest.mark.parametrize("bad", ["1G", math.nan, 1.5, 0, True])
+def test_find_integrals_memory_limit_is_an_integer_of_bytes(bad):
+    """max_bytes NaN would switch the memory plan off (every comparison with NaN is false); a text
+    was a raw TypeError: both InputError naming max_bytes."""
+    with pytest.raises(InputError, match="max_bytes"):
+        find_integrals("euler-top", degree=2, max_bytes=bad)

@@ -290,6 +290,8 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     check_count(orbits, "orbits", 2, 50)
     margin = check_count(margin if margin is not None else max(8, m // 10), "margin", 1, 10_000)
     steps = check_count(steps if steps is not None else m + 2 * margin, "steps", 1, 1_000_000)
+    if max_bytes is not None:
+        check_count(max_bytes, "max_bytes", 1, 2 ** 62)  # an int of bytes: never NaN, which disables every comparison
     if max_bytes is not None and planned_bytes(m, steps) > max_bytes:
         raise InputError(f"degree: {m} candidates over orbits of {steps + 1} points need about "
                          f"{planned_bytes(m, steps) / 2 ** 30:.3g} GiB for the evaluation matrices, beyond the memory "
