@@ -50,8 +50,10 @@ MAX_HK_UNKNOWNS = 2500
 MAX_HK_CIRCUITS = 200
 #: pool orbits added while the fit's nullspace has more than one vector, at most
 MAX_HK_EXTRA = 10
-#: fits tried in one search, at most (each a few seconds to half a minute in 6 variables)
-MAX_HK_FITS = 6
+#: fits tried in one search, at most: the first candidate's two shapes (sign-invariant, then all
+#: monomials).  The Clebsch system's fourth integral is its first fit (7 s); on the Lagrange top every
+#: fit fails (six fits: 14 s each, 94 s of a 206 s search)
+MAX_HK_FITS = 2
 #: points of each pool orbit (rows of the fit per orbit)
 POOL_STEPS = 40
 
