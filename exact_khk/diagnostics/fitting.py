@@ -45,7 +45,8 @@ from fractions import Fraction
 import flint
 
 from exact_khk.diagnostics.kernels import (PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
-                                           _size, canonical_nullspace, evaluation_matrix, lift, monomials, to_mpoly)
+                                           _size, canonical_nullspace, evaluation_matrix, lift, monomials,
+                                           orbit_mod_or_none, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
 #: the fit of one entry at degree δ solves a system with 2·C(n + δ, n)·C(k + J, J) unknowns (n the variables
@@ -318,16 +319,11 @@ class EntryFitter:
         self.blocks = {}          # (p, monomials) -> list per pool orbit of the echelon rows of its evaluation
 
     def _orbit(self, start, p):
-        from exact_khk.kahan.map import KahanMap
         x0, cvals = start
         if any(c.denominator % p == 0 for c in cvals):
             return None
         if (tuple(x0), p) not in self.orbits:
-            try:
-                self.orbits[tuple(x0), p] = [[int(t) for t in q]
-                                             for q in KahanMap(self.fld, self.eps, f"gf:{p}").orbit(x0, self.steps)]
-            except (SingularStepError, ZeroDivisionError, InputError):
-                self.orbits[tuple(x0), p] = None
+            self.orbits[tuple(x0), p] = orbit_mod_or_none(self.fld, self.eps, x0, self.steps, p)
         pts = self.orbits[tuple(x0), p]
         if pts is None:
             return None

@@ -39,8 +39,8 @@ import random
 import flint
 
 from exact_khk.diagnostics.fitting import circuits, entry_jacobian, rank_mod
-from exact_khk.diagnostics.kernels import _Evaluator, _point, canonical_nullspace, lift, monomial_text, monomials
-from exact_khk.errors import InputError, SingularStepError
+from exact_khk.diagnostics.kernels import (_Evaluator, _point, canonical_nullspace, lift, monomial_text, monomials,
+                                           orbit_mod_or_none)
 
 #: the highest degree of a fitted numerator or denominator read along the line
 MAX_HK_DEGREE = 12
@@ -56,14 +56,6 @@ MAX_HK_EXTRA = 10
 MAX_HK_FITS = 2
 #: points of each pool orbit (rows of the fit per orbit)
 POOL_STEPS = 40
-
-
-def _orbit(fld, eps, x0, steps, p):
-    from exact_khk.kahan.map import KahanMap
-    try:
-        return [[int(t) for t in q] for q in KahanMap(fld, eps, f"gf:{p}").orbit(x0, steps)]
-    except (SingularStepError, ZeroDivisionError, InputError):
-        return None
 
 
 def _vector(rows, cols, p):
@@ -133,7 +125,7 @@ def _candidates(job, ref, mod_rows, p, seed):
     col = {c: k for k, c in enumerate(support)}
     lines = []
     for t in ts:
-        pts = _orbit(job.fld, job.eps, [x + t * y for x, y in zip(a, b)], job.steps, p)
+        pts = orbit_mod_or_none(job.fld, job.eps, [x + t * y for x, y in zip(a, b)], job.steps, p)
         lines.append(None if pts is None else [ev(q, 1, p) for q in pts])
     out = []
     for S, pairs in raising:
@@ -156,7 +148,7 @@ def _symmetries(job, cols, i, j, p, seed):
     x = _point(random.Random(f"hk-sym-{seed}"), N)
 
     def ratio(y):
-        pts = _orbit(job.fld, job.eps, y, job.steps, p)
+        pts = orbit_mod_or_none(job.fld, job.eps, y, job.steps, p)
         v = None if pts is None else _vector([ev(q, 1, p) for q in pts], list(range(len(cols))), p)
         return None if v is None or not v[j] else v[i] * pow(v[j], -1, p) % p
 
@@ -230,7 +222,7 @@ class _Fit:
                     return None
                 tries += 1
                 self.starts.append(_point(self.rng, self.job.fld.dim))
-            pts = _orbit(self.job.fld, self.job.eps, self.starts[k], POOL_STEPS, p)
+            pts = orbit_mod_or_none(self.job.fld, self.job.eps, self.starts[k], POOL_STEPS, p)
             v = None if pts is None else _vector([ev(q, 1, p) for q in pts], list(range(len(self.sub))), p)
             if v is None:
                 if not first:

@@ -164,6 +164,15 @@ def _orbit_mod(fld, eps, x0, steps, p):
     return [[int(t) for t in pt] for pt in phi.orbit(x0, steps)]
 
 
+def orbit_mod_or_none(fld, eps, x0, steps, p):
+    """:func:`_orbit_mod`, or None where the orbit meets a singular step mod p."""
+    from exact_khk.errors import SingularStepError
+    try:
+        return _orbit_mod(fld, eps, x0, steps, p)
+    except (SingularStepError, ZeroDivisionError, InputError):
+        return None
+
+
 @dataclass
 class _OrbitKernel:
     x0: tuple
