@@ -169,3 +169,15 @@ def test_cli_certify_identities_and_prove_for_a_catalogue_system(capsys):
     assert main(["certify", "--system", "euler-top", "--steps", "3", "--prove"]) == 0
     out = capsys.readouterr().out
     assert "proof: Poisson map Phi_f" in out and "symbolic proof" in out and "VALID" in out
+
+
+def test_a_prime_too_small_for_a_bound_below_one_leaves_the_claims_undecided():
+    """Over F_101 the Euler top's bounds exceed 1: zero residuals prove nothing, so the claims are
+    undecided (None), never holding; the controls still fail exactly (a nonzero residual refutes)."""
+    recs = identity_checks(resolve("euler-top"), "gf:101", trials=2, max_draws=200)
+    claims = [r for r in recs if r.expected and not r.name.startswith("identity: rank")]
+    assert claims and all(r.holds is None for r in claims)
+    assert all("bound <= 1;" in r.evidence or "not available" in r.evidence for r in claims)
+    assert any(r.holds is False for r in recs if not r.expected)
+    big = identity_checks(resolve("euler-top"), trials=2)
+    assert all(r.holds is True for r in big if r.expected)

@@ -377,9 +377,12 @@ def identity_checks(system, arith=None, trials=2, seed=0, claims=None, progress=
             holds, evidence = None, "not available in the identity mode: no degree bound stated for this check"
             first = replace(first, residual="n/a", detail=evidence)
         else:
-            holds = True if all(c.holds for c in at_draws) else None
-            first = replace(first, detail=f"zero at each of the {k} draws" if holds else first.detail)
             bound = min(1.0, d.num / slack) ** k if slack > 0 else 1.0  # 1: no guarantee (P too small)
+            # zero residuals prove nothing where the bound is 1: undecided, never "holds"
+            holds = True if all(c.holds for c in at_draws) and bound < 1.0 else None
+            first = replace(first, detail=f"zero at each of the {k} draws" if holds else
+                            f"zero at each of the {k} draws, but P is too small for a bound below 1: undecided"
+                            if all(c.holds for c in at_draws) else first.detail)
             evidence = (f"probabilistic over F_{P} with failure bound <= {bound:.4g}; {k} random points in "
                         f"F_P^{N + 1}, cleared numerator degree <= {d.num} in (x, eps), bound (d/(P - S*D1 - 1))^k "
                         f"with S = {S} checks, D1 = {D1} (the degree of the denominators one check divides by)"
