@@ -285,3 +285,24 @@ def test_lie_poisson_with_degenerate_orbits_and_a_mixed_kernel():
     assert any("smaller invariant set" in w for w in res.warnings)
     assert res.visible == 3 and len(res.integrals) == 3 and res.independent == 3
     assert check_found(s, res, "1/10", points=2) == 3
+
+
+def test_cmoq_cubic_modified_energy():
+    """A cubic Hamiltonian with constant Poisson matrix (Celledoni, McLachlan, Owren, Quispel 2013):
+    the Kahan map with step h = 2 eps preserves H~ = H + (h/3) grad H^T (I - (h/2) f'(x))^-1 f(x).
+    The integral found at degree 3 is a function of H~: their gradients are parallel (SymPy)."""
+    system = "docs/examples/cubic.toml"
+    res = find_integrals(system, degree=3, eps="1/10")
+    assert (len(res.integrals), res.independent) == (1, 1)
+    assert check_found(system, res, "1/10") == 1
+    q, p = xs = sympy.symbols("q p")
+    eps = sympy.Rational(1, 10)
+    H = p ** 2 / 2 + q ** 3 / 3 - q ** 2 / 2
+    grad = sympy.Matrix([H.diff(q), H.diff(p)])
+    f = sympy.Matrix([[0, 1], [-1, 0]]) * grad
+    modified = H + (2 * eps / 3) * (grad.T * (sympy.eye(2) - eps * f.jacobian(xs)).LUsolve(f))[0]
+    found = as_sympy(res.integrals[0], xs)
+    assert not sympy.cancel(found.diff(q)).is_zero                       # not a constant
+    assert sympy.cancel(found.diff(q) * modified.diff(p) - found.diff(p) * modified.diff(q)) == 0
+    # the negative control: the unmodified energy H is not a function of the found integral
+    assert sympy.cancel(found.diff(q) * H.diff(p) - found.diff(p) * H.diff(q)) != 0
