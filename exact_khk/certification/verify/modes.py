@@ -161,6 +161,9 @@ class Identities:
                 return d, f"{key} is {_short(have)}, but re-derived it is {_short(want)}", None
         holds, residual, applicable, j = self.merged(i)
         evidence, P = c.get("evidence", ""), self.P
+        if holds is False and c["holds"] is not False and applicable:  # a refutation is exact: said first
+            return d, (f"recorded holds = {_tf(c['holds'])}, re-derived holds = false (refuted at draw {j}: a "
+                       f"nonzero residual {residual} mod P)"), None
         note = ""
         if _is_rank(rec):
             pattern = (rf"exact over F_{P}: rank r at a random point proves generic rank r over Q \(a nonzero r x r "
@@ -181,11 +184,13 @@ class Identities:
             if m is None or not re.fullmatch(_NOTE, evidence[m.end():]):
                 return d, f"evidence is {_short(evidence)}, but re-derived it is the Schwartz–Zippel bound " \
                           f"'probabilistic over F_{P} with failure bound <= ...'", None
-            p, shown, k, dims, deg, S, D1 = (int(t) if t.isdigit() else t for t in m.groups())
+            shown = m.group(2)
+            p, k, dims, deg, S, D1 = (int(m.group(g)) for g in (1, 3, 4, 5, 6, 7))
             low, high = counts
             if (p, k, dims) != (P, DRAWS, self.N + 1) or not low <= S <= high:
+                S_range = f"S = {low}" if low == high else f"S from {low} to {high}"
                 return d, (f"evidence states P = {p}, {k} random points in F_P^{dims}, S = {S} checks; re-derived: "
-                           f"P = {P}, {DRAWS} points in F_P^{self.N + 1}, S between {low} and {high}"), None
+                           f"P = {P}, {DRAWS} points in F_P^{self.N + 1}, {S_range}"), None
             if shown != f"{stated_bound(deg, S, D1, P, k):.4g}":
                 return d, (f"evidence states failure bound <= {shown}, but (d/(P - S*D1 - 1))^k with its own d = "
                            f"{deg}, S = {S}, D1 = {D1}, k = {k} is {stated_bound(deg, S, D1, P, k):.4g}"), None
