@@ -303,8 +303,9 @@ def test_records_of_the_identity_mode_are_rederived(tmp_path, capsys):
     assert report.ok and not report.partial and report.exit_status == 0, report.summary()
     assert report.rederived == len(d["checks"])
     assert report.verdict().startswith(f"VERIFIED: the record of this VALID certificate is correct: re-derived "
-                                       f"{len(d['checks'])} of {len(d['checks'])} records ({len(others)} as "
-                                       f"identities at the verifier's own random draws over F_P")
+                                       f"{len(d['checks'])} of {len(d['checks'])} records independently, with its "
+                                       f"orbit, values and status ({len(others)} of them as identities at the "
+                                       f"verifier's own random draws over F_P")
     path = tmp_path / "identities.json"
     path.write_text(json.dumps(d))
     assert main(["verify", str(path)]) == 0

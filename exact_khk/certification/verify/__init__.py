@@ -96,15 +96,15 @@ class VerifyReport:
     def verdict(self) -> str:
         """One line: ``VERIFIED: ...``, ``PARTIALLY VERIFIED: ...`` or ``NOT VERIFIED: <first failing check>: ...``."""
         count = f"re-derived {self.rederived} of {self.records} records"
-        if self.modes:
-            count += f" ({'; '.join(self.modes)})"
+        how = f" ({'; '.join(self.modes)})" if self.modes else ""
         if self.ok and not self.partial:
             return (f"VERIFIED: the record of this {self._status} certificate is correct: {count} "
-                    f"independently{'' if self.modes else ' and exactly'}, with its orbit, values and status")
+                    f"{'independently' if self.modes else 'exactly and independently'}, with its orbit, values and "
+                    f"status{how}")
         if self.ok:
             what = "; ".join(self.not_rechecked[:3]) + (" ..." if len(self.not_rechecked) > 3 else "")
-            return (f"PARTIALLY VERIFIED: the {self._status} certificate is correct as far as re-derived: {count}; "
-                    f"not re-checked: {what}")
+            return (f"PARTIALLY VERIFIED: the {self._status} certificate is correct as far as re-derived: {count}"
+                    f"{how}; not re-checked: {what}")
         name, _, detail = self.failures()[0] if self.failures() else ("no results", False, "")
         more = len(self.failures()) - 1
         tail = f" (and {more} more failing check{'s' * (more != 1)})" if more > 0 else ""
@@ -189,7 +189,7 @@ def verify(data, seed=None, proof_budget=None) -> VerifyReport:
                         (PROOF, "as identities of rational functions in SymPy")):
         k = sum(1 for d in derived if d.get("_rederived") and d["name"].startswith(prefix))
         if k:
-            modes.append(f"{k} {how}")
+            modes.append(f"{k} of them {how}")
     return VerifyReport(ok, tuple(results), True, total, rederived, tuple(skipped), notes, tuple(modes))
 
 
@@ -211,16 +211,21 @@ def _records(cert, data, F, orbit_ok, seed=None, proof_budget=None):
     if first is not None:
         try:
             modes[IDENTITY] = Identities(cert, data, ctx.chosen, first["arith"], seed)
-            want += modes[IDENTITY].names()
+            want += modes[IDENTITY].names
         except Undefined as exc:
             modes[IDENTITY] = None
             out.append(("identity records", False, f"cannot be re-derived: {exc}"))
     if any(n.startswith(PROOF) for n in recorded):
         kw = {} if proof_budget is None else {"budget": proof_budget}
-        modes[PROOF] = Proofs(cert, data, ctx.chosen, **kw)
-        want += modes[PROOF].names
-    # coverage: exactly the implied records, in order
-    diff = _first_difference(want, recorded) if all(modes.values()) else None
+        try:
+            modes[PROOF] = Proofs(cert, data, ctx.chosen, **kw)
+            want += modes[PROOF].names
+        except Undefined as exc:
+            modes[PROOF] = None
+            out.append(("proof records", False, f"cannot be re-derived: {exc}"))
+    # coverage: exactly the implied records, in order (those of a mode that cannot be listed left out)
+    listed = [n for n in recorded if not any(n.startswith(p) and modes[p] is None for p in modes)]
+    diff = _first_difference(want, listed)
     if diff:
         out.insert(0, ("records cover the claims", False, diff))
     elif all(modes.values()):
@@ -232,7 +237,7 @@ def _records(cert, data, F, orbit_ok, seed=None, proof_budget=None):
         out.append(("claim selection", True, selection + ": not re-checked"))
         skipped.append("the claims the certificate leaves out")
     proofs = modes.get(PROOF)
-    if proofs is not None and proofs.why:
+    if proofs and proofs.why:
         out.append(("proof records", True, f"not re-checked: {proofs.why}"))
     derived = []
     by_name = {r.name: r for r in expected}
@@ -243,13 +248,12 @@ def _records(cert, data, F, orbit_ok, seed=None, proof_budget=None):
         mode = next((p for p in modes if name.startswith(p)), None)
         if mode is not None:
             engine = modes[mode]
-            if engine is None or (mode == IDENTITY and name not in engine.records) or \
-                    (mode == PROOF and (engine.why or name not in engine.results)):
-                if engine is not None and mode == PROOF and engine.why and name in engine.names:
+            if engine is None or not engine.rederives(name):
+                if engine is not None and engine.why and name in engine.names:
                     skipped.append(name)
                 derived.append(dict(c))
                 continue
-            d, problem, detail = engine.check(c, counts) if mode == IDENTITY else engine.check(c)
+            d, problem, detail = engine.check(c, counts)
             derived.append(d)
             out.append((f"record {name}", problem is None, problem or detail))
             continue

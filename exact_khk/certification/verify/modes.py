@@ -39,6 +39,8 @@ DRAWS, MAX_ATTEMPTS = 2, 20
 #: top's 19 proof records, N = 3, in about 2 s on a loaded 2-core machine), and the time budget
 #: for all of them (seconds; checked between records and at each constant of the field)
 PROOF_MAX_DIM, PROOF_BUDGET = 3, 60.0
+#: the prime of the random point at which the proof records are listed (their names do not depend on it)
+NAMES_PRIME = 4611686018420360881
 
 
 def identity_claim(statement: str, N: int) -> str:
@@ -125,9 +127,10 @@ class Identities:
                 continue
             self.draws.append((recs, results))
         self.records = {IDENTITY + r.name: i for i, r in enumerate(self.draws[0][0])}
+        self.names, self.why = list(self.records), None
 
-    def names(self) -> list:
-        return list(self.records)
+    def rederives(self, name) -> bool:
+        return name in self.records
 
     def about(self) -> str:
         redrawn = f", {len(self.singular)} singular draw(s) redrawn" if self.singular else ""
@@ -289,8 +292,7 @@ class Proofs:
         self.signs = rational_signs(cert.system.n) if lp else None
         t0 = time.monotonic()
         # the list of records (names and statements) at a point of F_P: it does not depend on the point
-        F = _PrimeField(4611686018420360881)
-        rng = random.Random(0)
+        F, rng = _PrimeField(NAMES_PRIME), random.Random(0)
         for _ in range(MAX_ATTEMPTS):
             try:
                 ctx = Context.generic(cert, data, F, [F.of(rng.randrange(F.P)) for _ in range(N)],
@@ -299,6 +301,8 @@ class Proofs:
                 break
             except UNDEFINED:
                 continue
+        else:  # not met: a step or a statement undefined at 20 random points of F_P
+            raise Undefined(f"the proof records cannot be listed: undefined at {MAX_ATTEMPTS} random points")
         if N > PROOF_MAX_DIM:
             self.why = (f"a symbolic proof in dimension {N}: this verifier re-derives proofs up to dimension "
                         f"{PROOF_MAX_DIM} (PROOF_MAX_DIM)")
@@ -315,7 +319,10 @@ class Proofs:
             self.why = f"a symbolic proof beyond the verifier's time budget of {budget:g} s (PROOF_BUDGET)"
         self.K, self.seconds = (K if self.why is None else None), time.monotonic() - t0
 
-    def check(self, c):
+    def rederives(self, name) -> bool:
+        return self.why is None and name in self.results
+
+    def check(self, c, counts=None):
         """(re-derived record, problem or None, detail) of the recorded proof record ``c``."""
         rec, (holds, residual, applicable) = self.results[c["name"]]
         d = dict(c)
