@@ -23,13 +23,19 @@ never calls the library's Kahan map, linear algebra, arithmetic contexts or
 certification engines.  From the library it takes the reading of the input: the
 certificate's structure (:meth:`Certificate.from_json`), rationals
 (:func:`~exact_khk.parsing.parse_rational`) and the system parsing (the field's
-coefficients, the integrals' reduced form where their text divides by zero).
+coefficients, the integrals' reduced form where their text divides by zero); and SymPy's
+rational functions for the proofs.
 
-Records it cannot re-derive (the Schwartz–Zippel ``identity:`` records and the
-symbolic ``proof:`` records) are reported **not re-checked**: the result is then
-``PARTIALLY VERIFIED`` (exit status 4), never ``VERIFIED``; so is a certificate of
-a system file that covers only some of the claims the system declares (a
-``--claims`` selection, which the certificate does not record).
+The records of the engine's other modes (:mod:`.modes`) are the same records at a generic
+point, and must be exactly the identity / proof versions of the list above: the
+Schwartz–Zippel ``identity:`` records of ``certify --identities`` are re-derived at the
+verifier's own random draws over F_P (its failure bound uses the degree bounds the
+records state), the symbolic ``proof:`` records of ``certify --prove`` in SymPy's
+Q(x, ε) up to dimension 3 and within a time budget.  Records it cannot re-derive (proofs
+beyond those) are reported **not re-checked**: the result is then ``PARTIALLY VERIFIED``
+(exit status 4), never ``VERIFIED``; so is a certificate of a system file that covers
+only some of the claims the system declares (a ``--claims`` selection, which the
+certificate does not record).
 
 >>> from exact_khk.certification.lie_poisson import certify
 >>> data = certify(steps=2, signs=["-++"]).to_json()
