@@ -125,6 +125,8 @@ TAMPER = {
     "evidence upgraded": lambda d, i: tamper_record(d, i, evidence="symbolic proof: identity in Q(x, eps)"),
     "failure bound lowered": lambda d, i: tamper_record(
         d, i, evidence=re.sub(r"failure bound <= \S+;", "failure bound <= 1e-99;", d["checks"][i]["evidence"])),
+    "control evidence upgraded": lambda d, i: tamper_record(d, first_control(d), evidence="symbolic disproof"),
+    "control made inapplicable": lambda d, i: tamper_record(d, first_control(d), applicable=False),
     "prime changed in arith": lambda d, i: tamper_record(d, i, arith="gf:1000003"),
     "arith not a prime": lambda d, i: tamper_record(d, i, arith="gf:1000001"),
 }
@@ -155,6 +157,14 @@ def test_identity_records_dropped_invented_or_reordered(certs, which):
     ids = mode_records(d, "identity: ")
     d["checks"][ids[0]], d["checks"][ids[1]] = d["checks"][ids[1]], d["checks"][ids[0]]
     refused(d, "records reordered")
+
+
+def test_the_family_rank_records_are_rederived(certs):
+    d = copy.deepcopy(certs["lp2"])
+    c = next(c for c in d["checks"] if c["name"].startswith("identity: rank of integral gradients ("))
+    assert c["residual"] == "rank 2"
+    c["residual"] = "rank 3"
+    refused(d, f"record {c['name']}: recorded residual 'rank 3', re-derived 'rank 2'")
 
 
 def test_every_identity_record_with_the_prime_changed_is_refused(certs):

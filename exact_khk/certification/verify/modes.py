@@ -206,7 +206,7 @@ class Identities:
                     f"d = {deg}, S = {S}, D1 = {D1} (the engine's Deg of the claim: read, not re-derived)")
             pattern = None
         if pattern is not None and not re.fullmatch(pattern, evidence):
-            return d, f"evidence is {_short(evidence)}, but re-derived it is {_short(pattern)}", None
+            return d, f"evidence is {_short(evidence)}, but re-derived it is {_short(_readable(pattern))}", None
         d.update(holds=holds, applicable=applicable, _rederived=True)
         if c["holds"] != holds:
             return d, f"recorded holds = {_tf(c['holds'])}, re-derived holds = {_tf(holds)} ({how})", None
@@ -359,6 +359,11 @@ class Proofs:
         kind = "claim" if rec.expected else "control"
         state = "inapplicable" if not applicable else f"holds = {_tf(holds)}, residual {how}"
         return d, None, f"proof {kind}, re-derived in SymPy's {ring}: {state}; as recorded"
+
+
+def _readable(pattern: str) -> str:
+    """An evidence pattern as text: 'draw k' for a number, without the optional redraw note."""
+    return pattern.replace(_NOTE, "").replace(r"\d+", "k").replace("\\", "")
 
 
 def _tf(v) -> str:
