@@ -35,9 +35,9 @@ def register(sub):
                        "is recomputed, the records are exactly those the system and options imply, and each "
                        "record's statement, evidence, holds, residual and applicability are recomputed, then the "
                        "status. Plain exact arithmetic, independent of the library's solvers and certification "
-                       "engines; the records of --identities at its own random draws over F_P, those of --prove in "
-                       "SymPy up to dimension 3 (docs/verify.md). Exit status 0 VERIFIED, 1 NOT VERIFIED, 2 unreadable or "
-                       "malformed file, 4 PARTIALLY VERIFIED (some records not re-checked).")
+                       "engines; the records of --identities at its own random draws over F_P, those of --prove "
+                       "in SymPy up to dimension 3 (docs/verify.md). Exit status 0 VERIFIED, 1 NOT VERIFIED, "
+                       "2 unreadable or malformed file, 4 PARTIALLY VERIFIED (some records not re-checked).")
     p.add_argument("certificate", metavar="CERT.json", nargs="?", help="the certificate file")
     p.add_argument("--seed", type=int, metavar="S",
                    help="seed of the verifier's own random draws over F_P for the certificate's 'identity:' "

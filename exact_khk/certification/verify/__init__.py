@@ -49,15 +49,13 @@ certificate does not record).
 
 from __future__ import annotations
 
-from dataclasses import replace, dataclass
+from dataclasses import dataclass
 
 from exact_khk.certification.verify.fields import (RATIONAL_ARITHS, Undefined, _Evaluate, _Rationals,  # noqa: F401
                                                    cyclotomic_polynomial, exact_field, _show)
 from exact_khk.certification.verify.orbit import _Recheck
 from exact_khk.certification.verify.modes import IDENTITY, PROOF, Identities, Proofs
-from exact_khk.certification.verify.records import (EXPRESSION_KINDS, LIE_POISSON_KINDS, Context,  # noqa: F401
-                                                    Expressions, LiePoisson, declared_claims, expected_records,
-                                                    rederive)
+from exact_khk.certification.verify.records import Context, expected_records, rederive
 from exact_khk.errors import InputError
 
 __all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotomic_polynomial", "RATIONAL_ARITHS",
