@@ -209,6 +209,7 @@ PROOF_TAMPER = {
     "evidence changed": lambda d, i: tamper_record(d, i, evidence="symbolic proof: identity in Q(x0, eps)"),
     "residual of a claim": lambda d, i: tamper_record(d, i, residual="x0 - 1"),
     "residual of a control": lambda d, i: tamper_record(d, first_control(d, "proof: "), residual="x0 - 1"),
+    "residual not a rational function": lambda d, i: tamper_record(d, first_control(d, "proof: "), residual="exit()"),
     "arith": lambda d, i: tamper_record(d, i, arith="qfunc[x0,x1,eps,t]"),
     "dropped": lambda d, i: d["checks"].pop(i)["name"],
     "invented": lambda d, i: d["checks"].insert(i, dict(d["checks"][i], name="proof: integral Q conserved"))

@@ -41,6 +41,8 @@ DRAWS, MAX_ATTEMPTS = 2, 20
 #: and the time budget for all of them (seconds; checked between records and at each constant of
 #: the field)
 PROOF_MAX_DIM, PROOF_BUDGET = 3, 60.0
+#: the longest recorded residual of a proof record parsed (the engine abbreviates beyond 300 characters)
+RESIDUAL_CHARS = 10_000
 #: the prime of the random point at which the proof records are listed (their names do not depend on it)
 NAMES_PRIME = 4611686018420360881
 
@@ -271,7 +273,9 @@ class _SymPyField:
         from sympy import Symbol
         from sympy.parsing.sympy_parser import parse_expr
 
-        if not re.fullmatch(r"[0-9a-z_^*/+\- ()]+", text) or len(text) > 100_000:
+        # only numbers, the symbols and + - * / ^ ( ): nothing else reaches SymPy's parser (which evaluates)
+        if len(text) > RESIDUAL_CHARS or not re.fullmatch(r"[0-9a-z_^*/+\- ()]+", text) or \
+                not set(re.findall(r"[a-z_]\w*", text)) <= set(self.names):
             return None
         try:
             expr = parse_expr(text.replace("^", "**"), local_dict={s: Symbol(s) for s in self.names},
