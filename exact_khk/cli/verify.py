@@ -7,6 +7,10 @@ record or result differs — a tampered certificate —, or the certificate was
 computed in an inexact arithmetic and cannot be re-checked exactly); 2 an
 unreadable or malformed file (one line on stderr); 4 PARTIALLY VERIFIED (all that
 was re-derived agrees, but some records were not re-checked).
+
+The ``identity:`` records of ``certify --identities`` are re-derived at the verifier's own random
+draws (``--seed`` makes them reproducible), the ``proof:`` records of ``certify --prove`` in SymPy
+up to dimension 3 (docs/verify.md).
 """
 
 from __future__ import annotations
@@ -31,9 +35,13 @@ def register(sub):
                        "is recomputed, the records are exactly those the system and options imply, and each "
                        "record's statement, evidence, holds, residual and applicability are recomputed, then the "
                        "status. Plain exact arithmetic, independent of the library's solvers and certification "
-                       "engines (docs/verify.md). Exit status 0 VERIFIED, 1 NOT VERIFIED, 2 unreadable or "
-                       "malformed file, 4 PARTIALLY VERIFIED (some records not re-checked).")
+                       "engines; the records of --identities at its own random draws over F_P, those of --prove "
+                       "in SymPy up to dimension 3 (docs/verify.md). Exit status 0 VERIFIED, 1 NOT VERIFIED, "
+                       "2 unreadable or malformed file, 4 PARTIALLY VERIFIED (some records not re-checked).")
     p.add_argument("certificate", metavar="CERT.json", nargs="?", help="the certificate file")
+    p.add_argument("--seed", type=int, metavar="S",
+                   help="seed of the verifier's own random draws over F_P for the certificate's 'identity:' "
+                        "records (default: fresh from the operating system; the report states the seed used)")
     add_json_option(p, "the report")
     p.set_defaults(func=cmd_verify)
 
@@ -64,7 +72,7 @@ def cmd_verify(args):
     check_output(args.json)
     data = read_certificate(args.certificate)
     try:
-        report = verify(data)
+        report = verify(data, seed=args.seed)
     except InputError as exc:
         raise InputError(f"{args.certificate}: {exc}") from None
     if args.json is not None:

@@ -23,13 +23,19 @@ never calls the library's Kahan map, linear algebra, arithmetic contexts or
 certification engines.  From the library it takes the reading of the input: the
 certificate's structure (:meth:`Certificate.from_json`), rationals
 (:func:`~exact_khk.parsing.parse_rational`) and the system parsing (the field's
-coefficients, the integrals' reduced form where their text divides by zero).
+coefficients, the integrals' reduced form where their text divides by zero); and SymPy's
+rational functions for the proofs.
 
-Records it cannot re-derive (the Schwartz–Zippel ``identity:`` records and the
-symbolic ``proof:`` records) are reported **not re-checked**: the result is then
-``PARTIALLY VERIFIED`` (exit status 4), never ``VERIFIED``; so is a certificate of
-a system file that covers only some of the claims the system declares (a
-``--claims`` selection, which the certificate does not record).
+The records of the engine's other modes (:mod:`.modes`) are the same records at a generic
+point, and must be exactly the identity / proof versions of the list above: the
+Schwartz–Zippel ``identity:`` records of ``certify --identities`` are re-derived at the
+verifier's own random draws over F_P (its failure bound uses the degree bounds the
+records state), the symbolic ``proof:`` records of ``certify --prove`` in SymPy's
+Q(x, ε) up to dimension 3 and within a time budget.  Records it cannot re-derive (proofs
+beyond those) are reported **not re-checked**: the result is then ``PARTIALLY VERIFIED``
+(exit status 4), never ``VERIFIED``; so is a certificate of a system file that covers
+only some of the claims the system declares (a ``--claims`` selection, which the
+certificate does not record).
 
 >>> from exact_khk.certification.lie_poisson import certify
 >>> data = certify(steps=2, signs=["-++"]).to_json()
@@ -43,13 +49,13 @@ a system file that covers only some of the claims the system declares (a
 
 from __future__ import annotations
 
-from dataclasses import replace, dataclass
+from dataclasses import dataclass
 
 from exact_khk.certification.verify.fields import (RATIONAL_ARITHS, Undefined, _Evaluate, _Rationals,  # noqa: F401
                                                    cyclotomic_polynomial, exact_field, _show)
 from exact_khk.certification.verify.orbit import _Recheck
-from exact_khk.certification.verify.records import (EXPRESSION_KINDS, LIE_POISSON_KINDS, Context, Expressions,
-                                                    LiePoisson, declared_claims, rederive)
+from exact_khk.certification.verify.modes import IDENTITY, PROOF, Identities, Proofs
+from exact_khk.certification.verify.records import Context, expected_records, rederive
 from exact_khk.errors import InputError
 
 __all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotomic_polynomial", "RATIONAL_ARITHS",
@@ -59,11 +65,6 @@ __all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotom
 SCHEMA_VERSIONS = (2,)
 #: top-level keys a certificate may carry that are informational: shown, not re-checked, not counted
 INFORMATIONAL = ("invocation", "seconds", "versions", "height_bits", "path")
-#: records of the engine's other modes (identity, symbolic), which this verifier does not re-derive (name prefix -> what they are)
-NOT_RECHECKED = {"identity: ": "a Schwartz–Zippel identity over F_p (certify --identities)",
-                 "proof:": "a symbolic proof (certify --prove)"}
-
-
 @dataclass(frozen=True)
 class VerifyReport:
     """The outcome of :func:`verify`: ``results`` is a tuple of ``(name, ok, detail)``;
@@ -80,6 +81,8 @@ class VerifyReport:
     rederived: int = 0
     not_rechecked: tuple = ()
     notes: tuple = ()
+    #: how the records of the other modes were re-derived (one phrase per mode), for the verdict
+    modes: tuple = ()
 
     @property
     def partial(self) -> bool:
@@ -97,13 +100,15 @@ class VerifyReport:
     def verdict(self) -> str:
         """One line: ``VERIFIED: ...``, ``PARTIALLY VERIFIED: ...`` or ``NOT VERIFIED: <first failing check>: ...``."""
         count = f"re-derived {self.rederived} of {self.records} records"
+        how = f" ({'; '.join(self.modes)})" if self.modes else ""
         if self.ok and not self.partial:
-            return (f"VERIFIED: the record of this {self._status} certificate is correct: {count} exactly and "
-                    f"independently, with its orbit, values and status")
+            return (f"VERIFIED: the record of this {self._status} certificate is correct: {count} "
+                    f"{'independently' if self.modes else 'exactly and independently'}, with its orbit, values and "
+                    f"status{how}")
         if self.ok:
             what = "; ".join(self.not_rechecked[:3]) + (" ..." if len(self.not_rechecked) > 3 else "")
-            return (f"PARTIALLY VERIFIED: the {self._status} certificate is correct as far as re-derived: {count}; "
-                    f"not re-checked: {what}")
+            return (f"PARTIALLY VERIFIED: the {self._status} certificate is correct as far as re-derived: {count}"
+                    f"{how}; not re-checked: {what}")
         name, _, detail = self.failures()[0] if self.failures() else ("no results", False, "")
         more = len(self.failures()) - 1
         tail = f" (and {more} more failing check{'s' * (more != 1)})" if more > 0 else ""
@@ -123,14 +128,16 @@ class VerifyReport:
     def to_json(self) -> dict:
         return {"ok": self.ok, "checkable": self.checkable, "partial": self.partial, "verdict": self.verdict(),
                 "records": self.records, "rederived": self.rederived, "not_rechecked": list(self.not_rechecked),
-                "notes": list(self.notes),
+                "notes": list(self.notes), "modes": list(self.modes),
                 "results": [{"name": n, "ok": ok, "detail": d} for n, ok, d in self.results]}
 
 
-def verify(data) -> VerifyReport:
+def verify(data, seed=None, proof_budget=None) -> VerifyReport:
     """Re-derive the certificate ``data`` (the JSON dict of ``Certificate.to_json``); see
-    the module docstring.  Malformed structures raise :class:`~exact_khk.errors.InputError`
-    naming the field."""
+    the module docstring.  ``seed``: of the verifier's own random draws for the ``identity:``
+    records (default: fresh, from the operating system; the report states it);
+    ``proof_budget``: seconds for the ``proof:`` records (default :data:`~.modes.PROOF_BUDGET`).
+    Malformed structures raise :class:`~exact_khk.errors.InputError` naming the field."""
     from exact_khk.certification.records import Certificate
 
     if not isinstance(data, dict):
@@ -173,43 +180,28 @@ def verify(data) -> VerifyReport:
     results += _Recheck(cert, data, F).run()
     orbit_ok = all(ok for _, ok, _ in results)
     try:
-        derived, skipped, record_results = _records(cert, data, F, orbit_ok)
+        derived, skipped, record_results = _records(cert, data, F, orbit_ok, seed, proof_budget)
     except Undefined as exc:  # e.g. x0 with a denominator divisible by P in a gf:P certificate
         derived, skipped, record_results = data["checks"], [], [("records", False, f"cannot be re-derived: {exc}")]
     results += record_results
     results += _status_results(data, derived, skipped)
     ok = all(ok for _, ok, _ in results)
     rederived = sum(1 for d in derived if d.get("_rederived"))
-    return VerifyReport(ok, tuple(results), True, total, rederived, tuple(skipped), notes)
+    modes = []
+    for prefix, how in ((IDENTITY, "as identities at the verifier's own random draws over F_P, "
+                                   "each with its failure bound"),
+                        (PROOF, "as identities of rational functions in SymPy")):
+        k = sum(1 for d in derived if d.get("_rederived") and d["name"].startswith(prefix))
+        if k:
+            modes.append(f"{k} of them {how}")
+    return VerifyReport(ok, tuple(results), True, total, rederived, tuple(skipped), notes, tuple(modes))
 
 
 _KNOWN = set(INFORMATIONAL) | {"schema_version", "system", "x0", "eps", "steps", "arith", "signs", "status", "valid",
                                "verdict", "orbit", "values", "checks"}
 
 
-def expected_records(ctx) -> tuple:
-    """(the records the certificate's system and options imply, a note on the claim selection or None)."""
-    if getattr(ctx.system, "kind", "") == "lie-poisson":
-        lp = LiePoisson(ctx)
-        return [r for kind in LIE_POISSON_KINDS for r in kind(lp)], None
-    ex = Expressions(ctx)
-    known, own = declared_claims(ctx.system)
-    by_kind = {k: EXPRESSION_KINDS[k](ex) for k in known}
-    names = set(ctx.checks)
-    chosen = [k for k in known if any(r.name in names for r in by_kind[k])] or list(own)
-    note = None
-    if tuple(chosen) != own:
-        note = (f"the records cover the claims {', '.join(chosen)}; the system's own list is {', '.join(own)} "
-                f"(a --claims selection, which the certificate does not record)")
-    from exact_khk.certification.verify.records import ex_declared_controls
-
-    records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(ex)
-    # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
-    fixed = lambda: "x0 is a fixed point of Phi_f" if ex.ctx.same(ex.ctx.pts[1], ex.ctx.pts[0]) else None  # noqa: E731
-    return [r if r.expected else replace(r, always=fixed) for r in records], note
-
-
-def _records(cert, data, F, orbit_ok):
+def _records(cert, data, F, orbit_ok, seed=None, proof_budget=None):
     """Re-derive every record; returns (the checks with re-derived fields, the names not re-checked,
     results)."""
     checks = data["checks"]
@@ -217,38 +209,77 @@ def _records(cert, data, F, orbit_ok):
     ctx = Context(cert, data, F, {c.name: c for c in cert.checks})
     expected, selection = expected_records(ctx)
     want = [r.name for r in expected]
-    tail = [n for n in recorded[len(want):] if any(n.startswith(p) for p in NOT_RECHECKED)]
-    out = []
-    # coverage: exactly the implied records, in order (then the records of the other modes, not re-checked)
-    diff = _first_difference(want, recorded[:len(recorded) - len(tail)])
+    out, skipped, modes = [], [], {}
+    # the other modes: their records are there iff certify ran them (--identities, --prove)
+    first = next((c for c in checks if c["name"].startswith(IDENTITY)), None)
+    if first is not None:
+        try:
+            modes[IDENTITY] = Identities(cert, data, ctx.chosen, first["arith"], seed)
+            want += modes[IDENTITY].names
+        except Undefined as exc:
+            modes[IDENTITY] = None
+            out.append(("identity records", False, f"cannot be re-derived: {exc}"))
+    if any(n.startswith(PROOF) for n in recorded):
+        kw = {} if proof_budget is None else {"budget": proof_budget}
+        try:
+            modes[PROOF] = Proofs(cert, data, ctx.chosen, **kw)
+            want += modes[PROOF].names
+        except Undefined as exc:
+            modes[PROOF] = None
+            out.append(("proof records", False, f"cannot be re-derived: {exc}"))
+    # coverage: exactly the implied records, in order (those of a mode that cannot be listed left out)
+    listed = [n for n in recorded if not any(n.startswith(p) and modes[p] is None for p in modes)]
+    diff = _first_difference(want, listed)
     if diff:
-        out.append(("records cover the claims", False, diff))
-    else:
-        out.append(("records cover the claims", True, f"the {len(want)} records the system and options imply, "
-                    f"in order" + (f", and {len(tail)} of other modes" if tail else "")))
-    skipped = []
+        out.insert(0, ("records cover the claims", False, diff))
+    elif all(modes.values()):
+        parts = [f"{len(want) - sum(1 for n in want if n.startswith((IDENTITY, PROOF)))} exact"] + \
+            [f"{sum(1 for n in want if n.startswith(p))} {p[:-2]}" for p in modes]
+        out.insert(0, ("records cover the claims", True, f"the {len(want)} records the system and options imply "
+                       f"({', '.join(parts)}), in order"))
     if selection:
         out.append(("claim selection", True, selection + ": not re-checked"))
         skipped.append("the claims the certificate leaves out")
+    proofs = modes.get(PROOF)
+    if proofs and proofs.why:
+        out.append(("proof records", True, f"not re-checked: {proofs.why}"))
     derived = []
     by_name = {r.name: r for r in expected}
     cache_key = data_key(data)
+    counts = _identity_counts(checks)
     for c in checks:
-        rec = by_name.pop(c["name"], None)
+        name = c["name"]
+        mode = next((p for p in modes if name.startswith(p)), None)
+        if mode is not None:
+            engine = modes[mode]
+            if engine is None or not engine.rederives(name):
+                if engine is not None and engine.why and name in engine.names:
+                    skipped.append(name)
+                derived.append(dict(c))
+                continue
+            d, problem, detail = engine.check(c, counts)
+            derived.append(d)
+            out.append((f"record {name}", problem is None, problem or detail))
+            continue
+        rec = by_name.pop(name, None)
         if rec is None:
-            if any(c["name"].startswith(p) for p in NOT_RECHECKED):
-                why = next(w for p, w in NOT_RECHECKED.items() if c["name"].startswith(p))
-                skipped.append(c["name"])
-                out.append((f"record {c['name']}", True, f"not re-checked: {why}"))
             derived.append(dict(c))
             continue
         d, problem = _one_record(rec, c, cert, F, orbit_ok, cache_key)
         derived.append(d)
         if problem is None:
-            out.append((f"record {c['name']}", True, _describe(d)))
+            out.append((f"record {name}", True, _describe(d)))
         else:
-            out.append((f"record {c['name']}", False, problem))
+            out.append((f"record {name}", False, problem))
     return derived, skipped, out
+
+
+def _identity_counts(checks) -> tuple:
+    """(identity claim records whose evidence states a degree bound, identity claim records other than
+    rank): the range of S, the number of checks with a bound, in the engine's failure bound."""
+    claims = [c for c in checks if c["name"].startswith(IDENTITY) and c["expected"]]
+    return (sum(1 for c in claims if str(c.get("evidence", "")).startswith("probabilistic")),
+            sum(1 for c in claims if not c["name"].startswith(IDENTITY + "rank ")))
 
 
 def _first_difference(want, got) -> str | None:

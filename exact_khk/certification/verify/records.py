@@ -15,7 +15,7 @@ Each kind of claim is one function in one table (:data:`LIE_POISSON_KINDS`,
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 from math import gcd
 
@@ -122,16 +122,41 @@ def poisson_map(f, e, Pi, pts, ks):
 
 class Context:
     """What a certificate's records are derived from: the field F, ε, x0, the steps, the
-    recorded orbit (re-checked by :mod:`.orbit`), the system."""
+    recorded orbit (re-checked by :mod:`.orbit`), the system, the arithmetic's name and the
+    involutions (the family).
+
+    :meth:`generic` makes the context of the other modes instead: x0 and ε elements of F (a
+    random draw in F_P, or the symbols of Q(x, ε)), one step computed here, and
+    ``point_free``: the controls' rules that judge a point are off (x0 is generic)."""
+
+    point_free = False
 
     def __init__(self, cert, data, F, checks):
         self.cert, self.data, self.F, self.checks = cert, data, F, checks
         self.system, self.K, self.eps = cert.system, cert.steps, Fraction(cert.eps)
+        self.arith, self.signs = cert.arith, list(cert.signs)
         self.e = F.of(cert.eps)
         self.x0q = [Fraction(t) for t in cert.x0]
         self.x0 = [F.of(t) for t in cert.x0]
         self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
         self._memo = {}
+
+    @classmethod
+    def generic(cls, cert, data, F, x0, e, arith, signs=None):
+        """The context of one step from the generic point x0 (elements of F) with step e;
+        :class:`~.fields.Undefined` where that step is singular."""
+        from exact_khk.certification.verify.maps import _expression_field, _lp_field, _lp_hessian
+
+        ctx = cls.__new__(cls)
+        ctx.cert, ctx.data, ctx.F, ctx.checks, ctx.point_free = cert, data, F, {}, True
+        ctx.system, ctx.K, ctx.arith = cert.system, 1, arith
+        ctx.signs = list(cert.signs if signs is None else signs)
+        ctx.e, ctx.x0, ctx.eps, ctx.x0q, ctx._memo = e, list(x0), None, None, {}
+        s = cert.system
+        f = (_lp_field(s.n, [[F.of(t) for t in r] for r in _lp_hessian(s.a, s.b, s.c)])
+             if getattr(s, "kind", "") == "lie-poisson" else _expression_field(s, F))
+        ctx.pts = orbit(f, e, ctx.x0, 1)
+        return ctx
 
     def memo(self, key, fn):
         if key not in self._memo:
@@ -155,7 +180,7 @@ class LiePoisson:
         F = c.F
         self.Hq = _lp_hessian(s.a, s.b, s.c)
         self.Hs = [[F.of(t) for t in row] for row in self.Hq]
-        self.signs = list(c.cert.signs)
+        self.signs = list(c.signs)
         self.keys = ["f"] + self.signs
         self.M = {"f": self.Hs}
         for sg in self.signs:
@@ -164,7 +189,7 @@ class LiePoisson:
         self.integral = {"f": "H~"} | {sg: f"K~[{sg}]" for sg in self.signs}
         self.mapname = {"f": "Phi_f"} | {sg: f"Phi_g[{sg}]" for sg in self.signs}
         self.npts = c.K + 1
-        self.flint = c.cert.arith == "flint"
+        self.flint = c.arith == "flint"
 
     def orbit(self, key):
         c = self.ctx
@@ -321,8 +346,8 @@ def lp_rank(lp):
     signs_rows = [[Fraction(1)] * n] + [[Fraction(1 if ch == "+" else -1) for ch in sg] for sg in lp.signs]
     r_expr = _rank(signs_rows)
     n_rational = len({gcd(j, n) for j in range(n)})
-    over = (f"all n = {n} integrals are expressible in {c.cert.arith}"
-            if expresses_omega(get_arith(c.cert.arith), n) or n_rational == n
+    over = (f"all n = {n} integrals are expressible in {c.arith}"
+            if n_rational == n or expresses_omega(get_arith(c.arith), n)
             else f"over Q only {n_rational} of the n = {n} integrals are expressible (the others need Q(omega))")
 
     def rank_fn(rows_at, expected):
@@ -362,11 +387,16 @@ class LPDegeneracy:
         s = c.system
         self.a, self.b, self.c = list(s.a), list(s.b), list(s.c)
         Q = _FlintRationals()
-        self.n, self.x0, self.eps = lp.n, [Q.of(t) for t in c.x0q], Q.of(c.eps)
         self.Hq = [[Q.of(t) for t in row] for row in lp.Hq]
+        self.n, self.free = lp.n, c.point_free
+        if not self.free:
+            self.x0, self.eps = [Q.of(t) for t in c.x0q], Q.of(c.eps)
 
     def common(self):
-        n, x = self.n, self.x0
+        n = self.n
+        if self.free:  # a generic x0 (the other modes): only the system's own reason
+            return "Hs = 0" if not any(map(any, self.Hq)) else None
+        x = self.x0
         if determinant([[x[(i + j) % n] for j in range(n)] for i in range(n)]) == 0:
             return "J(x0) is singular"
         if not any(_matvec(self.Hq, x)):
@@ -375,6 +405,8 @@ class LPDegeneracy:
 
     def equilibrium(self):
         """x0 an equilibrium (Hs x0 = 0): a one-point orbit shows nothing, even where a control fails."""
+        if self.free:
+            return self.common()
         return "x0 is an equilibrium" if not any(_matvec(self.Hq, self.x0)) else None
 
     def planar(self):
@@ -383,6 +415,8 @@ class LPDegeneracy:
         al, be, ga = sum(self.a), sum(self.b), sum(self.c)
         if be * be == al * ga:
             return "n = 2: degenerate planar field"
+        if self.free:
+            return None
         U, V = sum(self.x0[:2]), sum(self.x0[2:])
         return "n = 2: invariant line" if al * U * U + 2 * be * U * V + ga * V * V == 0 else None
 
@@ -404,7 +438,7 @@ class LPDegeneracy:
         return self.common() or self.planar() or self.self_paired()
 
     def control_conserves(self):
-        return self.commutation() or ("pole" if self.pole(self.Hq, self.x0) else None)
+        return self.commutation() or (None if self.free else "pole" if self.pole(self.Hq, self.x0) else None)
 
     def non_admissible(self):
         why = self.common()
@@ -412,6 +446,8 @@ class LPDegeneracy:
             return why
         if self.self_paired(constant=True):
             return "b, c constant"
+        if self.free:
+            return why
         bad = non_admissible(self.Hq, self.n)
         if not any(_matvec(bad, self.x0)):
             return "equilibrium of the non-admissible field"
@@ -419,7 +455,7 @@ class LPDegeneracy:
 
     def perturbed(self):
         why = self.common()
-        if why:
+        if why or self.free:
             return why
         if self.pole(self.Hq, self.x0):
             return "pole at x0"
@@ -756,3 +792,28 @@ def declared_claims(system) -> tuple:
     known = tuple(k for k in EXPRESSION_KINDS if has[k])
     own = getattr(system, "claims", None) or known
     return known, tuple(k for k in EXPRESSION_KINDS if k in own)
+
+
+def expected_records(ctx, chosen=None) -> tuple:
+    """(the records the certificate's system and options imply, a note on the claim selection or None);
+    ``chosen``: the claims of a system given by expressions (default: those the records in
+    ``ctx.checks`` cover, else the system's own list)."""
+    if getattr(ctx.system, "kind", "") == "lie-poisson":
+        ctx.chosen = None
+        lp = LiePoisson(ctx)
+        return [r for kind in LIE_POISSON_KINDS for r in kind(lp)], None
+    ex = Expressions(ctx)
+    known, own = declared_claims(ctx.system)
+    by_kind = {k: EXPRESSION_KINDS[k](ex) for k in known}
+    names = set(ctx.checks)
+    if chosen is None:
+        chosen = [k for k in known if any(r.name in names for r in by_kind[k])] or list(own)
+    note = None
+    if tuple(chosen) != own:
+        note = (f"the records cover the claims {', '.join(chosen)}; the system's own list is {', '.join(own)} "
+                f"(a --claims selection, which the certificate does not record)")
+    ctx.chosen = list(chosen)
+    records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(ex)
+    # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
+    fixed = lambda: "x0 is a fixed point of Phi_f" if ex.ctx.same(ex.ctx.pts[1], ex.ctx.pts[0]) else None  # noqa: E731
+    return [r if r.expected else replace(r, always=fixed) for r in records], note
