@@ -24,19 +24,11 @@ from exact_khk.certification.verify.modes import identity_signs, stated_bound
 from exact_khk.certification.verify.fields import _PrimeField
 from exact_khk.cli.main import main
 from exact_khk.systems.lie_poisson.system import LiePoissonSystem, default_involutions
+from tests.test_verify_tamper import example_toml
 
 DOCS = pathlib.Path(__file__).parent.parent / "docs"
 GF = f"gf:{DEFAULT_PRIME}"
 SEED = 20261128  # the verifier's own draws, fixed for reproducible messages
-
-
-def example_toml(tmp_path_factory):
-    """The complete example of docs/system-files.md (an INVALID certificate), as a file."""
-    text = (DOCS / "system-files.md").read_text()
-    body = re.search(r"## A complete example\s+```toml\n(.*?)```", text, re.S).group(1)
-    path = tmp_path_factory.mktemp("example") / "example.toml"
-    path.write_text(body)
-    return path
 
 
 @pytest.fixture(scope="module")
