@@ -165,9 +165,15 @@ class System:
         """The :class:`Control` s of a certificate at x0 and ε (after every claim); none by default."""
         return []
 
-    #: the order in which the certificate checks the claims (None: the registry's,
-    #: :data:`~exact_khk.certification.claims.CLAIMS`)
+    #: how the certificate runs the claims, whatever the system (:mod:`~exact_khk.certification.claims`):
+    #: their order (None: the registry's, :data:`~exact_khk.certification.claims.CLAIMS`);
     claim_order = None
+    #: the claims about a map (integrals conserved, Poisson map) checked and stated per map along every
+    #: map's orbit, each computed first (a singular step names its map), the Poisson ones at the
+    #: ``poisson_points`` subset (False: along Φ_f's orbit, a commuting map's computed lazily);
+    claims_on_every_orbit = False
+    #: :meth:`negative_controls` in place of the claims' automatic controls (False: both)
+    own_controls_only = False
 
     def fast_forms(self, ar, eps):
         """An evaluator of the claims' quantities by closed forms of this system in ``ar`` at the
