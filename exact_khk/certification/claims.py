@@ -729,8 +729,7 @@ def measure(run):
     run.control("control: measure with density 1 preserved",
                 "[control, must fail] det dPhi(x) = 1 at the orbit points (the density 1 in place of m)",
                 lambda: compare(ar, ((k, lambda k=k: (run.det_jacobian(k), ar.one)) for k in range(K))),
-                expected=False,
-                degenerate=lambda: f"the density m = {m.text} is a constant: the claim is this control"
+                expected=False, degenerate=lambda: f"the density m = {m.text} is a constant: the claim is this control"
                 if hasattr(m, "partials") and _constant(m) else None)
 
 

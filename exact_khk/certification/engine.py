@@ -126,9 +126,9 @@ class Run:
     system's fast forms where it has them: :meth:`~exact_khk.systems.base.System.fast_forms`),
     and the checks appended to ``checks`` by :meth:`add`.
 
-    What a system declares it runs so (:class:`~exact_khk.systems.base.System`): the claims in its
+    It runs the claims as the system declares (:class:`~exact_khk.systems.base.System`): in its
     ``claim_order``; ``claims_on_every_orbit``: every map's orbit (``orbit_maps``) computed first (a
-    singular step names its map) and the claims about a map checked and stated per map;
+    singular step names its map), the claims about a map checked and stated per map;
     ``own_controls_only``: its own negative controls replace the automatic ones (:meth:`control`)."""
 
     def __init__(self, system, x0, eps, steps, ar, progress, poisson_points=None, point_free=False, options=None):
