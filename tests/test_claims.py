@@ -141,3 +141,31 @@ def test_system_files_name_the_registry_claims():
     from exact_khk.systems import expressions
 
     assert expressions.CLAIMS == CLAIMS
+
+
+def test_any_system_may_declare_the_certificate_behaviours_of_the_family():
+    """claims_on_every_orbit and own_controls_only are declared on System, not tied to the family: an
+    expression system declaring them has its integrals and Poisson map checked per map along every
+    map's orbit (the Poisson checks at the poisson_points subset) and its own controls alone."""
+    top = ExpressionSystem.from_expressions(
+        ["x1", "x2", "x3"], field={"x1": "x2*x3", "x2": "-2*x3*x1", "x3": "3*x1*x2"},
+        fields={"g": {"x1": "2*x2*x3", "x2": "-4*x3*x1", "x3": "6*x1*x2"}},
+        integrals={"C1": "(1 + 6*eps**2*x1**2)/(1 - 3*eps**2*x2**2)"},
+        poisson=[["0", "x3", "-x2"], ["-x3", "0", "x1"], ["x2", "-x1", "0"]],
+        controls={"naive": "x1**2 + x2**2 + x3**2"}, x0=["1", "2", "3"], eps="1/10")
+    claims = ["integrals", "commutation", "poisson"]
+    plain = certify_system(top, steps=5, claims=claims)
+    assert plain.check("integral C1 conserved by Phi_g").claim == "C1(y_k) = C1(y_0) along the Phi_g orbit of x0"
+    assert "control: C1 at a perturbed point" in [c.name for c in plain.checks]
+    top.claims_on_every_orbit = top.own_controls_only = True
+    declared = certify_system(top, steps=5, claims=claims, poisson_points=2)
+    conserved = declared.check("integral C1 conserved by Phi_g")
+    assert conserved.claim == "C1(x_k) = C1(x_0) for k = 1..5 along the Phi_g orbit"
+    for name, holds in (("integral C1 conserved by Phi_f", True), ("integral C1 conserved by Phi_g", False)):
+        # Phi_g is Phi_f at 2 eps, whose integral C1 is not (it is of step eps): both routes say so alike
+        assert declared.check(name).holds is plain.check(name).holds is holds
+        assert declared.check(name).residual == plain.check(name).residual
+    assert "Poisson map Phi_g" in [c.name for c in declared.checks]
+    jacobi = next(c for c in declared.checks if c.name.endswith("Jacobi identity"))
+    assert "at 2 of the 5 points (k = [0, 4]) of the Phi_f orbit" in jacobi.claim
+    assert [c.name for c in declared.checks if not c.expected] == ["control: naive conserved by Phi_f"]

@@ -2,9 +2,9 @@
 
 :func:`certify` certifies any :class:`~exact_khk.systems.base.System` by the claims of the
 registry it declares (:mod:`~exact_khk.certification.claims`, run by
-:mod:`~exact_khk.certification.engine`); a system that knows the paper's theorems (the
-Lie–Poisson family) takes the paper's options on top (:mod:`~exact_khk.certification.lie_poisson`:
-involutions, Poisson points, identities, proofs).
+:mod:`~exact_khk.certification.engine`); a system whose certificate takes involution signs
+(``certificate_options``: the Lie–Poisson family) takes them, and Poisson points, identities and
+proofs, by :mod:`~exact_khk.certification.lie_poisson`.
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **optio
 
     if isinstance(system, (str, bytes)) or hasattr(system, "__fspath__"):
         system = resolve(system)  # a catalogue name or a system file, as on the command line
-    if system is None or getattr(system, "certificate_options", ()):  # a system with theorems of its own
-        return lie_poisson.certify(system, x0, eps, steps, arith, **options)
-    if not isinstance(system, System):
+    if system is not None and not isinstance(system, System):
         raise InputError(f"system: expected a System (e.g. System.load('euler-top')) or a catalogue name, "
                          f"got {type(system).__name__}")
+    if system is None or "signs" in system.certificate_options:  # a certificate over involutions it chooses
+        return lie_poisson.certify(system, x0, eps, steps, arith, **options)
     other = sorted(set(options) - {"claims", "progress", "identities", "prove"})
     if other:
         raise InputError(f"{other[0]}: an option of Lie-Poisson systems only; {system.name} takes claims=, "

@@ -42,12 +42,12 @@ The claims, in the order they are checked (:data:`CLAIMS`):
   is preserved: m(Φ(x)) det dΦ(x) = m(x);  control: the density 1 (det dΦ(x) = 1) is not
   (inapplicable when m is a constant: then the claim is that control).
 
-A system with a certificate of its own theorems (``certificate_options``: the Lie–Poisson
-family, :mod:`~exact_khk.certification.lie_poisson`) is run as that certificate
-(``run.paper``): its claims in its ``claim_order``, every map's orbit at every claim, the Poisson
-checks at the ``poisson_points`` subset, the paper's wording, and its own negative controls
-(``negative_controls``, run by :func:`declared_controls` after the claims) in place of the
-automatic ones (:meth:`~exact_khk.certification.engine.Run.control`).  Quantities the claims
+Any system may declare (:class:`~exact_khk.systems.base.System`): ``claim_order``;
+``claims_on_every_orbit``, the claims about a map (integrals conserved, Poisson map) checked and
+stated per map along every map's computed orbit, the Poisson checks at the ``poisson_points``
+subset; ``own_controls_only``, its own negative controls (``negative_controls``, run by
+:func:`declared_controls` after the claims) in place of the automatic ones
+(:meth:`~exact_khk.certification.engine.Run.control`).  Quantities the claims
 share (integrals, gradients, Π) come memoised from the run, by the system's fast forms where it
 has them (:meth:`~exact_khk.systems.base.System.fast_forms`; the generic route where None).
 
@@ -346,7 +346,7 @@ def integrals(run):
     ar, K = run.ar, run.steps
     for name, fn in run.integrals.items():
         for m in run.field_names:
-            if run.paper:  # every orbit computed
+            if run.system.claims_on_every_orbit:  # every orbit computed
                 statement = f"{name}(x_k) = {name}(x_0) for k = 1..{K} along the Phi_{m} orbit"
                 evaluate = at_points(run, lambda k, name=name, m=m: (run.value(name, m, k), run.value(name, m, 0)),
                                      range(1, K + 1))
@@ -365,7 +365,7 @@ def integrals(run):
 
 
 def _perturbed_point_control(run, name, fn):
-    if run.paper:  # the family's own perturbed-point control replaces it (run.control)
+    if run.system.own_controls_only:  # as Run.control does, before any work
         return
     ar, e, pts = run.ar, run.e, run.pts
     grad = []
@@ -455,32 +455,32 @@ def poisson(run):
                 at_points(run, lambda k: fast.Pi_sides(pts[k]) if fast is not None
                           else (run.tensor("f", k), P.formula(ar, pts[k], e))), degree=lambda: _poly(tensor_deg(P)))
     jacobi = (lambda k: fast.jacobiator(pts[k])) if fast is not None else (lambda k: P.jacobiator(ar, pts[k], e))
-    if run.paper:
+    if run.system.claims_on_every_orbit:  # per map, at the Poisson points run.ks
         subset = "every point" if len(run.ks) == K else f"{len(run.ks)} of the {K} points (k = {run.ks})"
         run.add(f"Poisson tensor {P.name} Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at {subset} "
                 f"of the Phi_f orbit", at_points(run, lambda k: (jacobi(k), None), run.ks),
                 degree=lambda: _jacobi_deg(P))
-        for m in run.field_names:
+        for m in run.orbit_maps:
             run.add(f"Poisson map Phi_{m}",
                     f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) for Phi_{m} at {subset} of its orbit",
                     lambda m=m: compare(ar, poisson_map_sides(run, m)), degree=lambda: _poisson_map_deg(N, P))
-        return
-    run.add("Poisson tensor Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} "
-            f"orbit points", at_points(run, lambda k: (jacobi(k), None)), degree=lambda: _jacobi_deg(P))
-    run.add("Poisson map Phi_f", f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) at the {K} orbit points",
-            lambda: compare(ar, poisson_map_items(run.phi, lambda k: P.matrix(ar, pts[k], e), pts, range(K))),
-            degree=lambda: _poisson_map_deg(N, P))
-    run.add("control: Jacobi identity of Pi + W", "[control, must fail] Pi + W, W = e_0^e_1 + x_1 e_1^e_2, "
-            "satisfies the Jacobi identity at the orbit points",
-            lambda: compare(ar, ((k, lambda k=k: (jacobiator(ar, _plus_w(ar, P, e), pts[k]), None))
-                                 for k in range(K + 1))) if N >= 3 else (True, "0", ""),
-            expected=False,
-            degenerate=lambda: "in dimension 2 every bivector satisfies the Jacobi identity" if N < 3 else None)
+    else:
+        run.add("Poisson tensor Jacobi identity", f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} "
+                f"orbit points", at_points(run, lambda k: (jacobi(k), None)), degree=lambda: _jacobi_deg(P))
+        run.add("Poisson map Phi_f", f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) at the {K} orbit points",
+                lambda: compare(ar, poisson_map_items(run.phi, lambda k: P.matrix(ar, pts[k], e), pts, range(K))),
+                degree=lambda: _poisson_map_deg(N, P))
+    run.control("control: Jacobi identity of Pi + W", "[control, must fail] Pi + W, W = e_0^e_1 + x_1 e_1^e_2, "
+                "satisfies the Jacobi identity at the orbit points",
+                lambda: compare(ar, ((k, lambda k=k: (jacobiator(ar, _plus_w(ar, P, e), pts[k]), None))
+                                     for k in range(K + 1))) if N >= 3 else (True, "0", ""),
+                expected=False,
+                degenerate=lambda: "in dimension 2 every bivector satisfies the Jacobi identity" if N < 3 else None)
     j = next((i for i in range(N) if ar.is_zero(pts[1][i] - pts[0][i]) is False), 0)
     scaled = lambda k: [[(ar.one + pts[k][j]) * t for t in row] for row in P.matrix(ar, pts[k], e)]  # noqa: E731
-    run.add(f"control: (1 + x_{j}) Pi preserved", f"[control, must fail] the Kahan map preserves (1 + x_{j}) Pi "
-            f"(it would make 1 + x_{j} an integral)",
-            lambda: compare(ar, poisson_map_items(run.phi, scaled, pts, range(K))), expected=False)
+    run.control(f"control: (1 + x_{j}) Pi preserved", f"[control, must fail] the Kahan map preserves (1 + x_{j}) Pi "
+                f"(it would make 1 + x_{j} an integral)",
+                lambda: compare(ar, poisson_map_items(run.phi, scaled, pts, range(K))), expected=False)
 
 
 def poisson_map_sides(run, m):
@@ -533,7 +533,8 @@ def commutation(run):
                     f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
                     lambda phi_2g=phi_2g: compare(ar, commute_items(run.phi, phi_2g, pts)), expected=False)
     def image(m, k):  # Φ_m(x_k) at a point of the Φ_f orbit, memoised: every pair shares it
-        return run.memo((m, "image", k), lambda: run.orbit(m)[1] if k == 0 and run.paper else run.map(m).step(pts[k]))
+        return run.memo((m, "image", k), lambda: run.orbit(m)[1] if k == 0 and m in run.orbit_maps
+                        else run.map(m).step(pts[k]))
 
     for a, b in combinations(names[1:], 2) if run.options["pairs"] == "all" else ():
         run.add(f"commutation Phi_{a} o Phi_{b}", f"Phi_{a}(Phi_{b}(x)) = Phi_{b}(Phi_{a}(x)) at the {len(pts)} "
@@ -646,13 +647,13 @@ def jacobian(run):
             f"(I - eps f'(x))^-1 (I + eps f'(Phi(x))) at the {K} orbit points",
             lambda: compare(ar, ((k, lambda k=k: (dual_step(k), run.map_jacobian(pts[k], pts[k + 1])))
                                  for k in range(K))), degree=lambda: minus(partial(step_deg(N)), jacobian_deg(N)))
-    run.add("control: Jacobian with f'(x) for f'(Phi(x))",
-            "[control, must fail] the derivative of the step equals (I - eps f'(x))^-1 (I + eps f'(x))",
-            lambda: compare(ar, ((k, lambda k=k: (dual_step(k), run.map_jacobian(pts[k], pts[k])))
-                                 for k in range(K))), expected=False,
-            degenerate=lambda: "f'(Phi(x)) = f'(x) along the orbit" if all(
-                run.same(sum(f.jacobian(ar, pts[k + 1]), []), sum(f.jacobian(ar, pts[k]), []))
-                for k in range(K)) else None)
+    run.control("control: Jacobian with f'(x) for f'(Phi(x))",
+                "[control, must fail] the derivative of the step equals (I - eps f'(x))^-1 (I + eps f'(x))",
+                lambda: compare(ar, ((k, lambda k=k: (dual_step(k), run.map_jacobian(pts[k], pts[k])))
+                                     for k in range(K))), expected=False,
+                degenerate=lambda: "f'(Phi(x)) = f'(x) along the orbit" if all(
+                    run.same(sum(f.jacobian(ar, pts[k + 1]), []), sum(f.jacobian(ar, pts[k]), []))
+                    for k in range(K)) else None)
 
 
 # --- Celledoni–McLachlan–Owren–Quispel: modified energy and measure -----------------
@@ -676,10 +677,11 @@ def cmoq(run):
             f"dx / det(I - eps f'(x)) is preserved at the {K} orbit points",
             lambda: compare(ar, ((k, lambda k=k: det_sides(k)) for k in range(K))),
             degree=lambda: minus(times(_det_deg(N), Deg(2 * N, 0, 2 * N)), at(Deg(2 * N, 0), step_deg(N))))
-    run.add("control: H conserved", "[control, must fail] the Hamiltonian H itself is conserved along the "
-            "Phi_f orbit", lambda: compare(ar, conserved_items(lambda x: H(ar, x, e), pts)), expected=False)
-    run.add("control: Phi_f preserves volume", "[control, must fail] det dPhi(x) = 1 at the orbit points",
-            lambda: compare(ar, ((k, lambda k=k: (run.det_jacobian(k), ar.one)) for k in range(K))), expected=False)
+    run.control("control: H conserved", "[control, must fail] the Hamiltonian H itself is conserved along the "
+                "Phi_f orbit", lambda: compare(ar, conserved_items(lambda x: H(ar, x, e), pts)), expected=False)
+    run.control("control: Phi_f preserves volume", "[control, must fail] det dPhi(x) = 1 at the orbit points",
+                lambda: compare(ar, ((k, lambda k=k: (run.det_jacobian(k), ar.one)) for k in range(K))),
+                expected=False)
 
 
 def modified_energy(ar, field, H, x, e):
@@ -724,11 +726,11 @@ def measure(run):
             f"at the {K} orbit points", lambda: compare(ar, ((k, lambda k=k: (
                 density(pts[k + 1]) * run.det_jacobian(k), density(pts[k]))) for k in range(K))),
             degree=lambda: _measure_deg(run.system.dim, function_deg(m)))
-    run.add("control: measure with density 1 preserved", "[control, must fail] det dPhi(x) = 1 at the orbit points "
-            "(the density 1 in place of m)",
-            lambda: compare(ar, ((k, lambda k=k: (run.det_jacobian(k), ar.one)) for k in range(K))), expected=False,
-            degenerate=lambda: f"the density m = {m.text} is a constant: the claim is this control"
-            if hasattr(m, "partials") and _constant(m) else None)
+    run.control("control: measure with density 1 preserved",
+                "[control, must fail] det dPhi(x) = 1 at the orbit points (the density 1 in place of m)",
+                lambda: compare(ar, ((k, lambda k=k: (run.det_jacobian(k), ar.one)) for k in range(K))),
+                expected=False, degenerate=lambda: f"the density m = {m.text} is a constant: the claim is this control"
+                if hasattr(m, "partials") and _constant(m) else None)
 
 
 #: the claims a system file can declare, in the order they are checked

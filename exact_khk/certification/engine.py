@@ -101,8 +101,7 @@ def certify_system(system, x0=None, eps=None, steps: int = 20, arith=None, claim
         run_claims(run, wanted)
         orbit = tuple(tuple(ar.format(t) for t in p) for p in run.pts)
         values = run.integral_values()
-    orbits = [run.orbit(m) for m in run.field_names] if run.paper else [run.pts]
-    height = max(point_height(ar, p) for pts in orbits for p in pts) if ar.rational else None
+    height = max(point_height(ar, p) for m in run.orbit_maps for p in run.orbit(m)) if ar.rational else None
     checks = run.checks + other_modes(system, identities, prove, wanted, progress, options=options)
     return Certificate(system, tuple(x0), eps, steps, ar.name, (), tuple(checks), library_versions(),
                        time.perf_counter() - t_start, height, orbit, values, run.phi.path)
@@ -127,10 +126,10 @@ class Run:
     system's fast forms where it has them: :meth:`~exact_khk.systems.base.System.fast_forms`),
     and the checks appended to ``checks`` by :meth:`add`.
 
-    A system with a certificate of its own theorems (``certificate_options``: the paper's
-    family) is run as that certificate: every map's orbit is computed first (a singular step
-    names its map), its own negative controls replace the automatic controls of each claim
-    (:meth:`control`), and its statements are worded as the paper's certificate words them."""
+    It runs the claims as the system declares (:class:`~exact_khk.systems.base.System`): in its
+    ``claim_order``; ``claims_on_every_orbit``: every map's orbit (``orbit_maps``) computed first (a
+    singular step names its map), the claims about a map checked and stated per map;
+    ``own_controls_only``: its own negative controls replace the automatic ones (:meth:`control`)."""
 
     def __init__(self, system, x0, eps, steps, ar, progress, poisson_points=None, point_free=False, options=None):
         self.system, self.x0, self.eps, self.steps, self.ar = system, x0, eps, steps, ar
@@ -142,17 +141,18 @@ class Run:
         #: the claims' options: ``pairs`` "f" (Φ_f with each other map commutes) or "all" (every pair
         #: of maps); ``brackets`` "base" ({I, I_B} for each I_B = image of I) or "all" (every pair)
         self.options = {"pairs": "f", "brackets": "base", **(options or {})}
-        self.paper = bool(system.certificate_options)
         self.field_names = system.field_names()
+        #: the maps whose orbits the claims follow: every map's, or Φ_f's alone
+        self.orbit_maps = self.field_names if system.claims_on_every_orbit else ("f",)
         self.e = ar.convert(eps)
         self.f = system.named_field("f")
         self.phi = KahanMap(self.f, eps, ar)
         self._maps, self._orbits, self._dets, self._memo = {"f": self.phi}, {}, {}, {}
-        for name in self.field_names if self.paper else ("f",):
+        for name in self.orbit_maps:
             try:
                 self.orbit(name)
             except SingularStepError as exc:  # say which map (the message's f' is that map's field)
-                if not self.paper:
+                if not system.claims_on_every_orbit:
                     raise
                 raise SingularStepError(exc.x, exc.eps, step=exc.step, condition=exc.condition,
                                         detail="; ".join(filter(None, [f"a step of Phi_{name}", exc.detail]))
@@ -224,9 +224,9 @@ class Run:
         return self._dets[k]
 
     def control(self, *args, **kw):
-        """Add an automatic negative control of a claim, unless the system brings the controls
-        of a certificate of its own (the engine runs them after every claim)."""
-        if not self.paper:
+        """Add an automatic negative control of a claim, unless the system declares that its own
+        controls replace them (``own_controls_only``; the engine runs those after every claim)."""
+        if not self.system.own_controls_only:
             self.add(*args, **kw)
 
     def memo(self, key, fn):

@@ -19,6 +19,8 @@ a system; it never tests which family a system belongs to.
 * :meth:`hamiltonian_form` — (K, H) when f = K∇H with K constant skew and H
   cubic (Celledoni–McLachlan–Owren–Quispel: modified energy and invariant
   measure), else None;
+* ``claim_order``, ``claims_on_every_orbit``, ``own_controls_only`` — how the certificate
+  runs the claims, for any system declaring them;
 * ``default_x0``, ``default_eps``, :meth:`random_point`.
 
 The constructors ``System.load(spec)`` (a catalogue name or a system file) and
@@ -168,6 +170,12 @@ class System:
     #: the order in which the certificate checks the claims (None: the registry's,
     #: :data:`~exact_khk.certification.claims.CLAIMS`)
     claim_order = None
+    #: check and state the claims about a map (integrals conserved, Poisson map) per map along every
+    #: map's orbit, each computed first (a singular step names its map), the Poisson ones at the
+    #: ``poisson_points`` subset (False: along Φ_f's orbit; a commuting map's, lazily, for its integrals)
+    claims_on_every_orbit = False
+    #: :meth:`negative_controls` replace the claims' automatic controls (False: both are checked)
+    own_controls_only = False
 
     def fast_forms(self, ar, eps):
         """An evaluator of the claims' quantities by closed forms of this system in ``ar`` at the

@@ -371,8 +371,10 @@ class LiePoissonSystem(System):
                                              f"as H~ with B Hs, B = B[{s}]", base="H~", signs=s)
         return out
 
-    #: the order of the paper's claims in its certificate (the engine's registry, :mod:`exact_khk.certification.claims`)
+    #: the paper's certificate (:mod:`exact_khk.certification.claims`): its claims in the paper's order, about
+    #: every map along its orbit, with the family's controls (:meth:`negative_controls`) for the automatic ones
     claim_order = ("definition", "integrals", "commutation", "reversibility", "poisson", "involution", "rank")
+    claims_on_every_orbit = own_controls_only = True
 
     def fast_forms(self, ar, eps):
         """The closed forms of :class:`~.flint_forms.FlintForms` (python-flint matrices, the same
