@@ -7,10 +7,9 @@ from fractions import Fraction
 
 from exact_khk.certification.verify.fields import (Undefined, _Evaluate, _Rationals, _dot, _eliminate,
                                                    _matmul, _matvec, _show, to_fraction)
+from exact_khk.certification.verify.records import LiePoisson, family
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field,
                                                  _lp_hessian, _lp_J)
-
-_Undefined = Undefined
 
 
 class _Recheck:
@@ -19,7 +18,7 @@ class _Recheck:
     def __init__(self, cert, data, F):
         self.cert, self.data, self.F = cert, data, F
         self.system = cert.system
-        self.lp = getattr(self.system, "kind", "") == "lie-poisson"
+        self.lp = family(data) is LiePoisson
         self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
         self.e = F.of(cert.eps)
         if self.lp:
@@ -28,7 +27,7 @@ class _Recheck:
             self.Hs = [[F.of(t) for t in row] for row in _lp_hessian(self.system.a, self.system.b, self.system.c)]
             self.f = _lp_field(n, self.Hs)
         else:
-            self.f = _expression_field(self.system, F)
+            self.f = _expression_field(self.system.field("f"), F)
 
     def run(self) -> list:
         out = [self.orbit_length(), self.starts_at_x0()]
@@ -48,7 +47,7 @@ class _Recheck:
             return ("orbit starts at x0", False, "no orbit recorded")
         try:
             x0 = [self.F.of(t) for t in self.cert.x0]
-        except _Undefined as exc:
+        except Undefined as exc:
             return ("orbit starts at x0", False, str(exc))
         bad = [i for i, (a, b) in enumerate(zip(self.pts[0], x0)) if a != b]
         if bad:
@@ -95,7 +94,7 @@ class _Recheck:
     # --- integrals -------------------------------------------------------------
 
     def integral_functions(self) -> dict:
-        """name -> fn(x) (a field element; ZeroDivisionError or _Undefined at a pole)."""
+        """name -> fn(x) (a field element; ZeroDivisionError or Undefined at a pole)."""
         F, e = self.F, self.e
         if self.lp:
             n = self.n
@@ -103,7 +102,7 @@ class _Recheck:
             for s in self.cert.signs:
                 try:
                     M = _matmul(_involution(n, s, F), self.Hs)
-                except _Undefined as exc:
+                except Undefined as exc:
                     fns[f"K~[{s}]"] = exc
                     continue
                 fns[f"K~[{s}]"] = lambda x, M=M: _htilde(M, x, e, n)
@@ -121,16 +120,16 @@ class _Recheck:
         return fns
 
     def _value(self, name, fn, k):
-        """(value, how) of integral ``name`` at x_k; raises _Undefined at a pole."""
+        """(value, how) of integral ``name`` at x_k; raises Undefined at a pole."""
         x = self.pts[k]
         try:
             return fn(x), ""
         except ZeroDivisionError:
             pass
-        except _Undefined:
+        except Undefined:
             raise
         if self.lp or not isinstance(self.F, _Rationals):
-            raise _Undefined("division by zero")
+            raise Undefined("division by zero")
         # the expression as written divides by zero at x_k; its value there is that of the
         # reduced rational function, if it is finite (the library reduces it to lowest terms)
         from exact_khk.arith import get_arith
@@ -140,7 +139,7 @@ class _Recheck:
             return self.F.of(self.system.integrals()[name](get_arith("fraction"), [to_fraction(t) for t in x],
                                                           self.cert.eps)), " (reduced form)"
         except PoleError:
-            raise _Undefined("pole") from None
+            raise Undefined("pole") from None
 
     def integrals(self) -> list:
         fns = self.integral_functions()
@@ -165,13 +164,13 @@ class _Recheck:
 
     def _one_integral(self, name, fn, recorded, check):
         label = f"values of {name}"
-        if isinstance(fn, _Undefined):
+        if isinstance(fn, Undefined):
             return [(label, False, f"cannot be recomputed: {fn}")]
         if recorded is None:  # recorded as undefined: there must be a pole on the orbit
             for k in range(len(self.pts)):
                 try:
                     self._value(name, fn, k)
-                except _Undefined:
+                except Undefined:
                     return [(label, True, f"recorded as undefined; {name} has a pole at x_{k}")]
             return [(label, False, f"recorded as undefined, but {name} is finite at every orbit point")]
         if len(recorded) != len(self.pts):
@@ -181,7 +180,7 @@ class _Recheck:
             r = self.F.parse(text, f"values.{name}[{k}]")
             try:
                 v, how = self._value(name, fn, k)
-            except _Undefined as exc:
+            except Undefined as exc:
                 return [(label, False, f"recorded {_show(r)} at x_{k}, where {name} is undefined ({exc})")]
             if v != r:
                 return [(label, False, f"at x_{k}: recorded {_show(r)}, recomputed {_show(v)}")]

@@ -20,7 +20,7 @@ from fractions import Fraction
 from math import gcd
 
 from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul,
-                                                   _matvec, _FlintRationals, to_fraction)
+                                                   _matvec, _FlintRationals, rank, to_fraction)
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field, _lp_hessian,
                                                  _lp_J, determinant, dphi, dual_step, gradient, gradients, h_definition,
                                                  htilde_gradient, jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q,
@@ -66,6 +66,37 @@ def rederive(rec):
     if not rec.expected and holds is not False and rec.degenerate is not None and rec.degenerate():
         applicable = False
     return holds, residual, applicable
+
+
+def differs(fields, where: str):
+    """The first of ``fields`` ((key, re-derived, recorded)) that differs, as a message (None if none)."""
+    for key, want, have in fields:
+        if want != have:
+            return (f"{key} is {_short(have)}, but {'the statement' if key == 'claim' else 'it'} re-derived{where} is "
+                    f"{_short(want)}")
+    return None
+
+
+def outcome_differs(c, holds, same, shown, applicable, where="", how=""):
+    """The first of holds, residual (``same``: as recorded; ``shown``: the re-derived one, as shown) and
+    applicable in which the recorded record ``c`` differs from the re-derived one, as a message."""
+    if c["holds"] != holds:
+        return f"recorded holds = {_tf(c['holds'])}, re-derived{where} holds = {_tf(holds)}{how}"
+    if not same:
+        return f"recorded residual {_short(c['residual'])}, re-derived{where} {shown}"
+    if c.get("applicable", True) != applicable:
+        return (f"recorded applicable = {_tf(c.get('applicable', True))}, re-derived: the control "
+                f"{'can fail' if applicable else 'cannot fail'} here, so applicable = {_tf(applicable)}")
+    return None
+
+
+def _tf(v) -> str:
+    return {True: "true", False: "false", None: "undecided"}.get(v, repr(v))
+
+
+def _short(v, width=60) -> str:
+    text = v if isinstance(v, str) else repr(v)
+    return repr(text if len(text) <= width else text[:width - 3] + "...")
 
 
 def _flatten(v):
@@ -140,22 +171,19 @@ class Context:
         self.x0 = [F.of(t) for t in cert.x0]
         self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
         self._memo = {}
+        self.family = family(data)(self)
 
     @classmethod
     def generic(cls, cert, data, F, x0, e, arith, signs=None):
         """The context of one step from the generic point x0 (elements of F) with step e;
         :class:`~.fields.Undefined` where that step is singular."""
-        from exact_khk.certification.verify.maps import _expression_field, _lp_field, _lp_hessian
-
         ctx = cls.__new__(cls)
         ctx.cert, ctx.data, ctx.F, ctx.checks, ctx.point_free = cert, data, F, {}, True
         ctx.system, ctx.K, ctx.arith = cert.system, 1, arith
         ctx.signs = list(cert.signs if signs is None else signs)
         ctx.e, ctx.x0, ctx.eps, ctx.x0q, ctx._memo = e, list(x0), None, None, {}
-        s = cert.system
-        f = (_lp_field(s.n, [[F.of(t) for t in r] for r in _lp_hessian(s.a, s.b, s.c)])
-             if getattr(s, "kind", "") == "lie-poisson" else _expression_field(s, F))
-        ctx.pts = orbit(f, e, ctx.x0, 1)
+        ctx.family = family(data)(ctx)
+        ctx.pts = orbit(ctx.family.fields["f"], e, ctx.x0, 1)
         return ctx
 
     def memo(self, key, fn):
@@ -167,10 +195,45 @@ class Context:
         return all(s == t for s, t in zip(a, b))
 
 
+class Family:
+    """What the records of every system share: its Kahan maps (``fields``, named ``mapname``), their
+    orbits from x0, reversibility and commutation with Phi_f."""
+
+    def orbit(self, key):
+        c = self.ctx
+        return c.pts if key == "f" else c.memo(("orbit", key), lambda: orbit(self.fields[key], c.e, c.x0, c.K))
+
+    def reversibility(self):
+        c, out = self.ctx, []
+        for key, name in self.mapname.items():
+            def derive(key=key):
+                pts = self.orbit(key)
+                return compare((k, lambda k=k: (step(self.fields[key], -c.e, pts[k + 1]), pts[k])) for k in range(c.K))
+            out.append(claim(f"reversibility {name}", f"{name}({name}(x, eps), -eps) = x at the {c.K} points of its "
+                             f"orbit", derive))
+        return out
+
+    def commuting(self, key, e):
+        """(k, Phi_f(Phi_key(x_k, e)) vs Phi_key(x_{k+1}, e)) at the points of the Phi_f orbit."""
+        c, pts, f = self.ctx, self.ctx.pts, self.fields["f"]
+        y = lambda k: c.memo(("step", key, e == c.e, k), lambda: step(self.fields[key], e, pts[k]))  # noqa: E731
+        return ((k, lambda k=k: (step(f, c.e, y(k)), y(k + 1))) for k in range(c.K))
+
+    def commutation(self, key):
+        name = self.mapname[key]
+        return claim(f"commutation Phi_f o {name}", f"Phi_f({name}(x)) = {name}(Phi_f(x)) at the {self.ctx.K} points "
+                     f"x_k of the Phi_f orbit", lambda: compare(self.commuting(key, self.ctx.e)))
+
+    @staticmethod
+    def generic_signs(system, F):
+        """The involutions of the other modes' records over F (None: the system has none)."""
+        return None
+
+
 # --- the Lie–Poisson family ----------------------------------------------------------------
 
 
-class LiePoisson:
+class LiePoisson(Family):
     """The paper's certificate: the fields f and g[s], their orbits, H~ and K~[s]."""
 
     def __init__(self, ctx):
@@ -191,11 +254,13 @@ class LiePoisson:
         self.npts = c.K + 1
         self.flint = c.arith == "flint"
 
-    def orbit(self, key):
-        c = self.ctx
-        if key == "f":
-            return c.pts
-        return c.memo(("orbit", key), lambda: orbit(self.fields[key], c.e, c.x0, c.K))
+    def records(self, chosen=None):
+        self.ctx.chosen = None
+        return [r for kind in LIE_POISSON_KINDS for r in kind(self)], None
+
+    @staticmethod
+    def generic_signs(system, F):
+        return identity_signs(system.n, F)
 
     def value(self, key, pts, k):
         return self.ctx.memo(("I", key, id(pts), k), lambda: _htilde(self.M[key], pts[k], self.ctx.e, self.n))
@@ -214,6 +279,16 @@ class LiePoisson:
             p = int(m.group(1))
             return sorted({round(i * (K - 1) / max(p - 1, 1)) for i in range(p)})
         return list(range(K))
+
+
+def identity_signs(n: int, F) -> list:
+    """The involutions ``certify --identities gf:P`` certifies for the family (F = F_P; F_2: those
+    of ``certify --prove``): all 2^n − 2 when F_P holds ω = ζ_n (n ≥ 3, P ≡ 1 mod n), else the
+    rational ones (constant on the classes {j : gcd(j, n) = d}) other than ±I; sorted."""
+    every = [''.join("-" if (m >> j) & 1 else "+" for j in range(n)) for m in range(2 ** n)]
+    if not (n >= 3 and (F.P - 1) % n == 0):
+        every = [s for s in every if all(s[j] == s[k] for j in range(n) for k in range(n) if gcd(j, n) == gcd(k, n))]
+    return sorted(s for s in every if s not in ("+" * n, "-" * n))
 
 
 def lp_integrals(lp):
@@ -239,32 +314,6 @@ def lp_integrals(lp):
                                for k in range(1, lp.npts))
             out.append(claim(f"integral {I} conserved by {name}",
                              f"{I}(x_k) = {I}(x_0) for k = 1..{K} along the {name} orbit", derive))
-    return out
-
-
-def lp_commutation(lp):
-    c, out = lp.ctx, []
-    for sg in lp.signs:
-        def derive(sg=sg):
-            g, f, pts = lp.fields[sg], lp.fields["f"], c.pts
-            y = lambda k: c.memo(("gx", sg, k), lambda: step(g, c.e, pts[k]))  # noqa: E731
-            return compare((k, lambda k=k: (step(f, c.e, y(k)), y(k + 1))) for k in range(c.K))
-        out.append(claim(f"commutation Phi_f o Phi_g[{sg}]",
-                         f"Phi_f(Phi_g[{sg}](x)) = Phi_g[{sg}](Phi_f(x)) at the {c.K} points x_k of the Phi_f orbit",
-                         derive))
-    return out
-
-
-def lp_reversibility(lp):
-    c, out = lp.ctx, []
-    for key in lp.keys:
-        name = lp.mapname[key]
-
-        def derive(key=key):
-            pts = lp.orbit(key)
-            return compare((k, lambda k=k: (step(lp.fields[key], -c.e, pts[k + 1]), pts[k])) for k in range(c.K))
-        out.append(claim(f"reversibility {name}", f"{name}({name}(x, eps), -eps) = x at the {c.K} points of its orbit",
-                         derive))
     return out
 
 
@@ -323,28 +372,13 @@ def lp_involution(lp):
     return out
 
 
-def _rank(rows):
-    M = [list(r) for r in rows]
-    r = 0
-    for col in range(len(M[0]) if M else 0):
-        piv = next((i for i in range(r, len(M)) if M[i][col] != 0), None)
-        if piv is None:
-            continue
-        M[r], M[piv] = M[piv], M[r]
-        for i in range(r + 1, len(M)):
-            m = M[i][col] / M[r][col]
-            M[i] = [a - m * b for a, b in zip(M[i], M[r])]
-        r += 1
-    return r
-
-
 def lp_rank(lp):
     from exact_khk.arith import get_arith
     from exact_khk.systems.lie_poisson.system import expresses_omega
 
     c, n = lp.ctx, lp.n
     signs_rows = [[Fraction(1)] * n] + [[Fraction(1 if ch == "+" else -1) for ch in sg] for sg in lp.signs]
-    r_expr = _rank(signs_rows)
+    r_expr = rank(signs_rows)
     n_rational = len({gcd(j, n) for j in range(n)})
     over = (f"all n = {n} integrals are expressible in {c.arith}"
             if n_rational == n or expresses_omega(get_arith(c.arith), n)
@@ -355,7 +389,7 @@ def lp_rank(lp):
             ranks = {}
             for k in range(lp.npts):
                 try:
-                    ranks[k] = _rank(rows_at(k))
+                    ranks[k] = rank(rows_at(k))
                 except UNDEFINED:
                     continue
             high = [k for k, r in ranks.items() if r > expected]
@@ -516,13 +550,14 @@ def lp_controls(lp):
 
 
 #: the Lie–Poisson certificate's kinds of records, in the order ``certify`` writes them
-LIE_POISSON_KINDS = (lp_integrals, lp_commutation, lp_reversibility, lp_poisson, lp_involution, lp_rank, lp_controls)
+LIE_POISSON_KINDS = (lp_integrals, lambda lp: [lp.commutation(sg) for sg in lp.signs], LiePoisson.reversibility,
+                     lp_poisson, lp_involution, lp_rank, lp_controls)
 
 
 # --- systems given by expressions (catalogue, system files) --------------------------------
 
 
-class Expressions:
+class Expressions(Family):
     """A system given by expressions: its fields, integrals, controls, Π and H, evaluated
     from the system's own text by :class:`~.fields._Evaluate` (dual numbers for derivatives)."""
 
@@ -536,7 +571,8 @@ class Expressions:
         self.variables = list(spec["variables"])
         self.N = len(self.variables)
         self.field_names = ["f"] + list(spec.get("fields") or {})
-        self.fields = {g: _expression_field(_NamedField(c.system, g), F) for g in self.field_names}
+        self.fields = {g: _expression_field(c.system.field(g), F) for g in self.field_names}
+        self.mapname = {g: f"Phi_{g}" for g in self.field_names}
         lib = c.system
         self.lib_integrals, self.lib_controls = lib.integrals(), lib.controls()
 
@@ -562,10 +598,6 @@ class Expressions:
                 raise Undefined("pole") from None
         return value
 
-    def orbit(self, g):
-        c = self.ctx
-        return c.pts if g == "f" else c.memo(("orbit", g), lambda: orbit(self.fields[g], c.e, c.x0, c.K))
-
     def poisson(self, x):
         """Π(x) from the system's matrix: the upper triangle evaluated, the lower one its negative."""
         M = self.spec["poisson"]["matrix"]
@@ -578,32 +610,32 @@ class Expressions:
                 P[j][i] = -P[i][j]
         return P
 
-
-class _NamedField:
-    """``system.field(name)`` as :func:`~.maps._expression_field` reads it."""
-
-    def __init__(self, system, name):
-        self.system, self.name = system, name
-
-    def field(self, _):
-        return self.system.field(self.name)
+    def records(self, chosen=None):
+        """See :func:`expected_records`."""
+        ctx = self.ctx
+        known, own = declared_claims(ctx.system)
+        by_kind = {k: EXPRESSION_KINDS[k](self) for k in known}
+        names = set(ctx.checks)
+        if chosen is None:
+            chosen = [k for k in known if any(r.name in names for r in by_kind[k])] or list(own)
+        note = None
+        if tuple(chosen) != own:
+            note = (f"the records cover the claims {', '.join(chosen)}; the system's own list is {', '.join(own)} "
+                    f"(a --claims selection, which the certificate does not record)")
+        ctx.chosen = list(chosen)
+        records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(self)
+        # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
+        fixed = lambda: "x0 is a fixed point of Phi_f" if ctx.same(ctx.pts[1], ctx.pts[0]) else None  # noqa: E731
+        return [r if r.expected else replace(r, always=fixed) for r in records], note
 
 
 def ex_reversibility(ex):
-    c, K, out = ex.ctx, ex.ctx.K, []
-    for g in ex.field_names:
-        def derive(g=g):
-            pts = ex.orbit(g)
-            return compare((k, lambda k=k: (step(ex.fields[g], -c.e, pts[k + 1]), pts[k])) for k in range(K))
-        out.append(claim(f"reversibility Phi_{g}", f"Phi_{g}(Phi_{g}(x, eps), -eps) = x at the {K} points of its orbit",
-                         derive))
-    pts, f = c.pts, ex.fields["f"]
-    out.append(control("control: Phi_f applied twice returns",
-                       "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
-                       lambda: compare((k, lambda k=k: (pts[k + 2], pts[k])) for k in range(K - 1)) if K >= 2
-                       else compare([(0, lambda: (step(f, c.e, pts[1]), pts[0]))]),
-                       lambda: c.same(step(f, c.e, pts[1]), pts[0])))
-    return out
+    c, K, pts, f = ex.ctx, ex.ctx.K, ex.ctx.pts, ex.fields["f"]
+    return ex.reversibility() + [control(
+        "control: Phi_f applied twice returns",
+        "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
+        lambda: compare((k, lambda k=k: (pts[k + 2], pts[k])) for k in range(K - 1)) if K >= 2
+        else compare([(0, lambda: (step(f, c.e, pts[1]), pts[0]))]), lambda: c.same(step(f, c.e, pts[1]), pts[0]))]
 
 
 def ex_integrals(ex):
@@ -689,19 +721,12 @@ def ex_poisson(ex):
 
 
 def ex_commutation(ex):
-    c, K, pts, out = ex.ctx, ex.ctx.K, ex.ctx.pts, []
-    f = ex.fields["f"]
-
-    def items(g, e):
-        y = lambda k: c.memo(("gy", g, e == c.e, k), lambda: step(ex.fields[g], e, pts[k]))  # noqa: E731
-        return ((k, lambda k=k: (step(f, c.e, y(k)), y(k + 1))) for k in range(K))
-    for g in ex.field_names[1:]:
-        out += [claim(f"commutation Phi_f o Phi_{g}", f"Phi_f(Phi_{g}(x)) = Phi_{g}(Phi_f(x)) at the {K} points x_k "
-                      f"of the Phi_f orbit", lambda g=g: compare(items(g, c.e))),
-                control(f"control: commutation with Phi_{g} at 2 eps",
-                        f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
-                        lambda g=g: compare(items(g, 2 * c.e)), lambda: c.same(pts[1], pts[0]))]
-    return out
+    c = ex.ctx
+    return [r for g in ex.field_names[1:] for r in (
+        ex.commutation(g),
+        control(f"control: commutation with Phi_{g} at 2 eps",
+                f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
+                lambda g=g: compare(ex.commuting(g, 2 * c.e)), lambda: c.same(c.pts[1], c.pts[0])))]
 
 
 def ex_jacobian(ex):
@@ -794,26 +819,17 @@ def declared_claims(system) -> tuple:
     return known, tuple(k for k in EXPRESSION_KINDS if k in own)
 
 
+#: the record builders of a certificate's system, by its JSON's "family" key (a system without one is given
+#: by expressions)
+FAMILIES = {"lie-poisson": LiePoisson}
+
+
+def family(data):
+    return FAMILIES.get(data["system"].get("family"), Expressions)
+
+
 def expected_records(ctx, chosen=None) -> tuple:
     """(the records the certificate's system and options imply, a note on the claim selection or None);
     ``chosen``: the claims of a system given by expressions (default: those the records in
     ``ctx.checks`` cover, else the system's own list)."""
-    if getattr(ctx.system, "kind", "") == "lie-poisson":
-        ctx.chosen = None
-        lp = LiePoisson(ctx)
-        return [r for kind in LIE_POISSON_KINDS for r in kind(lp)], None
-    ex = Expressions(ctx)
-    known, own = declared_claims(ctx.system)
-    by_kind = {k: EXPRESSION_KINDS[k](ex) for k in known}
-    names = set(ctx.checks)
-    if chosen is None:
-        chosen = [k for k in known if any(r.name in names for r in by_kind[k])] or list(own)
-    note = None
-    if tuple(chosen) != own:
-        note = (f"the records cover the claims {', '.join(chosen)}; the system's own list is {', '.join(own)} "
-                f"(a --claims selection, which the certificate does not record)")
-    ctx.chosen = list(chosen)
-    records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(ex)
-    # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
-    fixed = lambda: "x0 is a fixed point of Phi_f" if ex.ctx.same(ex.ctx.pts[1], ex.ctx.pts[0]) else None  # noqa: E731
-    return [r if r.expected else replace(r, always=fixed) for r in records], note
+    return ctx.family.records(chosen)
