@@ -34,6 +34,8 @@ from exact_khk.certification.verify.records import (UNDEFINED, Context, _short, 
                                                     rederive)
 from exact_khk.errors import InputError
 
+__all__ = ["IDENTITY", "PROOF", "Identities", "Proofs", "identity_signs", "stated_bound"]
+
 IDENTITY, PROOF = "identity: ", "proof: "
 #: the draws the verifier makes (``certify --identities`` makes 2), and the most it tries for them
 DRAWS, MAX_ATTEMPTS = 2, 20
