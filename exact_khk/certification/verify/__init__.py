@@ -17,7 +17,7 @@ certificate's own data it re-derives
 * the status and the verdict line, from the re-derived records.
 
 It does so with plain exact arithmetic written out from the formulas
-(:mod:`.fields`: Q as Fractions, Q(ζ_N), F_P; its own Gaussian elimination and dual
+(:mod:`.fields`: Q, Q(ζ_N), F_P on python-flint's numbers; its own Gaussian elimination and dual
 numbers; :mod:`.maps`: the Kahan step, its derivative, the family's matrices) and
 never calls the library's Kahan map, linear algebra, arithmetic contexts or
 certification engines.  From the library it takes the reading of the input: the
@@ -212,22 +212,17 @@ def _records(cert, data, F, orbit_ok, seed=None, proof_budget=None):
     want = [r.name for r in expected]
     out, skipped, modes = [], [], {}
     # the other modes: their records are there iff certify ran them (--identities, --prove)
-    first = next((c for c in checks if c["name"].startswith(IDENTITY)), None)
-    if first is not None:
-        try:
-            modes[IDENTITY] = Identities(cert, data, ctx.chosen, first["arith"], seed)
-            want += modes[IDENTITY].names
-        except Undefined as exc:
-            modes[IDENTITY] = None
-            out.append(("identity records", False, f"cannot be re-derived: {exc}"))
-    if any(n.startswith(PROOF) for n in recorded):
-        kw = {} if proof_budget is None else {"budget": proof_budget}
-        try:
-            modes[PROOF] = Proofs(cert, data, ctx.chosen, **kw)
-            want += modes[PROOF].names
-        except Undefined as exc:
-            modes[PROOF] = None
-            out.append(("proof records", False, f"cannot be re-derived: {exc}"))
+    first = next((c for c in checks if c["name"].startswith(IDENTITY)), {})
+    budget = {} if proof_budget is None else {"budget": proof_budget}
+    for prefix, make in ((IDENTITY, lambda: Identities(cert, data, ctx.chosen, first["arith"], seed)),
+                         (PROOF, lambda: Proofs(cert, data, ctx.chosen, **budget))):
+        if any(n.startswith(prefix) for n in recorded):
+            try:
+                modes[prefix] = make()
+                want += modes[prefix].names
+            except Undefined as exc:
+                modes[prefix] = None
+                out.append((f"{prefix[:-2]} records", False, f"cannot be re-derived: {exc}"))
     # coverage: exactly the implied records, in order (those of a mode that cannot be listed left out)
     listed = [n for n in recorded if not any(n.startswith(p) and modes[p] is None for p in modes)]
     diff = _first_difference(want, listed)

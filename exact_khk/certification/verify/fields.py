@@ -1,6 +1,7 @@
-"""The exact fields of the verifier — Q, Q(ζ_N), F_P — written out from their definitions
-(no arithmetic context of the library), plain Gaussian elimination over them, dual
-numbers for exact derivatives, and a tiny evaluator of the system's expression text.
+"""The exact fields of the verifier — Q (python-flint ``fmpq``, or Fractions), Q(ζ_N)
+(``fmpq_poly`` modulo Φ_N), F_P (``nmod``) — with no arithmetic context of the library,
+plain Gaussian elimination over them, dual numbers for exact derivatives, and a tiny
+evaluator of the system's expression text.
 
 Elements support ``+ - * /`` and ``==``; a quantity that does not exist at a point
 (division by zero, a pole, a singular step) raises :class:`Undefined`.

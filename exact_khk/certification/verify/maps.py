@@ -153,10 +153,7 @@ def step(f, e, x):
 
 def orbit(f, e, x0, steps):
     """[x0, Φ(x0), …] (steps + 1 points)."""
-    pts = [list(x0)]
-    for _ in range(steps):
-        pts.append(step(f, e, pts[-1]))
-    return pts
+    return list(lazy_orbit(f, e, x0, steps))
 
 
 def lazy_orbit(f, e, x0, steps):

@@ -104,7 +104,7 @@ class Identities:
                 self.singular.append("eps = 0")
                 continue
             try:
-                ctx = Context.generic(cert, data, F, x, e, arith, self.signs)
+                ctx = Context(cert, data, F, point=(x, e), arith=arith, signs=self.signs)
                 recs, _ = expected_records(ctx, chosen)
             except UNDEFINED as exc:
                 self.singular.append(f"a step or a statement is undefined: {exc}")
@@ -281,8 +281,8 @@ class Proofs:
         F, rng = _PrimeField(NAMES_PRIME), random.Random(0)
         for _ in range(MAX_ATTEMPTS):
             try:
-                ctx = Context.generic(cert, data, F, [F.of(rng.randrange(F.P)) for _ in range(N)],
-                                      F.of(rng.randrange(1, F.P)), self.arith, self.signs)
+                point = [F.of(rng.randrange(F.P)) for _ in range(N)], F.of(rng.randrange(1, F.P))
+                ctx = Context(cert, data, F, point=point, arith=self.arith, signs=self.signs)
                 self.names = [PROOF + r.name for r in expected_records(ctx, chosen)[0]]
                 break
             except UNDEFINED:
@@ -295,7 +295,7 @@ class Proofs:
             return
         try:
             K = _SymPyField([f"x{i}" for i in range(N)] + ["eps"], t0 + budget)
-            ctx = Context.generic(cert, data, K, K.gens[:N], K.gens[N], self.arith, self.signs)
+            ctx = Context(cert, data, K, point=(K.gens[:N], K.gens[N]), arith=self.arith, signs=self.signs)
             recs, _ = expected_records(ctx, chosen)
             for r in recs:
                 if time.monotonic() > t0 + budget:

@@ -5,11 +5,10 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from exact_khk.certification.verify.fields import (Undefined, _Rationals, _eliminate, _matmul, _matvec, _show,
-                                                   to_fraction)
+from exact_khk.certification.verify.fields import Undefined, _Rationals, _eliminate, _matmul, _matvec, _show
 from exact_khk.certification.verify.maps import (_expression_field, _htilde, _identity_minus, _involution, _lp_field,
                                                  _lp_hessian, h_definition)
-from exact_khk.certification.verify.records import LiePoisson, evaluator, family
+from exact_khk.certification.verify.records import LiePoisson, evaluator, family, reduced
 
 
 class _Recheck:
@@ -116,16 +115,7 @@ class _Recheck:
             raise
         if self.lp or not isinstance(self.F, _Rationals):
             raise Undefined("division by zero")
-        # the expression as written divides by zero at x_k; its value there is that of the
-        # reduced rational function, if it is finite (the library reduces it to lowest terms)
-        from exact_khk.arith import get_arith
-        from exact_khk.errors import PoleError
-
-        try:
-            return self.F.of(self.system.integrals()[name](get_arith("fraction"), [to_fraction(t) for t in x],
-                                                          self.cert.eps)), " (reduced form)"
-        except PoleError:
-            raise Undefined("pole") from None
+        return reduced(self.system.integrals()[name], self.F, x, self.cert.eps), " (reduced form)"
 
     def integrals(self) -> list:
         fns = self.integral_functions()

@@ -155,35 +155,24 @@ class Context:
     recorded orbit (re-checked by :mod:`.orbit`), the system, the arithmetic's name and the
     involutions (the family).
 
-    :meth:`generic` makes the context of the other modes instead: x0 and ε elements of F (a
-    random draw in F_P, or the symbols of Q(x, ε)), one step computed here, and
-    ``point_free``: the controls' rules that judge a point are off (x0 is generic)."""
+    With ``point`` = (x0, ε), elements of F (a random draw in F_P, or the symbols of Q(x, ε)), it is
+    the context of the other modes instead: one step from x0 computed here (:class:`~.fields.Undefined`
+    where it is singular), ``arith`` and ``signs`` theirs, and ``point_free``: the controls' rules that
+    judge a point are off (x0 is generic)."""
 
-    point_free = False
-
-    def __init__(self, cert, data, F, checks):
-        self.cert, self.data, self.F, self.checks = cert, data, F, checks
-        self.system, self.K, self.eps = cert.system, cert.steps, Fraction(cert.eps)
-        self.arith, self.signs = cert.arith, list(cert.signs)
-        self.e = F.of(cert.eps)
-        self.x0q = [Fraction(t) for t in cert.x0]
-        self.x0 = [F.of(t) for t in cert.x0]
-        self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
-        self._memo = {}
+    def __init__(self, cert, data, F, checks=None, point=None, arith=None, signs=None):
+        self.cert, self.data, self.F, self.checks, self._memo = cert, data, F, checks or {}, {}
+        self.system, self.arith, self.point_free = cert.system, arith or cert.arith, point is not None
+        self.signs = list(cert.signs if signs is None else signs)
+        if point is None:
+            self.K, self.eps, self.e = cert.steps, Fraction(cert.eps), F.of(cert.eps)
+            self.x0q, self.x0 = [Fraction(t) for t in cert.x0], [F.of(t) for t in cert.x0]
+            self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
+        else:
+            self.K, self.eps, self.x0q, self.x0, self.e = 1, None, None, list(point[0]), point[1]
         self.family = family(data)(self)
-
-    @classmethod
-    def generic(cls, cert, data, F, x0, e, arith, signs=None):
-        """The context of one step from the generic point x0 (elements of F) with step e;
-        :class:`~.fields.Undefined` where that step is singular."""
-        ctx = cls.__new__(cls)
-        ctx.cert, ctx.data, ctx.F, ctx.checks, ctx.point_free = cert, data, F, {}, True
-        ctx.system, ctx.K, ctx.arith = cert.system, 1, arith
-        ctx.signs = list(cert.signs if signs is None else signs)
-        ctx.e, ctx.x0, ctx.eps, ctx.x0q, ctx._memo = e, list(x0), None, None, {}
-        ctx.family = family(data)(ctx)
-        ctx.pts = orbit(ctx.family.fields["f"], e, ctx.x0, 1)
-        return ctx
+        if point is not None:
+            self.pts = orbit(self.family.fields["f"], self.e, self.x0, 1)
 
     def memo(self, key, fn):
         if key not in self._memo:
@@ -551,6 +540,18 @@ LIE_POISSON_KINDS = (lp_integrals, lambda lp: [lp.commutation(sg) for sg in lp.s
 # --- systems given by expressions (catalogue, system files) --------------------------------
 
 
+def reduced(fn, F, x, eps):
+    """Over Q, where an expression as written divides by zero at x: the value there of the library's
+    rational function ``fn`` reduced to lowest terms (Undefined at a pole)."""
+    from exact_khk.arith import get_arith
+    from exact_khk.errors import PoleError
+
+    try:
+        return F.of(fn(get_arith("fraction"), [to_fraction(t) for t in x], eps))
+    except PoleError:
+        raise Undefined("pole") from None
+
+
 def evaluator(spec, F):
     """(text, where, e) -> x -> the value of the system's expression ``text`` at x in F (its parameters, ε = e)."""
     params = {p: _Evaluate(t, {}, F, f"system.parameters.{p}").value for p, t in (spec.get("parameters") or {}).items()}
@@ -586,14 +587,8 @@ class Expressions(Family):
             except ZeroDivisionError:
                 if table is None or not isinstance(c.F, _Rationals) or isinstance(x[0], Dual):
                     raise
-            from exact_khk.arith import get_arith
-            from exact_khk.errors import PoleError
-
-            fn = table[name] if eps is None else table[name].at_eps_zero()
-            try:
-                return c.F.of(fn(get_arith("fraction"), [to_fraction(t) for t in x], c.eps if eps is None else 0))
-            except PoleError:
-                raise Undefined("pole") from None
+            lib = table[name] if eps is None else table[name].at_eps_zero()
+            return reduced(lib, c.F, x, c.eps if eps is None else 0)
         return value
 
     def poisson(self, x):
