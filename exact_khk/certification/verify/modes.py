@@ -29,7 +29,7 @@ import secrets
 import time
 
 from exact_khk.certification.verify.fields import Undefined, _PrimeField, exact_field
-from exact_khk.certification.verify.records import (UNDEFINED, Context, _short, _tf, differs,  # noqa: F401
+from exact_khk.certification.verify.records import (UNDEFINED, Context, _short, _tf, differs,
                                                     expected_records, family, identity_signs, outcome_differs,
                                                     rederive)
 from exact_khk.errors import InputError
