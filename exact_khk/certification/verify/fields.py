@@ -132,10 +132,15 @@ class _Cyclotomic:
 def _cyc_op(fn):
     """A binary operation of :class:`_Cyc` on python-flint polynomials: ``fn(self, other, the field)``."""
     def op(self, o):
-        b = o.p if isinstance(o, _Cyc) else flint.fmpq_poly([flint.fmpq(o.numerator, o.denominator)]) \
-            if isinstance(o, (int, Fraction)) else None
+        b = _poly(o)
         return NotImplemented if b is None else _Cyc(self.K, fn(self.p, b, self.K))
     return op
+
+
+def _poly(o):
+    """An element of Q(ζ_N), an int or a Fraction as a python-flint polynomial (None for another type)."""
+    return o.p if isinstance(o, _Cyc) else flint.fmpq_poly([o]) if isinstance(o, int) else \
+        flint.fmpq_poly([flint.fmpq(o.numerator, o.denominator)]) if isinstance(o, Fraction) else None
 
 
 def _inverse(b, K):
@@ -167,8 +172,8 @@ class _Cyc:
     __hash__ = None
 
     def __eq__(self, o):
-        d = self - o
-        return NotImplemented if d is NotImplemented else d.p.is_zero()
+        b = _poly(o)
+        return NotImplemented if b is None else self.p == b
 
     def __neg__(self):
         return _Cyc(self.K, -self.p)

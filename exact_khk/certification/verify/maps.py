@@ -17,7 +17,8 @@ from exact_khk.certification.verify.fields import (Dual, Undefined, _Cyclotomic,
 
 def _identity_minus(e, D, sign=-1):
     """I + sign·e·D."""
-    return [[(1 if i == j else 0) + sign * e * t for j, t in enumerate(r)] for i, r in enumerate(D)]
+    se = sign * e
+    return [[(1 if i == j else 0) + se * t for j, t in enumerate(r)] for i, r in enumerate(D)]
 
 
 class _Quadratic:
