@@ -8,8 +8,10 @@ function giving ``(holds, residual)`` exactly, and for a control the rule that m
 it inapplicable where it cannot fail.  :func:`rederive` runs one; the caller compares
 it with the recorded one field by field.
 
-Each kind of claim is one function in one table (:data:`LIE_POISSON_KINDS`,
-:data:`EXPRESSION_KINDS`): adding a kind is adding a function and a line there.
+The system's family is read from the certificate's own system JSON (its ``"family"`` key, in
+:data:`FAMILIES`; none: a system given by expressions).  Each kind of claim is one function in one
+table (:data:`LIE_POISSON_KINDS`, :data:`EXPRESSION_KINDS`): adding a kind is adding a function and
+a line there.
 """
 
 from __future__ import annotations
