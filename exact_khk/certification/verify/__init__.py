@@ -17,7 +17,7 @@ certificate's own data it re-derives
 * the status and the verdict line, from the re-derived records.
 
 It does so with plain exact arithmetic written out from the formulas
-(:mod:`.fields`: Q as Fractions, Q(ζ_N), F_P; its own Gaussian elimination and dual
+(:mod:`.fields`: Q, Q(ζ_N), F_P on python-flint's numbers; its own Gaussian elimination and dual
 numbers; :mod:`.maps`: the Kahan step, its derivative, the family's matrices) and
 never calls the library's Kahan map, linear algebra, arithmetic contexts or
 certification engines.  From the library it takes the reading of the input: the
@@ -55,7 +55,8 @@ from exact_khk.certification.verify.fields import (RATIONAL_ARITHS, Undefined, _
                                                    cyclotomic_polynomial, exact_field, _show)
 from exact_khk.certification.verify.orbit import _Recheck
 from exact_khk.certification.verify.modes import IDENTITY, PROOF, Identities, Proofs
-from exact_khk.certification.verify.records import Context, expected_records, rederive
+from exact_khk.certification.verify.records import (Context, _short, _tf, differs, expected_records,
+                                                    outcome_differs, rederive)
 from exact_khk.errors import InputError
 
 __all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotomic_polynomial", "RATIONAL_ARITHS",
@@ -211,22 +212,17 @@ def _records(cert, data, F, orbit_ok, seed=None, proof_budget=None):
     want = [r.name for r in expected]
     out, skipped, modes = [], [], {}
     # the other modes: their records are there iff certify ran them (--identities, --prove)
-    first = next((c for c in checks if c["name"].startswith(IDENTITY)), None)
-    if first is not None:
-        try:
-            modes[IDENTITY] = Identities(cert, data, ctx.chosen, first["arith"], seed)
-            want += modes[IDENTITY].names
-        except Undefined as exc:
-            modes[IDENTITY] = None
-            out.append(("identity records", False, f"cannot be re-derived: {exc}"))
-    if any(n.startswith(PROOF) for n in recorded):
-        kw = {} if proof_budget is None else {"budget": proof_budget}
-        try:
-            modes[PROOF] = Proofs(cert, data, ctx.chosen, **kw)
-            want += modes[PROOF].names
-        except Undefined as exc:
-            modes[PROOF] = None
-            out.append(("proof records", False, f"cannot be re-derived: {exc}"))
+    first = next((c for c in checks if c["name"].startswith(IDENTITY)), {})
+    budget = {} if proof_budget is None else {"budget": proof_budget}
+    for prefix, make in ((IDENTITY, lambda: Identities(cert, data, ctx.chosen, first["arith"], seed)),
+                         (PROOF, lambda: Proofs(cert, data, ctx.chosen, **budget))):
+        if any(n.startswith(prefix) for n in recorded):
+            try:
+                modes[prefix] = make()
+                want += modes[prefix].names
+            except Undefined as exc:
+                modes[prefix] = None
+                out.append((f"{prefix[:-2]} records", False, f"cannot be re-derived: {exc}"))
     # coverage: exactly the implied records, in order (those of a mode that cannot be listed left out)
     listed = [n for n in recorded if not any(n.startswith(p) and modes[p] is None for p in modes)]
     diff = _first_difference(want, listed)
@@ -325,12 +321,11 @@ _RECORD_KEYS = {"checks", "status", "valid", "verdict", "seconds", "versions", "
 def _one_record(rec, c, cert, F, orbit_ok, cache_key=None):
     """(the record with re-derived holds/residual/applicable, the first difference or None)."""
     d = dict(c)
-    for key, want, have in (("claim", rec.claim, c["claim"]), ("expected", rec.expected, c["expected"]),
-                            ("evidence", F.evidence, c.get("evidence", "exact in Q")),
-                            ("arith", cert.arith, c["arith"])):
-        if want != have:
-            return d, (f"{key} is {_short(have)}, but {'the statement' if key == 'claim' else 'it'} re-derived from "
-                       f"the certificate's data is {_short(want)}")
+    problem = differs((("claim", rec.claim, c["claim"]), ("expected", rec.expected, c["expected"]),
+                       ("evidence", F.evidence, c.get("evidence", "exact in Q")), ("arith", cert.arith, c["arith"])),
+                      " from the certificate's data")
+    if problem:
+        return d, problem
     if not orbit_ok:
         return d, "not re-derived: the recorded orbit or values are wrong (see above)"
     key = (cache_key, rec.name, rec.claim, rec.expected)
@@ -341,8 +336,6 @@ def _one_record(rec, c, cert, F, orbit_ok, cache_key=None):
     if cache_key is not None:
         _DERIVED[key] = (holds, residual, applicable)
     d.update(holds=holds, applicable=applicable, _rederived=True)
-    if c["holds"] != holds:
-        return d, f"recorded holds = {_tf(c['holds'])}, re-derived holds = {_tf(holds)}"
     if isinstance(residual, str):
         same, shown = c["residual"] == residual, residual
     else:
@@ -351,12 +344,7 @@ def _one_record(rec, c, cert, F, orbit_ok, cache_key=None):
         except InputError:
             same = False
         shown = _show(residual)
-    if not same:
-        return d, f"recorded residual {_short(c['residual'])}, re-derived residual {_short(shown)}"
-    if c.get("applicable", True) != applicable:
-        return d, (f"recorded applicable = {_tf(c.get('applicable', True))}, re-derived: the control "
-                   f"{'can fail' if applicable else 'cannot fail'} here, so applicable = {_tf(applicable)}")
-    return d, None
+    return d, outcome_differs(c, holds, same, f"residual {_short(shown)}", applicable)
 
 
 def _describe(d) -> str:
@@ -364,15 +352,6 @@ def _describe(d) -> str:
     if not d.get("applicable", True):
         return f"{kind}, re-derived: inapplicable (cannot fail here), as recorded"
     return f"{kind}, re-derived: holds = {_tf(d['holds'])}, residual {_short(d['residual'])}, as recorded"
-
-
-def _tf(v) -> str:
-    return {True: "true", False: "false", None: "undecided"}.get(v, repr(v))
-
-
-def _short(v, width=60) -> str:
-    text = v if isinstance(v, str) else repr(v)
-    return repr(text if len(text) <= width else text[:width - 3] + "...")
 
 
 def _status_results(data, checks, skipped) -> list:

@@ -1,6 +1,7 @@
-"""The exact fields of the verifier — Q, Q(ζ_N), F_P — written out from their definitions
-(no arithmetic context of the library), plain Gaussian elimination over them, dual
-numbers for exact derivatives, and a tiny evaluator of the system's expression text.
+"""The exact fields of the verifier — Q (python-flint ``fmpq``, or Fractions), Q(ζ_N)
+(``fmpq_poly`` modulo Φ_N), F_P (``nmod``) — with no arithmetic context of the library,
+plain Gaussian elimination over them, dual numbers for exact derivatives, and a tiny
+evaluator of the system's expression text.
 
 Elements support ``+ - * /`` and ``==``; a quantity that does not exist at a point
 (division by zero, a pole, a singular step) raises :class:`Undefined`.
@@ -28,8 +29,6 @@ class Undefined(Exception):
     """A quantity that does not exist at a point (division by zero, a pole, a singular step)."""
 
 
-_Undefined = Undefined
-
 # --- exact fields: Q, Q(zeta_N), F_P --------------------------------------------------
 
 
@@ -40,7 +39,6 @@ def _show(e) -> str:
         bits = max(abs(num).bit_length(), den.bit_length())
         if bits > _SHOW_BITS:
             return f"<a rational of about {int(bits * 0.30103) + 1} digits>"
-        return str(e)
     return str(e)
 
 
@@ -60,12 +58,12 @@ class _Rationals:
         return to_fraction(q)
 
     def parse(self, text: str, where: str):
-        return parse_rational(text, where)
+        return self.of(parse_rational(text, where))
 
     def root_of_unity(self, n: int):
         if n <= 2:
             return self.of(-1 if n == 2 else 1)
-        raise _Undefined(f"Q has no primitive {n}-th root of unity")
+        raise Undefined(f"{self.name} has no primitive {n}-th root of unity")
 
 
 class _FlintRationals(_Rationals):
@@ -80,167 +78,105 @@ class _FlintRationals(_Rationals):
         q = Fraction(q)
         return flint.fmpq(q.numerator, q.denominator)
 
-    def parse(self, text: str, where: str):
-        return self.of(parse_rational(text, where))
-
-
-def _trim(c) -> tuple:
-    c = list(c)
-    while c and c[-1] == 0:
-        c.pop()
-    return tuple(c)
-
-
-def _pdivmod(a, b):
-    """(q, r) with a = q b + r, deg r < deg b (coefficient lists, constant term first)."""
-    a, q = list(a), [Fraction(0)] * max(len(a) - len(b) + 1, 0)
-    for i in range(len(a) - len(b), -1, -1):
-        c = Fraction(a[i + len(b) - 1]) / b[-1]
-        q[i] = c
-        if c:
-            for j, t in enumerate(b):
-                a[i + j] -= c * t
-    return _trim(q), _trim(a[:len(b) - 1])
-
 
 @lru_cache(maxsize=None)
 def cyclotomic_polynomial(N: int) -> tuple:
-    """Φ_N as integer coefficients, constant term first: (z^N − 1) / Π_{d | N, d < N} Φ_d.
+    """Φ_N as integer coefficients, constant term first (python-flint's ``fmpz_poly.cyclotomic``).
 
     >>> cyclotomic_polynomial(3), cyclotomic_polynomial(4)
     ((1, 1, 1), (1, 0, 1))
     """
-    p = [Fraction(-1)] + [Fraction(0)] * (N - 1) + [Fraction(1)]
-    for d in range(1, N):
-        if N % d == 0:
-            p, r = _pdivmod(p, [Fraction(t) for t in cyclotomic_polynomial(d)])
-            assert not r
-    return tuple(int(t) for t in p)
+    return tuple(int(t) for t in flint.fmpz_poly.cyclotomic(N).coeffs())
 
 
 class _Cyclotomic:
-    """Q(ζ_N): polynomials in z = ζ_N of degree < φ(N) with Fraction coefficients,
-    reduced modulo Φ_N (the printing of ``cyclo:N``: '1/3 - 2/3*z + z^2')."""
+    """Q(ζ_N): elements are :class:`_Cyc`, polynomials in z = ζ_N reduced modulo Φ_N (the printing
+    of ``cyclo:N``: '1/3 - 2/3*z + z^2')."""
 
     _TERM = re.compile(r"\s*([+-]?)\s*(?:(\d+(?:/\d+)?)(\*z(?:\^(\d+))?)?|z(?:\^(\d+))?)\s*")
 
     def __init__(self, N: int):
-        self.N = N
-        self.name = f"Q(zeta_{N})"
+        self.N, self.name = N, f"Q(zeta_{N})"
         self.evidence = f"exact in Q(zeta_{N})"
-        self.modulus = tuple(Fraction(t) for t in cyclotomic_polynomial(N))
         self.poly = flint.fmpq_poly(list(cyclotomic_polynomial(N)))
-        self.one, self.zero = _Cyc(self, (Fraction(1),)), _Cyc(self, ())
+        self.one, self.zero = self.of(1), self.of(0)
 
-    def reduce(self, c) -> tuple:
-        c, m, d = list(c), self.modulus, len(self.modulus) - 1
-        for i in range(len(c) - 1, d - 1, -1):
-            t = c[i]
-            if t:
-                for j in range(d + 1):
-                    c[i - d + j] -= t * m[j]
-        return _trim(c[:d])
-
-    def of(self, q: Fraction):
-        return _Cyc(self, (Fraction(q),))
+    def of(self, q, k: int = 0):
+        """q z^k."""
+        q = Fraction(q)
+        return _Cyc(self, flint.fmpq_poly([0] * k + [flint.fmpq(q.numerator, q.denominator)]) % self.poly)
 
     def parse(self, text: str, where: str):
         if not isinstance(text, str) or not text.strip():
             raise InputError(f"{where}: expected an element of {self.name} such as '1/3 - 2/3*z', got {text!r}")
-        coeffs, pos, first = {}, 0, True
+        out, pos = self.zero, 0
         while pos < len(text):
             m = self._TERM.match(text, pos)
-            if m is None or m.end() == pos or (not first and not m.group(1)):
+            if m is None or m.end() == pos or (pos and not m.group(1)):
                 raise InputError(f"{where}: {text[:60]!r} is not an element of {self.name} "
                                  f"(expected terms such as '1/3', '- 2/3*z', '+ z^2')")
             sign, num, zpart, e1, e2 = m.groups()
             if num is not None:
-                c = parse_rational(num, where)
-                k = 0 if zpart is None else int(e1 or 1)
+                c, k = parse_rational(num, where), 0 if zpart is None else int(e1 or 1)
             else:
                 c, k = Fraction(1), int(e2 or 1)
-            coeffs[k] = coeffs.get(k, 0) + (-c if sign == "-" else c)
-            pos, first = m.end(), False
-        top = max(coeffs)
-        return _Cyc(self, self.reduce([coeffs.get(k, Fraction(0)) for k in range(top + 1)]))
+            out, pos = out + self.of(-c if sign == "-" else c, k), m.end()
+        return out
 
     def root_of_unity(self, n: int):
         if self.N % n:
-            raise _Undefined(f"{self.name} contains no primitive {n}-th root of unity")
-        return _Cyc(self, self.reduce([Fraction(0)] * (self.N // n) + [Fraction(1)]))
+            raise Undefined(f"{self.name} contains no primitive {n}-th root of unity")
+        return self.of(1, self.N // n)
+
+
+def _cyc_op(fn):
+    """A binary operation of :class:`_Cyc` on python-flint polynomials: ``fn(self, other, the field)``."""
+    def op(self, o):
+        b = _poly(o)
+        return NotImplemented if b is None else _Cyc(self.K, fn(self.p, b, self.K))
+    return op
+
+
+def _poly(o):
+    """An element of Q(ζ_N), an int or a Fraction as a python-flint polynomial (None for another type)."""
+    return o.p if isinstance(o, _Cyc) else flint.fmpq_poly([o]) if isinstance(o, int) else \
+        flint.fmpq_poly([flint.fmpq(o.numerator, o.denominator)]) if isinstance(o, Fraction) else None
+
+
+def _inverse(b, K):
+    if b.is_zero():
+        raise ZeroDivisionError(f"division by zero in {K.name}")
+    g, s, _ = b.xgcd(K.poly)  # Φ_N is irreducible: g is a nonzero constant
+    return s / g.coeffs()[0]
 
 
 class _Cyc:
-    """An element of Q(ζ_N): a python-flint ``fmpq_poly`` in z of degree < φ(N), reduced modulo Φ_N
-    (``c``: its coefficients as Fractions, constant term first)."""
+    """An element of Q(ζ_N): a python-flint ``fmpq_poly`` ``p`` in z of degree < φ(N), reduced modulo Φ_N."""
 
     __slots__ = ("K", "p")
 
-    def __init__(self, K, c):
-        self.K = K
-        self.p = c if isinstance(c, flint.fmpq_poly) else \
-            flint.fmpq_poly([flint.fmpq(t.numerator, t.denominator) for t in map(Fraction, c)]) % K.poly
+    def __init__(self, K, p):
+        self.K, self.p = K, p
 
     @property
     def c(self) -> tuple:
+        """The coefficients as Fractions, constant term first."""
         return tuple(Fraction(int(t.p), int(t.q)) for t in self.p.coeffs())
 
-    def _co(self, o):
-        if isinstance(o, _Cyc):
-            return o.p
-        if isinstance(o, int):
-            return flint.fmpq_poly([o])
-        if isinstance(o, Fraction):
-            return flint.fmpq_poly([flint.fmpq(o.numerator, o.denominator)])
-        return None
-
-    def _new(self, p):
-        out = _Cyc.__new__(_Cyc)
-        out.K, out.p = self.K, p
-        return out
-
-    def __add__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self._new(self.p + b)
-
-    __radd__ = __add__
-
-    def __sub__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self._new(self.p - b)
-
-    def __rsub__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self._new(b - self.p)
-
-    def __neg__(self):
-        return self._new(-self.p)
-
-    def __mul__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self._new((self.p * b) % self.K.poly)
-
-    __rmul__ = __mul__
-
-    def _inverse(self, b):
-        if b.is_zero():
-            raise ZeroDivisionError(f"division by zero in {self.K.name}")
-        g, s, _ = b.xgcd(self.K.poly)  # Φ_N is irreducible: g is a nonzero constant
-        return s / g.coeffs()[0] if not g.is_one() else s
-
-    def __truediv__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self._new((self.p * self._inverse(b)) % self.K.poly)
-
-    def __rtruediv__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self._new((b * self._inverse(self.p)) % self.K.poly)
+    __add__ = __radd__ = _cyc_op(lambda a, b, K: a + b)
+    __sub__ = _cyc_op(lambda a, b, K: a - b)
+    __rsub__ = _cyc_op(lambda a, b, K: b - a)
+    __mul__ = __rmul__ = _cyc_op(lambda a, b, K: a * b % K.poly)
+    __truediv__ = _cyc_op(lambda a, b, K: a * _inverse(b, K) % K.poly)
+    __rtruediv__ = _cyc_op(lambda a, b, K: b * _inverse(a, K) % K.poly)
+    __hash__ = None
 
     def __eq__(self, o):
-        b = self._co(o)
+        b = _poly(o)
         return NotImplemented if b is None else self.p == b
 
-    __hash__ = None
+    def __neg__(self):
+        return _Cyc(self.K, -self.p)
 
     def __bool__(self):
         return not self.p.is_zero()
@@ -255,30 +191,30 @@ class _Cyc:
 
 
 class _PrimeField:
-    """F_P, P a prime (checked by :func:`exact_field`): elements are :class:`_Mod` (printed as
-    the residue in [0, P))."""
+    """F_P, P a prime (checked by :func:`exact_field`): elements are python-flint ``nmod`` (printed
+    as the residue in [0, P))."""
 
     def __init__(self, P: int):
         self.P, self.name = P, f"F_{P}"
         self.evidence = f"modular: exact in F_{P} (zero mod P is evidence, not proof)"
-        self.one, self.zero = _Mod(P, 1), _Mod(P, 0)
+        self.one, self.zero = flint.nmod(1, P), flint.nmod(0, P)
 
-    def of(self, q: Fraction):
+    def of(self, q):
         q = Fraction(q)
         if q.denominator % self.P == 0:
-            raise _Undefined(f"{_show(q)} has no value mod {self.P} (its denominator is divisible by P)")
-        return _Mod(self.P, q.numerator * pow(q.denominator, -1, self.P))
+            raise Undefined(f"{_show(q)} has no value mod {self.P} (its denominator is divisible by P)")
+        return flint.nmod(q.numerator, self.P) / q.denominator
 
     def parse(self, text: str, where: str):
         if not isinstance(text, str) or not re.fullmatch(r"\d{1,40}", text.strip()) or int(text) >= self.P:
             raise InputError(f"{where}: {str(text)[:60]!r} is not a residue mod {self.P} (an integer in [0, P))")
-        return _Mod(self.P, int(text))
+        return flint.nmod(int(text), self.P)
 
     def root_of_unity(self, n: int):
         """g^((P-1)/n), g the least primitive root mod P (the embedding of ``gf:P``)."""
         if (self.P - 1) % n:
-            raise _Undefined(f"F_{self.P} contains no primitive {n}-th root of unity (P != 1 mod {n})")
-        return _Mod(self.P, pow(_least_primitive_root(self.P), (self.P - 1) // n, self.P))
+            raise Undefined(f"F_{self.P} contains no primitive {n}-th root of unity (P != 1 mod {n})")
+        return flint.nmod(pow(_least_primitive_root(self.P), (self.P - 1) // n, self.P), self.P)
 
 
 @lru_cache(maxsize=None)
@@ -292,77 +228,6 @@ def _least_primitive_root(P: int) -> int:
     while any(pow(g, (P - 1) // q, P) == 1 for q in qs):
         g += 1
     return g
-
-
-class _Mod:
-    """An element of F_P."""
-
-    __slots__ = ("P", "v")
-
-    def __init__(self, P, v):
-        self.P, self.v = P, v % P
-
-    def _co(self, o):
-        if isinstance(o, _Mod):
-            return o.v
-        if isinstance(o, int):
-            return o % self.P
-        if isinstance(o, Fraction):
-            if o.denominator % self.P == 0:
-                raise ZeroDivisionError(f"{_show(o)} has no value mod {self.P}")
-            return o.numerator * pow(o.denominator, -1, self.P) % self.P
-        return None
-
-    def __add__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else _Mod(self.P, self.v + b)
-
-    __radd__ = __add__
-
-    def __sub__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else _Mod(self.P, self.v - b)
-
-    def __rsub__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else _Mod(self.P, b - self.v)
-
-    def __neg__(self):
-        return _Mod(self.P, -self.v)
-
-    def __mul__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else _Mod(self.P, self.v * b)
-
-    __rmul__ = __mul__
-
-    def __truediv__(self, o):
-        b = self._co(o)
-        if b is None:
-            return NotImplemented
-        if b == 0:
-            raise ZeroDivisionError(f"division by zero mod {self.P}")
-        return _Mod(self.P, self.v * pow(b, -1, self.P))
-
-    def __rtruediv__(self, o):
-        b = self._co(o)
-        if b is None:
-            return NotImplemented
-        if self.v == 0:
-            raise ZeroDivisionError(f"division by zero mod {self.P}")
-        return _Mod(self.P, b * pow(self.v, -1, self.P))
-
-    def __eq__(self, o):
-        b = self._co(o)
-        return NotImplemented if b is None else self.v == b
-
-    __hash__ = None
-
-    def __bool__(self):
-        return self.v != 0
-
-    def __str__(self):
-        return str(self.v)
 
 
 #: the largest N of a ``cyclo:N`` certificate re-checked: the library's own limit
@@ -403,7 +268,7 @@ def exact_field(arith: str):
     if value < 1:
         raise _invalid_name(arith, "cyclo:N needs N >= 1")
     if value > MAX_CYCLOTOMIC_N:  # as get_arith: Φ_N has degree φ(N)
-        raise _Undefined(f"cyclo:{param[:40]}: N is above {MAX_CYCLOTOMIC_N}, the largest cyclo:N this "
+        raise Undefined(f"cyclo:{param[:40]}: N is above {MAX_CYCLOTOMIC_N}, the largest cyclo:N this "
                          "library computes in (not checkable)")
     return _Cyclotomic(value)
 
@@ -415,25 +280,39 @@ def _invalid_name(arith: str, why: str) -> InputError:
 # --- linear algebra: plain Gaussian elimination over a field ------------------------
 
 
-def _eliminate(A, B=None):
-    """Gaussian elimination on the square matrix A (with right-hand side columns B):
-    returns (det A, the solution X of A X = B or None).  Pivots: the first nonzero entry."""
-    N = len(A)
-    M = [list(row) + (list(B[i]) if B is not None else []) for i, row in enumerate(A)]
-    det = 1
-    for col in range(N):
-        piv = next((i for i in range(col, N) if nonzero(M[i][col])), None)
+def _forward(M, width):
+    """Gaussian elimination on the rows of M, in place, over its first ``width`` columns (pivot:
+    the first nonzero entry): (the number of pivots, their product times the swaps' sign)."""
+    r, det = 0, 1
+    for col in range(width):
+        piv = next((i for i in range(r, len(M)) if nonzero(M[i][col])), None)
         if piv is None:
-            return 0 * M[0][0], None
-        if piv != col:
-            M[col], M[piv] = M[piv], M[col]
+            continue
+        if piv != r:
+            M[r], M[piv] = M[piv], M[r]
             det = -det
-        p = M[col][col]
+        p = M[r][col]
         det = det * p
-        for i in range(col + 1, N):
+        for i in range(r + 1, len(M)):
             if M[i][col] != 0:
                 m = M[i][col] / p
-                M[i] = [a - m * b for a, b in zip(M[i], M[col])]
+                M[i] = [a - m * b for a, b in zip(M[i], M[r])]
+        r += 1
+    return r, det
+
+
+def rank(rows) -> int:
+    return _forward([list(r) for r in rows], len(rows[0]) if rows else 0)[0]
+
+
+def _eliminate(A, B=None):
+    """Gaussian elimination on the square matrix A (with right-hand side columns B):
+    returns (det A, the solution X of A X = B or None)."""
+    N = len(A)
+    M = [list(row) + (list(B[i]) if B is not None else []) for i, row in enumerate(A)]
+    r, det = _forward(M, N)
+    if r < N:
+        return 0 * M[0][0], None
     if B is None:
         return det, None
     width = len(B[0])
@@ -445,6 +324,14 @@ def _eliminate(A, B=None):
                 s = s - M[i][k] * X[k][j]
             X[i][j] = s / M[i][i]
     return det, X
+
+
+def solve(A, b, singular: str):
+    """The solution x of A x = b (a vector); :class:`Undefined` ``singular`` if A is singular."""
+    _, X = _eliminate(A, [[t] for t in b])
+    if X is None:
+        raise Undefined(singular)
+    return [r[0] for r in X]
 
 
 def nonzero(t) -> bool:
@@ -468,6 +355,9 @@ def _dot(u, v):
 def _matvec(A, x):
     return [_dot(r, x) for r in A]
 
+
+def transpose(M):
+    return [list(r) for r in zip(*M)]
 
 
 # --- a tiny evaluator of the integrals' expression text -------------------------------
@@ -588,6 +478,11 @@ class Dual:
         zero = 0 * x[0]
         return [Dual(t, [zero + (1 if m == i else 0) for m in range(N)]) for i, t in enumerate(x)]
 
+    @staticmethod
+    def parts(t, N, zero):
+        """(value, gradient) of a dual number in N variables, or of a constant (gradient 0)."""
+        return (t.v, t.d) if isinstance(t, Dual) else (t, [zero] * N)
+
     def _split(self, o):
         if isinstance(o, Dual):
             return o.v, o.d
@@ -636,10 +531,3 @@ class Dual:
         return self.v == v and all(a == (0 if d is None else b) for a, b in zip(self.d, d or self.d))
 
     __hash__ = None
-
-
-def value_and_gradient(t, N, zero):
-    """(value, gradient) of a dual number or of a constant (gradient 0)."""
-    if isinstance(t, Dual):
-        return t.v, t.d
-    return t, [zero] * N

@@ -11,17 +11,14 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from exact_khk.certification.verify.fields import (Dual, Undefined, _Cyclotomic, _eliminate, _matmul,
-                                                   _matvec, _dot, _Rationals)
-
-_Undefined = Undefined
+from exact_khk.certification.verify.fields import (Dual, Undefined, _Cyclotomic, _eliminate, _matmul, _matvec,
+                                                   _dot, _Rationals, solve, transpose)
 
 
 def _identity_minus(e, D, sign=-1):
     """I + sign·e·D."""
-    N = len(D)
-    return [[(1 if i == j else 0) + sign * e * D[i][j] for j in range(N)] for i in range(N)]
-
+    se = sign * e
+    return [[(1 if i == j else 0) + se * t for j, t in enumerate(r)] for i, r in enumerate(D)]
 
 
 class _Quadratic:
@@ -58,10 +55,14 @@ class _Quadratic:
     def homogeneous(self):
         return not any(self.linear) and all(c == 0 for c in self.const)
 
+    def kahan_rhs(self, e, x):
+        """(I + e L) x + 2 e c: the right-hand side of the step equation (I − e f'(x)) Φ(x) = ."""
+        return [x[i] + e * _dot([l for _, l in self.linear[i]], [x[j] for j, _ in self.linear[i]])
+                + 2 * e * self.const[i] for i in range(self.dim)]
 
-def _expression_field(system, F) -> _Quadratic:
-    """The quadratic terms of an ExpressionSystem's field f (its coefficient tuples)."""
-    fld = system.field("f")
+
+def _expression_field(fld, F) -> _Quadratic:
+    """The quadratic field of an ExpressionSystem's ``field(name)`` (its coefficient tuples)."""
     quad = [[(j, k, F.of(Fraction(c))) for (j, k), c in terms] for terms in fld.quad]
     lin = [[(j, F.of(Fraction(c))) for j, c in row] for row in fld.linear]
     return _Quadratic(fld.dim, quad, lin, [F.of(Fraction(c)) for c in fld.const])
@@ -109,14 +110,9 @@ def _involution(n, signs, F):
     computed in Q(ζ_n) and mapped into F (ζ_n to F's primitive n-th root of unity)."""
     s = [1 if ch == "+" else -1 for ch in signs]
     K = _Cyclotomic(n)
-    alpha = []
-    for k in range(n):
-        coeffs = [Fraction(0)] * n
-        for j in range(n):
-            coeffs[(-j * k) % n] += Fraction(s[j], n)
-        alpha.append(K.reduce(coeffs))
+    alpha = [sum((K.of(Fraction(s[j], n), (-j * k) % n) for j in range(n)), K.zero).c for k in range(n)]
     if isinstance(F, _Rationals) and any(len(a) > 1 for a in alpha):
-        raise _Undefined(f"the involution {signs!r} is not rational")
+        raise Undefined(f"the involution {signs!r} is not rational")
     if all(len(a) <= 1 for a in alpha):
         vals = [F.of(a[0] if a else Fraction(0)) for a in alpha]
     else:
@@ -125,25 +121,27 @@ def _involution(n, signs, F):
         for a in alpha:
             v, p = F.zero, F.one
             for t in a:
-                v, p = v + p * t, p * w
+                v, p = v + p * F.of(t), p * w
             vals.append(v)
     Bc = [[vals[(j - i) % n] for j in range(n)] for i in range(n)]
     Z = [F.zero] * n
     return [list(r) + Z for r in Bc] + [Z + list(r) for r in Bc]
 
 
-def _htilde(M, x, e, n):
-    """H~_M(x, ε) = xᵀ (I − ε²(M J(x))²)⁻¹ M x; _Undefined at a pole."""
-    N = 2 * n
-    MJ = _matmul(M, _lp_J(x, n))
-    MJ2 = _matmul(MJ, MJ)
-    e2 = e * e
-    S = [[(1 if i == j else 0) - e2 * MJ2[i][j] for j in range(N)] for i in range(N)]
-    det, z = _eliminate(S, [[t] for t in _matvec(M, x)])
-    if z is None:
-        raise _Undefined("I - eps^2 (M J(x))^2 is singular")
-    return _dot(x, [r[0] for r in z])
+#: where H~_M has a pole
+HTILDE_POLE = "I - eps^2 (M J(x))^2 is singular"
 
+
+def _htilde_matrices(M, x, e, n):
+    """(J(x), M J(x), S = I − ε²(M J(x))²)."""
+    J = _lp_J(x, n)
+    MJ = _matmul(M, J)
+    return J, MJ, _identity_minus(e * e, _matmul(MJ, MJ))
+
+
+def _htilde(M, x, e, n):
+    """H~_M(x, ε) = xᵀ (I − ε²(M J(x))²)⁻¹ M x; Undefined at a pole."""
+    return _dot(x, solve(_htilde_matrices(M, x, e, n)[2], _matvec(M, x), HTILDE_POLE))
 
 
 # --- steps, orbits, derivatives ---------------------------------------------------------
@@ -151,22 +149,12 @@ def _htilde(M, x, e, n):
 
 def step(f, e, x):
     """Φ_f(x, e): the solution y of (I − e f'(x)) y = (I + e L) x + 2 e c (Undefined if singular)."""
-    N = f.dim
-    A = _identity_minus(e, f.jacobian(x))
-    rhs = [x[i] + e * _dot([l for _, l in f.linear[i]], [x[j] for j, _ in f.linear[i]]) + 2 * e * f.const[i]
-           for i in range(N)]
-    _, y = _eliminate(A, [[t] for t in rhs])
-    if y is None:
-        raise Undefined("singular step: I - eps f'(x) is singular")
-    return [r[0] for r in y]
+    return solve(_identity_minus(e, f.jacobian(x)), f.kahan_rhs(e, x), "singular step: I - eps f'(x) is singular")
 
 
 def orbit(f, e, x0, steps):
     """[x0, Φ(x0), …] (steps + 1 points)."""
-    pts = [list(x0)]
-    for _ in range(steps):
-        pts.append(step(f, e, pts[-1]))
-    return pts
+    return list(lazy_orbit(f, e, x0, steps))
 
 
 def lazy_orbit(f, e, x0, steps):
@@ -188,27 +176,19 @@ def dphi(f, e, x, y):
 
 def dual_step(f, e, x):
     """The derivative of the step x -> Φ(x), by dual numbers through the solve."""
-    y = step(f, e, Dual.variables(x))
-    zero = 0 * x[0]
-    return [[t.d[j] if isinstance(t, Dual) else zero for j in range(len(x))] for t in y]
+    return gradients(lambda y: step(f, e, y), x)
 
 
 def determinant(M):
     return _eliminate(M)[0]
 
 
-def transpose(M):
-    return [list(r) for r in zip(*M)]
-
-
 def jacobiator(matrix, x):
     """The cyclic sums Σ_m (Π_im ∂_mΠ_jk + Π_jm ∂_mΠ_ki + Π_km ∂_mΠ_ij), i < j < k, of the
     bivector ``matrix(point)`` at x (derivatives by dual numbers)."""
-    N = len(x)
-    zero = 0 * x[0]
-    M = matrix(Dual.variables(x))
-    P = [[t.v if isinstance(t, Dual) else t for t in row] for row in M]
-    dP = [[t.d if isinstance(t, Dual) else [zero] * N for t in row] for row in M]
+    N, zero = len(x), 0 * x[0]
+    parts = [[Dual.parts(t, N, zero) for t in row] for row in matrix(Dual.variables(x))]
+    P, dP = [[t[0] for t in row] for row in parts], [[t[1] for t in row] for row in parts]
     out = []
     for i in range(N):
         for j in range(i + 1, N):
@@ -227,8 +207,7 @@ def gradient(fn, x):
 
 def gradients(fn, x):
     """[∇fn_i(x)] of a vector function fn, by one pass of dual numbers."""
-    zero = 0 * x[0]
-    return [list(v.d) if isinstance(v, Dual) else [zero] * len(x) for v in fn(Dual.variables(x))]
+    return [list(Dual.parts(v, len(x), 0 * x[0])[1]) for v in fn(Dual.variables(x))]
 
 
 def lp_shift(n):
@@ -276,33 +255,21 @@ def htilde_gradient(M, x, e, n):
     """∇H~_M(x) in closed form: with S = I − ε²(M J(x))², z = S⁻¹ M x, w = S⁻ᵀ x, u = Mᵀ w,
     ∂_m H~ = z_m + u_m + ε² (uᵀ J(e_m) M J z + (Mᵀ J(x)ᵀ u)ᵀ J(e_m) z)  (J is linear in x;
     J(e_m) = 0 for m >= n).  Undefined at a pole."""
-    N = 2 * n
-    J = _lp_J(x, n)
-    MJ = _matmul(M, J)
-    MJ2 = _matmul(MJ, MJ)
-    S = [[(1 if i == j else 0) - e * e * MJ2[i][j] for j in range(N)] for i in range(N)]
-    _, z = _eliminate(S, [[t] for t in _matvec(M, x)])
-    _, w = _eliminate([list(r) for r in zip(*S)], [[t] for t in x])
-    if z is None or w is None:
-        raise Undefined("I - eps^2 (M J(x))^2 is singular")
-    z, w = [r[0] for r in z], [r[0] for r in w]
-    Mt = [list(r) for r in zip(*M)]
+    J, MJ, S = _htilde_matrices(M, x, e, n)
+    z, w = solve(S, _matvec(M, x), HTILDE_POLE), solve(transpose(S), x, HTILDE_POLE)
+    Mt = transpose(M)
     u = _matvec(Mt, w)
     a = _matvec(MJ, z)
-    r = _matvec(Mt, _matvec([list(c) for c in zip(*J)], u))
+    r = _matvec(Mt, _matvec(transpose(J), u))
 
     def form(p, q, k):  # pᵀ J(e_k) q
         return sum((p[i] * q[n + (k - i) % n] - p[n + i] * q[(k - i) % n] for i in range(n)), 0 * x[0])
-    return [z[m] + u[m] + (e * e * (form(u, a, m) + form(r, z, m)) if m < n else 0) for m in range(N)]
+    return [z[m] + u[m] + (e * e * (form(u, a, m) + form(r, z, m)) if m < n else 0) for m in range(2 * n)]
 
 
 def h_definition(x, y, e, n):
     """h(x, y) = (2ε)⁻¹ xᵀ J((x + y)/2)⁻¹ y (Undefined where J(m) is singular)."""
-    m = [(a + b) / 2 for a, b in zip(x, y)]
-    _, z = _eliminate(_lp_J(m, n), [[t] for t in y])
-    if z is None:
-        raise Undefined("J((x+x~)/2) is singular")
-    return _dot(x, [r[0] for r in z]) / (2 * e)
+    return _dot(x, solve(_lp_J([(a + b) / 2 for a, b in zip(x, y)], n), y, "J((x+x~)/2) is singular")) / (2 * e)
 
 
 __all__ = ["_Quadratic", "_Rationals", "_Cyclotomic"]

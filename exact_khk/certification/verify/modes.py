@@ -29,8 +29,12 @@ import secrets
 import time
 
 from exact_khk.certification.verify.fields import Undefined, _PrimeField, exact_field
-from exact_khk.certification.verify.records import UNDEFINED, Context, expected_records, rederive
+from exact_khk.certification.verify.records import (UNDEFINED, Context, _short, _tf, differs,
+                                                    expected_records, family, identity_signs, outcome_differs,
+                                                    rederive)
 from exact_khk.errors import InputError
+
+__all__ = ["IDENTITY", "PROOF", "Identities", "Proofs", "identity_signs", "stated_bound"]
 
 IDENTITY, PROOF = "identity: ", "proof: "
 #: the draws the verifier makes (``certify --identities`` makes 2), and the most it tries for them
@@ -53,23 +57,6 @@ def identity_claim(statement: str, N: int) -> str:
 
 def proof_claim(statement: str) -> str:
     return f"{statement} [as an identity of rational functions in (x, eps), one step]"
-
-
-def identity_signs(n: int, F) -> list:
-    """The involutions ``certify --identities gf:P`` certifies for the family: all 2^n − 2 when F_P
-    holds ω = ζ_n (n ≥ 3, P ≡ 1 mod n), else the rational ones (constant on the classes
-    {j : gcd(j, n) = d}) other than ±I; sorted."""
-    from math import gcd
-
-    every = [''.join("-" if (m >> j) & 1 else "+" for j in range(n)) for m in range(2 ** n)]
-    if not (n >= 3 and (F.P - 1) % n == 0):
-        every = [s for s in every if all(s[j] == s[k] for j in range(n) for k in range(n) if gcd(j, n) == gcd(k, n))]
-    return sorted(s for s in every if s not in ("+" * n, "-" * n))
-
-
-def rational_signs(n: int) -> list:
-    """The rational involutions other than ±I (those ``certify --prove`` proves for the family)."""
-    return identity_signs(n, _PrimeField(2))
 
 
 def _is_rank(rec) -> bool:
@@ -104,8 +91,7 @@ class Identities:
         if not isinstance(F, _PrimeField):
             raise Undefined(f"arith {str(arith)[:60]!r} is not gf:P (identity records are over F_P)")
         self.F, self.P, self.N = F, F.P, cert.system.dim
-        lp = getattr(cert.system, "kind", "") == "lie-poisson"
-        self.signs = identity_signs(cert.system.n, F) if lp else None
+        self.signs = family(data).generic_signs(cert.system, F)
         self.seed = secrets.randbits(64) if seed is None else seed
         self.draws, self.singular = [], []
         rng = random.Random(self.seed)
@@ -118,7 +104,7 @@ class Identities:
                 self.singular.append("eps = 0")
                 continue
             try:
-                ctx = Context.generic(cert, data, F, x, e, arith, self.signs)
+                ctx = Context(cert, data, F, point=(x, e), arith=arith, signs=self.signs)
                 recs, _ = expected_records(ctx, chosen)
             except UNDEFINED as exc:
                 self.singular.append(f"a step or a statement is undefined: {exc}")
@@ -161,11 +147,10 @@ class Identities:
         i = self.records[c["name"]]
         rec = self.draws[0][0][i]
         d = dict(c)
-        want_claim = identity_claim(rec.claim, self.N)
-        for key, want, have in (("claim", want_claim, c["claim"]), ("expected", rec.expected, c["expected"]),
-                                ("arith", self.arith, c["arith"])):
-            if want != have:
-                return d, f"{key} is {_short(have)}, but re-derived it is {_short(want)}", None
+        problem = differs((("claim", identity_claim(rec.claim, self.N), c["claim"]),
+                           ("expected", rec.expected, c["expected"]), ("arith", self.arith, c["arith"])), "")
+        if problem:
+            return d, problem, None
         holds, residual, applicable, j = self.merged(i)
         evidence, P = c.get("evidence", ""), self.P
         if holds is False and c["holds"] is not False and applicable:  # a refutation is exact: said first
@@ -212,8 +197,6 @@ class Identities:
         if pattern is not None and not re.fullmatch(pattern, evidence):
             return d, f"evidence is {_short(evidence)}, but re-derived it is {_short(_readable(pattern))}", None
         d.update(holds=holds, applicable=applicable, _rederived=True)
-        if c["holds"] != holds:
-            return d, f"recorded holds = {_tf(c['holds'])}, re-derived holds = {_tf(holds)} ({how})", None
         if holds is False:  # a residual of another draw: nonzero mod P, not the same value
             try:
                 same = self.F.parse(c["residual"], "residual") != 0
@@ -222,11 +205,9 @@ class Identities:
             shown = "a nonzero residue mod P"
         else:  # '0', 'n/a' or 'rank r'
             same, shown = c["residual"] == residual, repr(residual)
-        if not same:
-            return d, f"recorded residual {_short(c['residual'])}, re-derived {shown}", None
-        if c.get("applicable", True) != applicable:
-            return d, (f"recorded applicable = {_tf(c.get('applicable', True))}, re-derived applicable = "
-                       f"{_tf(applicable)}"), None
+        problem = outcome_differs(c, holds, same, shown, applicable, how=f" ({how})")
+        if problem:
+            return d, problem, None
         kind = "claim" if rec.expected else "control"
         if not applicable:
             how = "inapplicable (cannot fail for this system)"
@@ -294,15 +275,14 @@ class Proofs:
         N = cert.system.dim
         self.N, self.why, self.results = N, None, {}
         self.arith = "qfunc[" + ",".join([f"x{i}" for i in range(N)] + ["eps"]) + "]"
-        lp = getattr(cert.system, "kind", "") == "lie-poisson"
-        self.signs = rational_signs(cert.system.n) if lp else None
+        self.signs = family(data).generic_signs(cert.system, _PrimeField(2))  # the rational involutions
         t0 = time.monotonic()
         # the list of records (names and statements) at a point of F_P: it does not depend on the point
         F, rng = _PrimeField(NAMES_PRIME), random.Random(0)
         for _ in range(MAX_ATTEMPTS):
             try:
-                ctx = Context.generic(cert, data, F, [F.of(rng.randrange(F.P)) for _ in range(N)],
-                                      F.of(rng.randrange(1, F.P)), self.arith, self.signs)
+                point = [F.of(rng.randrange(F.P)) for _ in range(N)], F.of(rng.randrange(1, F.P))
+                ctx = Context(cert, data, F, point=point, arith=self.arith, signs=self.signs)
                 self.names = [PROOF + r.name for r in expected_records(ctx, chosen)[0]]
                 break
             except UNDEFINED:
@@ -315,7 +295,7 @@ class Proofs:
             return
         try:
             K = _SymPyField([f"x{i}" for i in range(N)] + ["eps"], t0 + budget)
-            ctx = Context.generic(cert, data, K, K.gens[:N], K.gens[N], self.arith, self.signs)
+            ctx = Context(cert, data, K, point=(K.gens[:N], K.gens[N]), arith=self.arith, signs=self.signs)
             recs, _ = expected_records(ctx, chosen)
             for r in recs:
                 if time.monotonic() > t0 + budget:
@@ -340,14 +320,11 @@ class Proofs:
         else:
             evidence = (f"symbolic proof: identity in {ring}" if holds else
                         f"symbolic disproof: a nonzero difference in {ring}")
-        for key, want, have in (("claim", proof_claim(rec.claim), c["claim"]), ("expected", rec.expected,
-                                c["expected"]), ("arith", self.arith, c["arith"]), ("evidence", evidence,
-                                                                                  c.get("evidence"))):
-            if want != have:
-                return d, f"{key} is {_short(have)}, but re-derived in SymPy it is {_short(want)}", None
+        problem = differs((("claim", proof_claim(rec.claim), c["claim"]), ("expected", rec.expected, c["expected"]),
+                           ("arith", self.arith, c["arith"]), ("evidence", evidence, c.get("evidence"))), " in SymPy")
+        if problem:
+            return d, problem, None
         d.update(holds=holds, applicable=applicable, _rederived=True)
-        if c["holds"] != holds:
-            return d, f"recorded holds = {_tf(c['holds'])}, re-derived in SymPy holds = {_tf(holds)}", None
         recorded, how = c["residual"], "equal"
         if isinstance(residual, str):
             same = recorded == residual
@@ -357,11 +334,9 @@ class Proofs:
                 same, how = True, "nonzero (the recorded one is abbreviated: not compared by value)"
             else:
                 same = value is not None and value - residual == 0
-        if not same:
-            return d, f"recorded residual {_short(recorded)}, re-derived in SymPy {_short(str(residual))}", None
-        if c.get("applicable", True) != applicable:
-            return d, (f"recorded applicable = {_tf(c.get('applicable', True))}, re-derived applicable = "
-                       f"{_tf(applicable)}"), None
+        problem = outcome_differs(c, holds, same, _short(str(residual)), applicable, " in SymPy")
+        if problem:
+            return d, problem, None
         kind = "claim" if rec.expected else "control"
         state = "inapplicable" if not applicable else f"holds = {_tf(holds)}, residual {how}"
         return d, None, f"proof {kind}, re-derived in SymPy's {ring}: {state}; as recorded"
@@ -370,12 +345,3 @@ class Proofs:
 def _readable(pattern: str) -> str:
     """An evidence pattern as text: 'draw k' for a number, without the optional redraw note."""
     return pattern.replace(_NOTE, "").replace(r"\d+", "k").replace("\\", "")
-
-
-def _tf(v) -> str:
-    return {True: "true", False: "false", None: "undecided"}.get(v, repr(v))
-
-
-def _short(v, width=60) -> str:
-    text = v if isinstance(v, str) else repr(v)
-    return repr(text if len(text) <= width else text[:width - 3] + "...")

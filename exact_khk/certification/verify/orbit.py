@@ -5,12 +5,10 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from exact_khk.certification.verify.fields import (Undefined, _Evaluate, _Rationals, _dot, _eliminate,
-                                                   _matmul, _matvec, _show, to_fraction)
-from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field,
-                                                 _lp_hessian, _lp_J)
-
-_Undefined = Undefined
+from exact_khk.certification.verify.fields import Undefined, _Rationals, _eliminate, _matmul, _matvec, _show
+from exact_khk.certification.verify.maps import (_expression_field, _htilde, _identity_minus, _involution, _lp_field,
+                                                 _lp_hessian, h_definition)
+from exact_khk.certification.verify.records import LiePoisson, evaluator, family, reduced
 
 
 class _Recheck:
@@ -19,7 +17,7 @@ class _Recheck:
     def __init__(self, cert, data, F):
         self.cert, self.data, self.F = cert, data, F
         self.system = cert.system
-        self.lp = getattr(self.system, "kind", "") == "lie-poisson"
+        self.lp = family(data) is LiePoisson
         self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
         self.e = F.of(cert.eps)
         if self.lp:
@@ -28,7 +26,7 @@ class _Recheck:
             self.Hs = [[F.of(t) for t in row] for row in _lp_hessian(self.system.a, self.system.b, self.system.c)]
             self.f = _lp_field(n, self.Hs)
         else:
-            self.f = _expression_field(self.system, F)
+            self.f = _expression_field(self.system.field("f"), F)
 
     def run(self) -> list:
         out = [self.orbit_length(), self.starts_at_x0()]
@@ -48,7 +46,7 @@ class _Recheck:
             return ("orbit starts at x0", False, "no orbit recorded")
         try:
             x0 = [self.F.of(t) for t in self.cert.x0]
-        except _Undefined as exc:
+        except Undefined as exc:
             return ("orbit starts at x0", False, str(exc))
         bad = [i for i, (a, b) in enumerate(zip(self.pts[0], x0)) if a != b]
         if bad:
@@ -57,20 +55,13 @@ class _Recheck:
         return ("orbit starts at x0", True, "x_0 = x0")
 
     def steps(self):
-        f, e, N, pts = self.f, self.e, self.f.dim, self.pts
+        f, e, pts = self.f, self.e, self.pts
         homogeneous = f.homogeneous
         eq_bad = det_bad = None
         for k in range(len(pts) - 1):
             x, y = pts[k], pts[k + 1]
-            D = f.jacobian(x)
-            A = [[(1 if i == j else 0) - e * D[i][j] for j in range(N)] for i in range(N)]
-            lhs = _matvec(A, y)
-            if homogeneous:
-                rhs = x
-            else:
-                rhs = [x[i] + e * _dot([l for _, l in f.linear[i]], [x[j] for j, _ in f.linear[i]])
-                       + 2 * e * f.const[i] for i in range(N)]
-            diff = [a - b for a, b in zip(lhs, rhs)]
+            A = _identity_minus(e, f.jacobian(x))
+            diff = [a - b for a, b in zip(_matvec(A, y), x if homogeneous else f.kahan_rhs(e, x))]
             i = next((i for i, d in enumerate(diff) if d != 0), None)
             if i is not None and eq_bad is None:
                 eq_bad = (k, i, diff[i])
@@ -95,7 +86,7 @@ class _Recheck:
     # --- integrals -------------------------------------------------------------
 
     def integral_functions(self) -> dict:
-        """name -> fn(x) (a field element; ZeroDivisionError or _Undefined at a pole)."""
+        """name -> fn(x) (a field element; ZeroDivisionError or Undefined at a pole)."""
         F, e = self.F, self.e
         if self.lp:
             n = self.n
@@ -103,44 +94,28 @@ class _Recheck:
             for s in self.cert.signs:
                 try:
                     M = _matmul(_involution(n, s, F), self.Hs)
-                except _Undefined as exc:
+                except Undefined as exc:
                     fns[f"K~[{s}]"] = exc
                     continue
                 fns[f"K~[{s}]"] = lambda x, M=M: _htilde(M, x, e, n)
             return fns
         spec = self.data["system"]
-        params = {p: _Evaluate(t, {}, F, f"system.parameters.{p}").value
-                  for p, t in (spec.get("parameters") or {}).items()}
-        variables = list(spec["variables"])
-        fns = {}
-        for name, text in (spec.get("integrals") or {}).items():
-            def fn(x, text=text, name=name):
-                names = dict(params, eps=e, **dict(zip(variables, x)))
-                return _Evaluate(text, names, F, f"system.integrals.{name}").value
-            fns[name] = fn
-        return fns
+        expression = evaluator(spec, F)
+        return {name: expression(text, f"system.integrals.{name}", e)
+                for name, text in (spec.get("integrals") or {}).items()}
 
     def _value(self, name, fn, k):
-        """(value, how) of integral ``name`` at x_k; raises _Undefined at a pole."""
+        """(value, how) of integral ``name`` at x_k; raises Undefined at a pole."""
         x = self.pts[k]
         try:
             return fn(x), ""
         except ZeroDivisionError:
             pass
-        except _Undefined:
+        except Undefined:
             raise
         if self.lp or not isinstance(self.F, _Rationals):
-            raise _Undefined("division by zero")
-        # the expression as written divides by zero at x_k; its value there is that of the
-        # reduced rational function, if it is finite (the library reduces it to lowest terms)
-        from exact_khk.arith import get_arith
-        from exact_khk.errors import PoleError
-
-        try:
-            return self.F.of(self.system.integrals()[name](get_arith("fraction"), [to_fraction(t) for t in x],
-                                                          self.cert.eps)), " (reduced form)"
-        except PoleError:
-            raise _Undefined("pole") from None
+            raise Undefined("division by zero")
+        return reduced(self.system.integrals()[name], self.F, x, self.cert.eps), " (reduced form)"
 
     def integrals(self) -> list:
         fns = self.integral_functions()
@@ -165,13 +140,13 @@ class _Recheck:
 
     def _one_integral(self, name, fn, recorded, check):
         label = f"values of {name}"
-        if isinstance(fn, _Undefined):
+        if isinstance(fn, Undefined):
             return [(label, False, f"cannot be recomputed: {fn}")]
         if recorded is None:  # recorded as undefined: there must be a pole on the orbit
             for k in range(len(self.pts)):
                 try:
                     self._value(name, fn, k)
-                except _Undefined:
+                except Undefined:
                     return [(label, True, f"recorded as undefined; {name} has a pole at x_{k}")]
             return [(label, False, f"recorded as undefined, but {name} is finite at every orbit point")]
         if len(recorded) != len(self.pts):
@@ -181,7 +156,7 @@ class _Recheck:
             r = self.F.parse(text, f"values.{name}[{k}]")
             try:
                 v, how = self._value(name, fn, k)
-            except _Undefined as exc:
+            except Undefined as exc:
                 return [(label, False, f"recorded {_show(r)} at x_{k}, where {name} is undefined ({exc})")]
             if v != r:
                 return [(label, False, f"at x_{k}: recorded {_show(r)}, recomputed {_show(v)}")]
@@ -197,19 +172,17 @@ class _Recheck:
     def _definition(self, recorded):
         """H~(x_k) = (2 eps)^-1 x_k^T J(m)^-1 x_{k+1}, m = (x_k + x_{k+1})/2 (skipped where J(m) is singular)."""
         label = "H~ closed form = definition"
-        n, e, pts, F = self.n, self.e, self.pts, self.F
+        pts = self.pts
         if len(recorded) != len(pts):
             return (label, False, "the values of H~ do not match the orbit")
         done, skipped = 0, []
         for k in range(len(pts) - 1):
-            x, y = pts[k], pts[k + 1]
-            m = [(a + b) / 2 for a, b in zip(x, y)]
-            _, z = _eliminate(_lp_J(m, n), [[t] for t in y])
-            if z is None:
+            try:
+                h = h_definition(pts[k], pts[k + 1], self.e, self.n)
+            except Undefined:
                 skipped.append(k)
                 continue
-            h = _dot(x, [r[0] for r in z]) / (2 * e)
-            r = F.parse(recorded[k], f"values.H~[{k}]")
+            r = self.F.parse(recorded[k], f"values.H~[{k}]")
             if h != r:
                 return (label, False, f"at x_{k}: recorded H~ = {_show(r)}, definition gives {_show(h)}")
             done += 1

@@ -8,8 +8,10 @@ function giving ``(holds, residual)`` exactly, and for a control the rule that m
 it inapplicable where it cannot fail.  :func:`rederive` runs one; the caller compares
 it with the recorded one field by field.
 
-Each kind of claim is one function in one table (:data:`LIE_POISSON_KINDS`,
-:data:`EXPRESSION_KINDS`): adding a kind is adding a function and a line there.
+The system's family is read from the certificate's own system JSON (its ``"family"`` key, in
+:data:`FAMILIES`; none: a system given by expressions).  Each kind of claim is one function in one
+table (:data:`LIE_POISSON_KINDS`, :data:`EXPRESSION_KINDS`): adding a kind is adding a function and
+a line there.
 """
 
 from __future__ import annotations
@@ -19,10 +21,11 @@ from dataclasses import dataclass, replace
 from fractions import Fraction
 from math import gcd
 
-from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _eliminate, _matmul,
-                                                   _matvec, _FlintRationals, to_fraction)
-from exact_khk.certification.verify.maps import (_expression_field, _htilde, _involution, _lp_field, _lp_hessian,
-                                                 _lp_J, determinant, dphi, dual_step, gradient, gradients, h_definition,
+from exact_khk.certification.verify.fields import (Dual, Undefined, _Evaluate, _Rationals, _dot, _matmul, _matvec,
+                                                   _FlintRationals, rank, solve, to_fraction)
+from exact_khk.certification.verify.maps import (_expression_field, _htilde, _identity_minus, _involution, _lp_field,
+                                                 _lp_hessian, _lp_J, determinant, dphi, dual_step, gradient, gradients,
+                                                 h_definition,
                                                  htilde_gradient, jacobiator, lazy_orbit, lp_pi, lp_pi_from_q, lp_q,
                                                  lp_shift, orbit, shift_index, step, transpose)
 
@@ -68,6 +71,37 @@ def rederive(rec):
     return holds, residual, applicable
 
 
+def differs(fields, where: str):
+    """The first of ``fields`` ((key, re-derived, recorded)) that differs, as a message (None if none)."""
+    for key, want, have in fields:
+        if want != have:
+            return (f"{key} is {_short(have)}, but {'the statement' if key == 'claim' else 'it'} re-derived{where} is "
+                    f"{_short(want)}")
+    return None
+
+
+def outcome_differs(c, holds, same, shown, applicable, where="", how=""):
+    """The first of holds, residual (``same``: as recorded; ``shown``: the re-derived one, as shown) and
+    applicable in which the recorded record ``c`` differs from the re-derived one, as a message."""
+    if c["holds"] != holds:
+        return f"recorded holds = {_tf(c['holds'])}, re-derived{where} holds = {_tf(holds)}{how}"
+    if not same:
+        return f"recorded residual {_short(c['residual'])}, re-derived{where} {shown}"
+    if c.get("applicable", True) != applicable:
+        return (f"recorded applicable = {_tf(c.get('applicable', True))}, re-derived: the control "
+                f"{'can fail' if applicable else 'cannot fail'} here, so applicable = {_tf(applicable)}")
+    return None
+
+
+def _tf(v) -> str:
+    return {True: "true", False: "false", None: "undecided"}.get(v, repr(v))
+
+
+def _short(v, width=60) -> str:
+    text = v if isinstance(v, str) else repr(v)
+    return repr(text if len(text) <= width else text[:width - 3] + "...")
+
+
 def _flatten(v):
     if isinstance(v, (list, tuple)):
         for t in v:
@@ -76,14 +110,14 @@ def _flatten(v):
         yield v
 
 
-def compare(items):
-    """``lhs == rhs`` for every ``(k, thunk)``: (False, first nonzero lhs − rhs) at the first
-    difference, (True, '0') if all agree, (None, 'n/a') if undefined at every point
-    (points where a side is undefined are skipped)."""
+def compare(sides, ks):
+    """``lhs == rhs`` for ``(lhs, rhs) = sides(k)``, k in ``ks`` (rhs None: 0): (False, first nonzero
+    lhs − rhs) at the first difference, (True, '0') if all agree, (None, 'n/a') if undefined at every
+    point (points where a side is undefined are skipped)."""
     done = 0
-    for _, thunk in items:
+    for k in ks:
         try:
-            lhs, rhs = thunk()
+            lhs, rhs = sides(k)
         except UNDEFINED:
             continue
         done += 1
@@ -97,27 +131,25 @@ def compare(items):
 
 
 def conserved(value, pts):
-    """(k, I(x_k) vs I(x_0)) for k >= 1 (``pts`` may be lazy)."""
+    """I(x_k) = I(x_0) for k >= 1, by :func:`compare` (``pts`` may be lazy)."""
     pts = iter(pts)
     x0 = next(pts)
-    return ((k, lambda x=x: (value(x), value(x0))) for k, x in enumerate(pts, 1))
+    return compare(lambda x: (value(x), value(x0)), pts)
 
 
 def poisson_map(f, e, Pi, pts, ks):
-    """(k, dΦ(x_k) Π(x_k) dΦ(x_k)ᵀ vs Π(x_{k+1})), decided multiplied out by A = I − εf'(x_k)
+    """dΦ(x_k) Π(x_k) dΦ(x_k)ᵀ = Π(x_{k+1}) by :func:`compare`, decided multiplied out by A = I − εf'(x_k)
     (dΦ = A⁻¹B, B = I + εf'(x_{k+1}): B Π(x_k) Bᵀ = A Π(x_{k+1}) Aᵀ, no solve; A is invertible on
     an orbit, whose steps are re-checked nonsingular or solved here); where that
     fails, the residual is that of dΦ Π dΦᵀ − Π(x_{k+1}) itself."""
     def sides(k):
         x, y = pts[k], pts[k + 1]
-        A = [[(1 if i == j else 0) - e * t for j, t in enumerate(r)] for i, r in enumerate(f.jacobian(x))]
-        B = [[(1 if i == j else 0) + e * t for j, t in enumerate(r)] for i, r in enumerate(f.jacobian(y))]
-        if _matmul(_matmul(B, Pi(k)), transpose(B)) == _matmul(_matmul(A, Pi(k + 1)),
-                                                                                            transpose(A)):
+        A, B = _identity_minus(e, f.jacobian(x)), _identity_minus(e, f.jacobian(y), 1)
+        if _matmul(_matmul(B, Pi(k)), transpose(B)) == _matmul(_matmul(A, Pi(k + 1)), transpose(A)):
             return (), ()
         D = dphi(f, e, x, y)
         return _matmul(_matmul(D, Pi(k)), transpose(D)), Pi(k + 1)
-    return ((k, lambda k=k: sides(k)) for k in ks)
+    return compare(sides, ks)
 
 
 class Context:
@@ -125,38 +157,24 @@ class Context:
     recorded orbit (re-checked by :mod:`.orbit`), the system, the arithmetic's name and the
     involutions (the family).
 
-    :meth:`generic` makes the context of the other modes instead: x0 and ε elements of F (a
-    random draw in F_P, or the symbols of Q(x, ε)), one step computed here, and
-    ``point_free``: the controls' rules that judge a point are off (x0 is generic)."""
+    With ``point`` = (x0, ε), elements of F (a random draw in F_P, or the symbols of Q(x, ε)), it is
+    the context of the other modes instead: one step from x0 computed here (:class:`~.fields.Undefined`
+    where it is singular), ``arith`` and ``signs`` theirs, and ``point_free``: the controls' rules that
+    judge a point are off (x0 is generic)."""
 
-    point_free = False
-
-    def __init__(self, cert, data, F, checks):
-        self.cert, self.data, self.F, self.checks = cert, data, F, checks
-        self.system, self.K, self.eps = cert.system, cert.steps, Fraction(cert.eps)
-        self.arith, self.signs = cert.arith, list(cert.signs)
-        self.e = F.of(cert.eps)
-        self.x0q = [Fraction(t) for t in cert.x0]
-        self.x0 = [F.of(t) for t in cert.x0]
-        self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
-        self._memo = {}
-
-    @classmethod
-    def generic(cls, cert, data, F, x0, e, arith, signs=None):
-        """The context of one step from the generic point x0 (elements of F) with step e;
-        :class:`~.fields.Undefined` where that step is singular."""
-        from exact_khk.certification.verify.maps import _expression_field, _lp_field, _lp_hessian
-
-        ctx = cls.__new__(cls)
-        ctx.cert, ctx.data, ctx.F, ctx.checks, ctx.point_free = cert, data, F, {}, True
-        ctx.system, ctx.K, ctx.arith = cert.system, 1, arith
-        ctx.signs = list(cert.signs if signs is None else signs)
-        ctx.e, ctx.x0, ctx.eps, ctx.x0q, ctx._memo = e, list(x0), None, None, {}
-        s = cert.system
-        f = (_lp_field(s.n, [[F.of(t) for t in r] for r in _lp_hessian(s.a, s.b, s.c)])
-             if getattr(s, "kind", "") == "lie-poisson" else _expression_field(s, F))
-        ctx.pts = orbit(f, e, ctx.x0, 1)
-        return ctx
+    def __init__(self, cert, data, F, checks=None, point=None, arith=None, signs=None):
+        self.cert, self.data, self.F, self.checks, self._memo = cert, data, F, checks or {}, {}
+        self.system, self.arith, self.point_free = cert.system, arith or cert.arith, point is not None
+        self.signs = list(cert.signs if signs is None else signs)
+        if point is None:
+            self.K, self.eps, self.e = cert.steps, Fraction(cert.eps), F.of(cert.eps)
+            self.x0q, self.x0 = [Fraction(t) for t in cert.x0], [F.of(t) for t in cert.x0]
+            self.pts = [[F.parse(t, f"orbit[{k}][{i}]") for i, t in enumerate(p)] for k, p in enumerate(cert.orbit)]
+        else:
+            self.K, self.eps, self.x0q, self.x0, self.e = 1, None, None, list(point[0]), point[1]
+        self.family = family(data)(self)
+        if point is not None:
+            self.pts = orbit(self.family.fields["f"], self.e, self.x0, 1)
 
     def memo(self, key, fn):
         if key not in self._memo:
@@ -167,10 +185,45 @@ class Context:
         return all(s == t for s, t in zip(a, b))
 
 
+class Family:
+    """What the records of every system share: its Kahan maps (``fields``, named ``mapname``), their
+    orbits from x0, reversibility and commutation with Phi_f."""
+
+    def orbit(self, key):
+        c = self.ctx
+        return c.pts if key == "f" else c.memo(("orbit", key), lambda: orbit(self.fields[key], c.e, c.x0, c.K))
+
+    def reversibility(self):
+        c, out = self.ctx, []
+        for key, name in self.mapname.items():
+            def derive(key=key):
+                pts = self.orbit(key)
+                return compare(lambda k: (step(self.fields[key], -c.e, pts[k + 1]), pts[k]), range(c.K))
+            out.append(claim(f"reversibility {name}", f"{name}({name}(x, eps), -eps) = x at the {c.K} points of its "
+                             f"orbit", derive))
+        return out
+
+    def commuting(self, key, e):
+        """Phi_f(Phi_key(x_k, e)) = Phi_key(x_{k+1}, e) at the points of the Phi_f orbit, by :func:`compare`."""
+        c, pts, f = self.ctx, self.ctx.pts, self.fields["f"]
+        y = lambda k: c.memo(("step", key, e == c.e, k), lambda: step(self.fields[key], e, pts[k]))  # noqa: E731
+        return compare(lambda k: (step(f, c.e, y(k)), y(k + 1)), range(c.K))
+
+    def commutation(self, key):
+        name = self.mapname[key]
+        return claim(f"commutation Phi_f o {name}", f"Phi_f({name}(x)) = {name}(Phi_f(x)) at the {self.ctx.K} points "
+                     f"x_k of the Phi_f orbit", lambda: self.commuting(key, self.ctx.e))
+
+    @staticmethod
+    def generic_signs(system, F):
+        """The involutions of the other modes' records over F (None: the system has none)."""
+        return None
+
+
 # --- the Lie–Poisson family ----------------------------------------------------------------
 
 
-class LiePoisson:
+class LiePoisson(Family):
     """The paper's certificate: the fields f and g[s], their orbits, H~ and K~[s]."""
 
     def __init__(self, ctx):
@@ -191,11 +244,13 @@ class LiePoisson:
         self.npts = c.K + 1
         self.flint = c.arith == "flint"
 
-    def orbit(self, key):
-        c = self.ctx
-        if key == "f":
-            return c.pts
-        return c.memo(("orbit", key), lambda: orbit(self.fields[key], c.e, c.x0, c.K))
+    def records(self, chosen=None):
+        self.ctx.chosen = None
+        return [r for kind in LIE_POISSON_KINDS for r in kind(self)], None
+
+    @staticmethod
+    def generic_signs(system, F):
+        return identity_signs(system.n, F)
 
     def value(self, key, pts, k):
         return self.ctx.memo(("I", key, id(pts), k), lambda: _htilde(self.M[key], pts[k], self.ctx.e, self.n))
@@ -216,6 +271,16 @@ class LiePoisson:
         return list(range(K))
 
 
+def identity_signs(n: int, F) -> list:
+    """The involutions ``certify --identities gf:P`` certifies for the family (F = F_P; F_2: those
+    of ``certify --prove``): all 2^n − 2 when F_P holds ω = ζ_n (n ≥ 3, P ≡ 1 mod n), else the
+    rational ones (constant on the classes {j : gcd(j, n) = d}) other than ±I; sorted."""
+    every = [''.join("-" if (m >> j) & 1 else "+" for j in range(n)) for m in range(2 ** n)]
+    if not (n >= 3 and (F.P - 1) % n == 0):
+        every = [s for s in every if all(s[j] == s[k] for j in range(n) for k in range(n) if gcd(j, n) == gcd(k, n))]
+    return sorted(s for s in every if s not in ("+" * n, "-" * n))
+
+
 def lp_integrals(lp):
     c, K = lp.ctx, lp.ctx.K
     out = []
@@ -224,8 +289,7 @@ def lp_integrals(lp):
 
         def derive(key=key):
             pts = lp.orbit(key)
-            return compare((k, lambda k=k: (lp.value(key, pts, k), h_definition(pts[k], pts[k + 1], c.e, lp.n)))
-                           for k in range(K))
+            return compare(lambda k: (lp.value(key, pts, k), h_definition(pts[k], pts[k + 1], c.e, lp.n)), range(K))
         out.append(claim(f"integral {I} (closed form = definition)",
                          f"{I}(x) by (tH 4) equals h(x, {name}(x)) = (2 eps)^-1 x^T J((x+x~)/2)^-1 x~ at the "
                          f"{K} points of the {name} orbit", derive))
@@ -235,36 +299,9 @@ def lp_integrals(lp):
 
             def derive(ikey=ikey, mkey=mkey):
                 pts = lp.orbit(mkey)
-                return compare((k, lambda k=k: (lp.value(ikey, pts, k), lp.value(ikey, pts, 0)))
-                               for k in range(1, lp.npts))
+                return compare(lambda k: (lp.value(ikey, pts, k), lp.value(ikey, pts, 0)), range(1, lp.npts))
             out.append(claim(f"integral {I} conserved by {name}",
                              f"{I}(x_k) = {I}(x_0) for k = 1..{K} along the {name} orbit", derive))
-    return out
-
-
-def lp_commutation(lp):
-    c, out = lp.ctx, []
-    for sg in lp.signs:
-        def derive(sg=sg):
-            g, f, pts = lp.fields[sg], lp.fields["f"], c.pts
-            y = lambda k: c.memo(("gx", sg, k), lambda: step(g, c.e, pts[k]))  # noqa: E731
-            return compare((k, lambda k=k: (step(f, c.e, y(k)), y(k + 1))) for k in range(c.K))
-        out.append(claim(f"commutation Phi_f o Phi_g[{sg}]",
-                         f"Phi_f(Phi_g[{sg}](x)) = Phi_g[{sg}](Phi_f(x)) at the {c.K} points x_k of the Phi_f orbit",
-                         derive))
-    return out
-
-
-def lp_reversibility(lp):
-    c, out = lp.ctx, []
-    for key in lp.keys:
-        name = lp.mapname[key]
-
-        def derive(key=key):
-            pts = lp.orbit(key)
-            return compare((k, lambda k=k: (step(lp.fields[key], -c.e, pts[k + 1]), pts[k])) for k in range(c.K))
-        out.append(claim(f"reversibility {name}", f"{name}({name}(x, eps), -eps) = x at the {c.K} points of its orbit",
-                         derive))
     return out
 
 
@@ -276,18 +313,16 @@ def lp_poisson(lp):
     out = [claim("Poisson tensor Pi formula",
                  f"Pi = J - eps^2 J Hs J Hs J equals (1 - eps^2 q_0) J - eps^2 sum_(l>=1) q_l A^l J at the {lp.npts} "
                  f"points of the Phi_f orbit",
-                 lambda: compare((k, lambda k=k: (Pi(c.pts)(k), lp_pi_from_q(lp.Hs, c.pts[k], c.e, n)))
-                                 for k in range(lp.npts))),
+                 lambda: compare(lambda k: (Pi(c.pts)(k), lp_pi_from_q(lp.Hs, c.pts[k], c.e, n)), range(lp.npts))),
            claim("Poisson tensor Pi Jacobi identity",
                  f"the cyclic sums of Pi_im d_m Pi_jk vanish at {subset} of the Phi_f orbit",
-                 lambda: compare((k, lambda k=k: (jacobiator(lambda x: lp_pi(lp.Hs, x, c.e, n), c.pts[k]), None))
-                                 for k in ks))]
+                 lambda: compare(lambda k: (jacobiator(lambda x: lp_pi(lp.Hs, x, c.e, n), c.pts[k]), None), ks))]
     for key in lp.keys:
         name = lp.mapname[key]
 
         def derive(key=key):
             pts = lp.orbit(key)
-            return compare(poisson_map(lp.fields[key], c.e, Pi(pts), pts, ks))
+            return poisson_map(lp.fields[key], c.e, Pi(pts), pts, ks)
         out.append(claim(f"Poisson map {name}",
                          f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) for {name} at {subset} of its orbit", derive))
     return out
@@ -296,46 +331,30 @@ def lp_poisson(lp):
 def lp_involution(lp):
     c, n = lp.ctx, lp.n
 
+    every = range(lp.npts)
+
     def q_sides(k):
         g = gradients(lambda x: lp_q(lp.Hs, x, n), c.pts[k])
         return g[1:], [[g[0][i] for i in shift_index(n, l)] for l in range(1, n)]
+
+    def bracket(sg, P):  # grad H~^T P(x_k) grad K~[sg] = 0
+        return compare(lambda k: (_dot(lp.grad("f", k), _matvec(P(c.pts[k]), lp.grad(sg, k))), None), every)
     out = [claim("gradients of q_l: grad q_l = A^l grad q_0",
                  f"the exact gradients ({'closed form' if lp.flint else 'dual numbers'}) of "
                  f"q_l = tr((A^T)^l (J Hs)^2)/(2n) satisfy grad q_l = A^l grad q_0 at the {lp.npts} points of "
-                 f"the Phi_f orbit", lambda: compare((k, lambda k=k: q_sides(k)) for k in range(lp.npts)))]
-    bracket = lambda u, P, v: sum((a * b for a, b in zip(u, _matvec(P, v))), 0 * u[0])  # noqa: E731
+                 f"the Phi_f orbit", lambda: compare(q_sides, every))]
     for sg in lp.signs:
         B = _involution(n, sg, c.F)
         out += [claim(f"integral gradients grad K~[{sg}] = B grad H~",
                       f"grad K~[{sg}] = B grad H~ (exact gradients) at the {lp.npts} points of the Phi_f orbit",
-                      lambda sg=sg, B=B: compare((k, lambda k=k: (lp.grad(sg, k), _matvec(B, lp.grad("f", k))))
-                                                 for k in range(lp.npts))),
+                      lambda sg=sg, B=B: compare(lambda k: (lp.grad(sg, k), _matvec(B, lp.grad("f", k))), every)),
                 claim(f"involution {{H~,K~[{sg}]}}_J",
                       f"grad H~^T J grad K~[{sg}] = 0 at the {lp.npts} points of the Phi_f orbit",
-                      lambda sg=sg: compare((k, lambda k=k: (bracket(lp.grad("f", k), _lp_J(c.pts[k], n),
-                                                                     lp.grad(sg, k)), None))
-                                            for k in range(lp.npts))),
+                      lambda sg=sg: bracket(sg, lambda x: _lp_J(x, n))),
                 claim(f"involution {{H~,K~[{sg}]}}_Pi",
                       f"grad H~^T Pi grad K~[{sg}] = 0 at the {lp.npts} points of the Phi_f orbit",
-                      lambda sg=sg: compare((k, lambda k=k: (bracket(lp.grad("f", k), lp_pi(lp.Hs, c.pts[k], c.e, n),
-                                                                     lp.grad(sg, k)), None))
-                                            for k in range(lp.npts)))]
+                      lambda sg=sg: bracket(sg, lambda x: lp_pi(lp.Hs, x, c.e, n)))]
     return out
-
-
-def _rank(rows):
-    M = [list(r) for r in rows]
-    r = 0
-    for col in range(len(M[0]) if M else 0):
-        piv = next((i for i in range(r, len(M)) if M[i][col] != 0), None)
-        if piv is None:
-            continue
-        M[r], M[piv] = M[piv], M[r]
-        for i in range(r + 1, len(M)):
-            m = M[i][col] / M[r][col]
-            M[i] = [a - m * b for a, b in zip(M[i], M[r])]
-        r += 1
-    return r
 
 
 def lp_rank(lp):
@@ -344,7 +363,7 @@ def lp_rank(lp):
 
     c, n = lp.ctx, lp.n
     signs_rows = [[Fraction(1)] * n] + [[Fraction(1 if ch == "+" else -1) for ch in sg] for sg in lp.signs]
-    r_expr = _rank(signs_rows)
+    r_expr = rank(signs_rows)
     n_rational = len({gcd(j, n) for j in range(n)})
     over = (f"all n = {n} integrals are expressible in {c.arith}"
             if n_rational == n or expresses_omega(get_arith(c.arith), n)
@@ -355,7 +374,7 @@ def lp_rank(lp):
             ranks = {}
             for k in range(lp.npts):
                 try:
-                    ranks[k] = _rank(rows_at(k))
+                    ranks[k] = rank(rows_at(k))
                 except UNDEFINED:
                     continue
             high = [k for k, r in ranks.items() if r > expected]
@@ -494,49 +513,68 @@ def lp_controls(lp):
     def perturbed():
         x = list(c.pts[0])
         x[-1] = rel if x[-1] == 0 else x[-1] + x[-1] * rel
-        return compare([(0, lambda: (H(x), lp.value("f", c.pts, K)))])
+        return compare(lambda _: (H(x), lp.value("f", c.pts, K)), [0])
     return [
         control("control: commutation with non-associated field",
                 f"[control, must fail] Phi_f commutes with the Kahan map of the control field "
                 f"({'A Hs' if n >= 3 else '(2I + A) Hs'}) at the points of the Phi_f orbit",
-                lambda: compare((k, lambda x=x: (step(f, c.e, step(fc, c.e, x)), step(fc, c.e, step(f, c.e, x))))
-                                for k, x in enumerate(c.pts)), deg.commutation),
+                lambda: compare(lambda x: (step(f, c.e, step(fc, c.e, x)), step(fc, c.e, step(f, c.e, x))), c.pts),
+                deg.commutation),
         control("control: integral H~ conserved by Phi_control",
                 "[control, must fail] H~ is conserved along the orbit of the control map",
-                lambda: compare(conserved(H, lazy_orbit(fc, c.e, c.x0, K))), deg.control_conserves),
+                lambda: conserved(H, lazy_orbit(fc, c.e, c.x0, K)), deg.control_conserves),
         control("control: integral H~ conserved for a non-admissible Hessian",
                 "[control, must fail] with " + ("Hs[0][0]" if n >= 3 else "Hs[0][2] = Hs[2][0]") + " raised by 1 "
                 "(block X(" + ("a" if n >= 3 else "b") + ") not cyclic Hankel), the closed "
                 "form H~ is conserved by the Kahan map of J(x) Hs' x",
-                lambda: compare(conserved(lambda x: _htilde(bad, x, c.e, n),
-                                          lazy_orbit(_lp_field(n, bad), c.e, c.x0, K))), deg.non_admissible),
+                lambda: conserved(lambda x: _htilde(bad, x, c.e, n),
+                                          lazy_orbit(_lp_field(n, bad), c.e, c.x0, K)), deg.non_admissible),
         control("control: integral H~ at a perturbed point",
                 f"[control, must fail] H~ at x0 with its last coordinate perturbed by 2^-60 relative equals "
                 f"H~(x_{K}) on the orbit", perturbed, deg.perturbed, deg.equilibrium)]
 
 
 #: the Lie–Poisson certificate's kinds of records, in the order ``certify`` writes them
-LIE_POISSON_KINDS = (lp_integrals, lp_commutation, lp_reversibility, lp_poisson, lp_involution, lp_rank, lp_controls)
+LIE_POISSON_KINDS = (lp_integrals, lambda lp: [lp.commutation(sg) for sg in lp.signs], LiePoisson.reversibility,
+                     lp_poisson, lp_involution, lp_rank, lp_controls)
 
 
 # --- systems given by expressions (catalogue, system files) --------------------------------
 
 
-class Expressions:
+def reduced(fn, F, x, eps):
+    """Over Q, where an expression as written divides by zero at x: the value there of the library's
+    rational function ``fn`` reduced to lowest terms (Undefined at a pole)."""
+    from exact_khk.arith import get_arith
+    from exact_khk.errors import PoleError
+
+    try:
+        return F.of(fn(get_arith("fraction"), [to_fraction(t) for t in x], eps))
+    except PoleError:
+        raise Undefined("pole") from None
+
+
+def evaluator(spec, F):
+    """(text, where, e) -> x -> the value of the system's expression ``text`` at x in F (its parameters, ε = e)."""
+    params = {p: _Evaluate(t, {}, F, f"system.parameters.{p}").value for p, t in (spec.get("parameters") or {}).items()}
+    variables = list(spec["variables"])
+    return lambda text, where, e: lambda x: _Evaluate(text, dict(params, eps=e, **dict(zip(variables, x))), F,
+                                                      where).value
+
+
+class Expressions(Family):
     """A system given by expressions: its fields, integrals, controls, Π and H, evaluated
     from the system's own text by :class:`~.fields._Evaluate` (dual numbers for derivatives)."""
 
     def __init__(self, ctx):
         self.ctx = c = ctx
-        spec = c.data["system"]
-        self.spec = spec
+        self.spec = spec = c.data["system"]
         F = c.F
-        self.params = {p: _Evaluate(t, {}, F, f"system.parameters.{p}").value
-                       for p, t in (spec.get("parameters") or {}).items()}
-        self.variables = list(spec["variables"])
-        self.N = len(self.variables)
+        self.expression = evaluator(spec, F)
+        self.N = len(spec["variables"])
         self.field_names = ["f"] + list(spec.get("fields") or {})
-        self.fields = {g: _expression_field(_NamedField(c.system, g), F) for g in self.field_names}
+        self.fields = {g: _expression_field(c.system.field(g), F) for g in self.field_names}
+        self.mapname = {g: f"Phi_{g}" for g in self.field_names}
         lib = c.system
         self.lib_integrals, self.lib_controls = lib.integrals(), lib.controls()
 
@@ -546,64 +584,50 @@ class Expressions:
         c = self.ctx
 
         def value(x):
-            names = dict(self.params, eps=c.e if eps is None else eps, **dict(zip(self.variables, x)))
             try:
-                return _Evaluate(text, names, c.F, where).value
+                return self.expression(text, where, c.e if eps is None else eps)(x)
             except ZeroDivisionError:
                 if table is None or not isinstance(c.F, _Rationals) or isinstance(x[0], Dual):
                     raise
-            from exact_khk.arith import get_arith
-            from exact_khk.errors import PoleError
-
-            fn = table[name] if eps is None else table[name].at_eps_zero()
-            try:
-                return c.F.of(fn(get_arith("fraction"), [to_fraction(t) for t in x], c.eps if eps is None else 0))
-            except PoleError:
-                raise Undefined("pole") from None
+            lib = table[name] if eps is None else table[name].at_eps_zero()
+            return reduced(lib, c.F, x, c.eps if eps is None else 0)
         return value
-
-    def orbit(self, g):
-        c = self.ctx
-        return c.pts if g == "f" else c.memo(("orbit", g), lambda: orbit(self.fields[g], c.e, c.x0, c.K))
 
     def poisson(self, x):
         """Π(x) from the system's matrix: the upper triangle evaluated, the lower one its negative."""
-        M = self.spec["poisson"]["matrix"]
-        names = dict(self.params, eps=self.ctx.e, **dict(zip(self.variables, x)))
-        zero = 0 * x[0]
-        P = [[zero] * self.N for _ in range(self.N)]
+        M, P = self.spec["poisson"]["matrix"], [[0 * x[0]] * self.N for _ in range(self.N)]
         for i in range(self.N):
             for j in range(i + 1, self.N):
-                P[i][j] = _Evaluate(M[i][j], names, self.ctx.F, f"system.poisson.matrix[{i}][{j}]").value
+                P[i][j] = self.expression(M[i][j], f"system.poisson.matrix[{i}][{j}]", self.ctx.e)(x)
                 P[j][i] = -P[i][j]
         return P
 
-
-class _NamedField:
-    """``system.field(name)`` as :func:`~.maps._expression_field` reads it."""
-
-    def __init__(self, system, name):
-        self.system, self.name = system, name
-
-    def field(self, _):
-        return self.system.field(self.name)
+    def records(self, chosen=None):
+        """See :func:`expected_records`."""
+        ctx = self.ctx
+        known, own = declared_claims(ctx.system)
+        by_kind = {k: EXPRESSION_KINDS[k](self) for k in known}
+        names = set(ctx.checks)
+        if chosen is None:
+            chosen = [k for k in known if any(r.name in names for r in by_kind[k])] or list(own)
+        note = None
+        if tuple(chosen) != own:
+            note = (f"the records cover the claims {', '.join(chosen)}; the system's own list is {', '.join(own)} "
+                    f"(a --claims selection, which the certificate does not record)")
+        ctx.chosen = list(chosen)
+        records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(self)
+        # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
+        fixed = lambda: "x0 is a fixed point of Phi_f" if ctx.same(ctx.pts[1], ctx.pts[0]) else None  # noqa: E731
+        return [r if r.expected else replace(r, always=fixed) for r in records], note
 
 
 def ex_reversibility(ex):
-    c, K, out = ex.ctx, ex.ctx.K, []
-    for g in ex.field_names:
-        def derive(g=g):
-            pts = ex.orbit(g)
-            return compare((k, lambda k=k: (step(ex.fields[g], -c.e, pts[k + 1]), pts[k])) for k in range(K))
-        out.append(claim(f"reversibility Phi_{g}", f"Phi_{g}(Phi_{g}(x, eps), -eps) = x at the {K} points of its orbit",
-                         derive))
-    pts, f = c.pts, ex.fields["f"]
-    out.append(control("control: Phi_f applied twice returns",
-                       "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
-                       lambda: compare((k, lambda k=k: (pts[k + 2], pts[k])) for k in range(K - 1)) if K >= 2
-                       else compare([(0, lambda: (step(f, c.e, pts[1]), pts[0]))]),
-                       lambda: c.same(step(f, c.e, pts[1]), pts[0])))
-    return out
+    c, K, pts, f = ex.ctx, ex.ctx.K, ex.ctx.pts, ex.fields["f"]
+    return ex.reversibility() + [control(
+        "control: Phi_f applied twice returns",
+        "[control, must fail] Phi_f(Phi_f(x, eps), eps) = x at the orbit points",
+        lambda: compare(lambda k: (pts[k + 2], pts[k]), range(K - 1)) if K >= 2
+        else compare(lambda _: (step(f, c.e, pts[1]), pts[0]), [0]), lambda: c.same(step(f, c.e, pts[1]), pts[0]))]
 
 
 def ex_integrals(ex):
@@ -612,18 +636,18 @@ def ex_integrals(ex):
         I = ex.fn(text, f"system.integrals.{name}", name=name, table=ex.lib_integrals)
         out.append(claim(f"integral {name} conserved by Phi_f",
                          f"{name}(x_k) = {name}(x_0) for k = 1..{K} along the Phi_f orbit; {name} = {text}",
-                         lambda I=I: compare(conserved(I, pts))))
+                         lambda I=I: conserved(I, pts)))
         for g in ex.field_names[1:]:
             out.append(claim(f"integral {name} conserved by Phi_{g}",
                              f"{name}(y_k) = {name}(y_0) along the Phi_{g} orbit of x0",
-                             lambda I=I, g=g: compare(conserved(I, lazy_orbit(ex.fields[g], c.e, c.x0, K)))))
+                             lambda I=I, g=g: conserved(I, lazy_orbit(ex.fields[g], c.e, c.x0, K))))
         out.append(_perturbed_point(ex, name, text, I))
         lib = ex.lib_integrals[name]
         if lib.depends_on_eps and lib.at_eps_zero() is not None:
             I0 = ex.fn(text, f"system.integrals.{name}", eps=0 * c.e, name=name, table=ex.lib_integrals)
             out.append(control(f"control: {name} at eps = 0 conserved",
                                f"[control, must fail] the eps -> 0 limit of {name} (the continuous-time quantity) "
-                               f"is conserved along the Phi_f orbit", lambda I0=I0: compare(conserved(I0, pts)),
+                               f"is conserved along the Phi_f orbit", lambda I0=I0: conserved(I0, pts),
                                lambda lib=lib: "constant" if _constant(lib.at_eps_zero()) else None))
     return out
 
@@ -643,7 +667,7 @@ def _perturbed_point(ex, name, text, I):
     moved[j] = rel if moved[j] == 0 else moved[j] + moved[j] * rel
     return control(f"control: {name} at a perturbed point",
                    f"[control, must fail] {name} at x0 with x_{j} moved by 2^-60 relative (d{name}/dx_{j}(x0) != 0) "
-                   f"equals {name}(x_{c.K})", lambda: compare([(0, lambda: (I(moved), I(pts[-1])))]))
+                   f"equals {name}(x_{c.K})", lambda: compare(lambda _: (I(moved), I(pts[-1])), [0]))
 
 
 def _library_gradient(ex, name):
@@ -676,32 +700,25 @@ def ex_poisson(ex):
     return [
         claim("Poisson tensor Jacobi identity",
               f"the cyclic sums of Pi_im d_m Pi_jk vanish at the {K + 1} orbit points",
-              lambda: compare((k, lambda k=k: (jacobiator(ex.poisson, pts[k]), None)) for k in range(K + 1))),
+              lambda: compare(lambda k: (jacobiator(ex.poisson, pts[k]), None), range(K + 1))),
         claim("Poisson map Phi_f", f"dPhi(x) Pi(x) dPhi(x)^T = Pi(Phi(x)) at the {K} orbit points",
-              lambda: compare(poisson_map(f, c.e, Pi, pts, range(K)))),
+              lambda: poisson_map(f, c.e, Pi, pts, range(K))),
         control("control: Jacobi identity of Pi + W", "[control, must fail] Pi + W, W = e_0^e_1 + x_1 e_1^e_2, "
                 "satisfies the Jacobi identity at the orbit points",
-                lambda: compare((k, lambda k=k: (jacobiator(plus_w, pts[k]), None)) for k in range(K + 1))
+                lambda: compare(lambda k: (jacobiator(plus_w, pts[k]), None), range(K + 1))
                 if N >= 3 else (True, "0"), lambda: N < 3),
         control(f"control: (1 + x_{j}) Pi preserved", f"[control, must fail] the Kahan map preserves (1 + x_{j}) Pi "
-                f"(it would make 1 + x_{j} an integral)", lambda: compare(poisson_map(f, c.e, scaled, pts, range(K))),
+                f"(it would make 1 + x_{j} an integral)", lambda: poisson_map(f, c.e, scaled, pts, range(K)),
                 lambda: c.same(pts[1], pts[0]))]
 
 
 def ex_commutation(ex):
-    c, K, pts, out = ex.ctx, ex.ctx.K, ex.ctx.pts, []
-    f = ex.fields["f"]
-
-    def items(g, e):
-        y = lambda k: c.memo(("gy", g, e == c.e, k), lambda: step(ex.fields[g], e, pts[k]))  # noqa: E731
-        return ((k, lambda k=k: (step(f, c.e, y(k)), y(k + 1))) for k in range(K))
-    for g in ex.field_names[1:]:
-        out += [claim(f"commutation Phi_f o Phi_{g}", f"Phi_f(Phi_{g}(x)) = Phi_{g}(Phi_f(x)) at the {K} points x_k "
-                      f"of the Phi_f orbit", lambda g=g: compare(items(g, c.e))),
-                control(f"control: commutation with Phi_{g} at 2 eps",
-                        f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
-                        lambda g=g: compare(items(g, 2 * c.e)), lambda: c.same(pts[1], pts[0]))]
-    return out
+    c = ex.ctx
+    return [r for g in ex.field_names[1:] for r in (
+        ex.commutation(g),
+        control(f"control: commutation with Phi_{g} at 2 eps",
+                f"[control, must fail] Phi_f(., eps) commutes with Phi_{g}(., 2 eps) at the Phi_f orbit points",
+                lambda g=g: ex.commuting(g, 2 * c.e), lambda: c.same(c.pts[1], c.pts[0])))]
 
 
 def ex_jacobian(ex):
@@ -709,41 +726,35 @@ def ex_jacobian(ex):
     return [
         claim("Jacobian of Phi_f", f"the derivative of the step (dual numbers through the solve) equals "
               f"(I - eps f'(x))^-1 (I + eps f'(Phi(x))) at the {K} orbit points",
-              lambda: compare((k, lambda k=k: (dual_step(f, c.e, pts[k]), dphi(f, c.e, pts[k], pts[k + 1])))
-                              for k in range(K))),
+              lambda: compare(lambda k: (dual_step(f, c.e, pts[k]), dphi(f, c.e, pts[k], pts[k + 1])), range(K))),
         control("control: Jacobian with f'(x) for f'(Phi(x))",
                 "[control, must fail] the derivative of the step equals (I - eps f'(x))^-1 (I + eps f'(x))",
-                lambda: compare((k, lambda k=k: (dual_step(f, c.e, pts[k]), dphi(f, c.e, pts[k], pts[k])))
-                                for k in range(K)),
+                lambda: compare(lambda k: (dual_step(f, c.e, pts[k]), dphi(f, c.e, pts[k], pts[k])), range(K)),
                 lambda: all(c.same(sum(f.jacobian(pts[k + 1]), []), sum(f.jacobian(pts[k]), [])) for k in range(K)))]
 
 
 def ex_cmoq(ex):
     c, K, pts, f = ex.ctx, ex.ctx.K, ex.ctx.pts, ex.fields["f"]
     H = ex.fn(ex.spec["hamiltonian"]["H"], "system.hamiltonian.H")
-    kahan = lambda x: [[(1 if i == j else 0) - c.e * t for j, t in enumerate(r)]  # noqa: E731
-                       for i, r in enumerate(f.jacobian(x))]
+    kahan = lambda x: _identity_minus(c.e, f.jacobian(x))  # noqa: E731
 
     def modified(x):
-        _, z = _eliminate(kahan(x), [[t] for t in f.evaluate(x)])
-        if z is None:
-            raise Undefined("I - eps f'(x) is singular")
-        g = gradient(H, x)
-        return H(x) + c.F.of(Fraction(2, 3)) * c.e * sum((a * r[0] for a, r in zip(g, z)), 0 * x[0])
+        z = solve(kahan(x), f.evaluate(x), "I - eps f'(x) is singular")
+        return H(x) + c.F.of(Fraction(2, 3)) * c.e * sum((a * b for a, b in zip(gradient(H, x), z)), 0 * x[0])
 
     def det_sides(k):
         D = determinant(dphi(f, c.e, pts[k], pts[k + 1]))
         return D * determinant(kahan(pts[k])), determinant(kahan(pts[k + 1]))
     return [
         claim("CMOQ modified energy conserved", f"H~(x) = H(x) + (2 eps/3) grad H(x)^T (I - eps f'(x))^-1 f(x) "
-              f"is conserved along the Phi_f orbit (k = 1..{K})", lambda: compare(conserved(modified, pts))),
+              f"is conserved along the Phi_f orbit (k = 1..{K})", lambda: conserved(modified, pts)),
         claim("CMOQ invariant measure", "det dPhi(x) det(I - eps f'(x)) = det(I - eps f'(Phi(x))): the measure "
               f"dx / det(I - eps f'(x)) is preserved at the {K} orbit points",
-              lambda: compare((k, lambda k=k: det_sides(k)) for k in range(K))),
+              lambda: compare(det_sides, range(K))),
         control("control: H conserved", "[control, must fail] the Hamiltonian H itself is conserved along the "
-                "Phi_f orbit", lambda: compare(conserved(H, pts))),
+                "Phi_f orbit", lambda: conserved(H, pts)),
         control("control: Phi_f preserves volume", "[control, must fail] det dPhi(x) = 1 at the orbit points",
-                lambda: compare((k, lambda k=k: (determinant(dphi(f, c.e, pts[k], pts[k + 1])), 1)) for k in range(K)),
+                lambda: compare(lambda k: (determinant(dphi(f, c.e, pts[k], pts[k + 1])), 1), range(K)),
                 lambda: c.same(pts[1], pts[0]))]
 
 
@@ -761,10 +772,9 @@ def ex_measure(ex):
     lib = ex.ctx.system.measure()
     return [
         claim("invariant measure", f"m(Phi(x)) det dPhi(x) = m(x), m = {text}: the measure m(x) dx is preserved "
-              f"at the {K} orbit points", lambda: compare((k, lambda k=k: (m(pts[k + 1]) * det(k), m(pts[k])))
-                                                          for k in range(K))),
+              f"at the {K} orbit points", lambda: compare(lambda k: (m(pts[k + 1]) * det(k), m(pts[k])), range(K))),
         control("control: measure with density 1 preserved", "[control, must fail] det dPhi(x) = 1 at the orbit "
-                "points (the density 1 in place of m)", lambda: compare((k, lambda k=k: (det(k), 1)) for k in range(K)),
+                "points (the density 1 in place of m)", lambda: compare(lambda k: (det(k), 1), range(K)),
                 lambda: "constant density" if hasattr(lib, "partials") and _constant(lib) else None)]
 
 
@@ -773,7 +783,7 @@ def ex_declared_controls(ex):
     return [control(f"control: {name} conserved by Phi_f",
                     f"[control, must fail] {name} = {text} is conserved along the Phi_f orbit",
                     lambda fn=ex.fn(text, f"system.controls.{name}", name=name, table=ex.lib_controls):
-                    compare(conserved(fn, pts)))
+                    conserved(fn, pts))
             for name, text in (ex.spec.get("controls") or {}).items()]
 
 
@@ -794,26 +804,17 @@ def declared_claims(system) -> tuple:
     return known, tuple(k for k in EXPRESSION_KINDS if k in own)
 
 
+#: the record builders of a certificate's system, by its JSON's "family" key (a system without one is given
+#: by expressions)
+FAMILIES = {"lie-poisson": LiePoisson}
+
+
+def family(data):
+    return FAMILIES.get(data["system"].get("family"), Expressions)
+
+
 def expected_records(ctx, chosen=None) -> tuple:
     """(the records the certificate's system and options imply, a note on the claim selection or None);
     ``chosen``: the claims of a system given by expressions (default: those the records in
     ``ctx.checks`` cover, else the system's own list)."""
-    if getattr(ctx.system, "kind", "") == "lie-poisson":
-        ctx.chosen = None
-        lp = LiePoisson(ctx)
-        return [r for kind in LIE_POISSON_KINDS for r in kind(lp)], None
-    ex = Expressions(ctx)
-    known, own = declared_claims(ctx.system)
-    by_kind = {k: EXPRESSION_KINDS[k](ex) for k in known}
-    names = set(ctx.checks)
-    if chosen is None:
-        chosen = [k for k in known if any(r.name in names for r in by_kind[k])] or list(own)
-    note = None
-    if tuple(chosen) != own:
-        note = (f"the records cover the claims {', '.join(chosen)}; the system's own list is {', '.join(own)} "
-                f"(a --claims selection, which the certificate does not record)")
-    ctx.chosen = list(chosen)
-    records = [r for k in chosen for r in by_kind[k]] + ex_declared_controls(ex)
-    # at a fixed point of Phi_f every control is inapplicable, even one that fails: the orbit is one point
-    fixed = lambda: "x0 is a fixed point of Phi_f" if ex.ctx.same(ex.ctx.pts[1], ex.ctx.pts[0]) else None  # noqa: E731
-    return [r if r.expected else replace(r, always=fixed) for r in records], note
+    return ctx.family.records(chosen)
