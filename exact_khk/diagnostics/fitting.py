@@ -45,7 +45,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.diagnostics.kernels import (PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
-                                           _size, canonical_nullspace, evaluation_matrix, lift, monomials,
+                                           _size, canonical_nullspace, evaluation_matrix, evaluator, lift, monomials,
                                            orbit_mod_or_none, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
@@ -311,12 +311,13 @@ class EntryFitter:
                  orbits=None):
         self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
         self.margin, self.known = margin, list(known)
-        self.orbits = {} if orbits is None else orbits  # (x0, p) -> orbit mod p, shared by the fitters of a search
+        # shared by the fitters of a search: (x0, p) -> orbit mod p, and "blocks" -> their evaluations' echelon forms
+        self.orbits = {} if orbits is None else orbits
+        self.blocks = self.orbits.setdefault("blocks", _Blocks())
         self.say, self.max_bytes = progress or (lambda text: None), max_bytes
         self.rng = random.Random(f"fit-{seed}")
         self.starts = []          # pool starting points (rational) and the known integrals' values there
         self.data = {}            # p -> list of (points mod p, entry values, known values) per pool orbit
-        self.blocks = {}          # (p, monomials) -> list per pool orbit of the echelon rows of its evaluation
 
     def _orbit(self, start, p):
         x0, cvals = start
@@ -327,7 +328,7 @@ class EntryFitter:
         pts = self.orbits[tuple(x0), p]
         if pts is None:
             return None
-        ev = _Evaluator(self.exps)
+        ev = evaluator(tuple(self.exps))
         pivots, free, basis = canonical_nullspace([ev(q, 1, p) for q in pts], len(self.exps), p)
         if tuple(pivots) != self.pivots:
             return None  # a smaller invariant set or an unlucky prime: another pivot pattern
@@ -369,20 +370,12 @@ class EntryFitter:
         return data[:count]
 
     def _block(self, p, mons, i):
-        """(R, rank): the reduced echelon form of the evaluation of ``mons`` on pool orbit i (its first
-        ``rank`` rows are the orbit's conditions); None when the pool is unusable mod p.  Cached for the
-        monomials of the last fit mod p only."""
+        """(R, rank): the reduced echelon form of the evaluation of ``mons`` (a tuple) on pool orbit i (its
+        first ``rank`` rows are the orbit's conditions); None when the pool is unusable mod p."""
         data = self.pool(p, i + 1)
         if data is None:
             return None
-        key = (p, tuple(mons))
-        if key not in self.blocks:
-            self.blocks = {k: v for k, v in self.blocks.items() if k[0] != p}
-            self.blocks[key] = []
-        cache = self.blocks[key]
-        while len(cache) <= i:
-            cache.append(evaluation_matrix(mons, data[len(cache)][0], p).rref())
-        return cache[i]
+        return self.blocks.get((self.starts[i][0], p, mons), lambda: evaluation_matrix(mons, data[i][0], p).rref())
 
     def _orbits_for(self, p, mons, rows):
         """The number of pool orbits whose echelon rows first reach ``rows`` (None: pool unusable)."""
@@ -416,11 +409,15 @@ class EntryFitter:
             flat = [int(t) for t in R.entries()[:rank * mu]]
             for r in range(rank):
                 row = flat[r * mu:(r + 1) * mu]
-                for cols, offsets in ((shape.ncols, left), (shape.dcols, right)):
-                    nz = [(j, v) for j, v in enumerate(row[c] for c in cols) if v]
-                    for off, w in offsets:
-                        for j, v in nz:
-                            A[i, off + j] = v * w % p
+                nz = [(j, v) for j, v in enumerate(row[:nn]) if v]  # N's monomials lead the union
+                for off, w in left:
+                    for j, v in nz:
+                        A[i, off + j] = v * w % p
+                if not shape.same:
+                    nz = [(j, v) for j, v in enumerate([row[c] for c in shape.dcols]) if v]
+                for off, w in right:
+                    for j, v in nz:
+                        A[i, off + j] = v * w % p
                 i += 1
         return A
 
@@ -592,6 +589,30 @@ class EntryFitter:
                 {tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in den.to_dict().items()})
 
 
+#: entries of the echelon forms kept by a search (:class:`_Blocks`, 8 bytes each: 34 MB); the Lagrange top's
+#: 200 fits evaluate the monomials of degree <= 1..4 in its 6 variables on the same pool orbits
+BLOCK_ENTRIES = 2 ** 22
+
+
+class _Blocks:
+    """Echelon forms of monomial evaluations on pool orbits, (x0, p, monomials) -> (R, rank), shared by
+    the fitters of a search (their pools start from the same points); the oldest are dropped beyond
+    BLOCK_ENTRIES entries."""
+
+    def __init__(self):
+        self.kept, self.entries = {}, 0
+
+    def get(self, key, make):
+        if key not in self.kept:
+            R, rank = make()
+            self.kept[key] = (R, rank)
+            self.entries += R.nrows() * R.ncols()
+            while self.entries > BLOCK_ENTRIES and len(self.kept) > 1:
+                old = self.kept.pop(next(iter(self.kept)))
+                self.entries -= old[0].nrows() * old[0].ncols()
+        return self.kept[key]
+
+
 class _Shape:
     """The unknowns of one fit: the coefficients of N over the monomials ``num`` and of D over ``den``,
     each times every product c^b in ``cmons`` of the known integrals' values, as columns [N | D] (c^b
@@ -602,7 +623,8 @@ class _Shape:
         have = set(self.num)
         self.union = tuple(self.num + [e for e in self.den if e not in have])
         pos = {e: i for i, e in enumerate(self.union)}
-        self.ncols, self.dcols = [pos[e] for e in self.num], [pos[e] for e in self.den]
+        self.dcols = [pos[e] for e in self.den]
+        self.same = self.num == self.den
         self.half = len(self.num) * len(self.cmons)
         self.width = self.half + len(self.den) * len(self.cmons)
 
