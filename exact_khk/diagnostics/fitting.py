@@ -412,7 +412,7 @@ class EntryFitter:
                 nz = [(j, v) for j, v in enumerate(row[:nn]) if v]  # N's monomials lead the union
                 for off, w in left:
                     for j, v in nz:
-                        A[i, off + j] = v * w % p
+                        A[i, off + j] = v * w % p if w != 1 else v
                 if not shape.same:
                     nz = [(j, v) for j, v in enumerate([row[c] for c in shape.dcols]) if v]
                 for off, w in right:
