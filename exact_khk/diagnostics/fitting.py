@@ -305,7 +305,9 @@ class EntryFitter:
     One orbit's conditions on a polynomial P of degree ≤ δ (P = 0 at its points) are the rows of the
     reduced echelon form of its evaluation matrix (as many as its rank, against one per point); the
     fit's system stacks, for each orbit s of the pool, those rows R_s as [R_s ⊗ c_s^b | −e_s R_s ⊗ c_s^b],
-    filled straight into one ``nmod_mat`` (its memory planned first, :func:`fit_bytes`)."""
+    filled straight into one ``nmod_mat`` (its memory planned first, :func:`fit_bytes`).  N and D may
+    range over different monomials (:meth:`solve`; the HK-basis route, :mod:`.hkbases`): R_s is then
+    the echelon form of the evaluation of their union, its columns of each taken into its half."""
 
     def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=(), progress=None, max_bytes=None,
                  orbits=None):
