@@ -611,8 +611,9 @@ BLOCK_ENTRIES = 2 ** 22
 
 class _Blocks:
     """Echelon forms of monomial evaluations on pool orbits, (x0, p, monomials) -> (R, rank), shared by
-    the fitters of a search (their pools start from the same points); the oldest are dropped beyond
-    BLOCK_ENTRIES entries."""
+    the fitters of a search (their pools start from the same points); beyond BLOCK_ENTRIES entries the
+    oldest of other monomials or primes are dropped (those of the fit at work are all needed again when
+    its system is built, after :meth:`EntryFitter._orbits_for` has counted their ranks)."""
 
     def __init__(self):
         self.kept, self.entries = {}, 0
@@ -622,9 +623,11 @@ class _Blocks:
             R, rank = make()
             self.kept[key] = (R, rank)
             self.entries += R.nrows() * R.ncols()
-            while self.entries > BLOCK_ENTRIES and len(self.kept) > 1:
-                old = self.kept.pop(next(iter(self.kept)))
-                self.entries -= old[0].nrows() * old[0].ncols()
+            for old in [k for k in self.kept if k[1:] != key[1:]]:
+                if self.entries <= BLOCK_ENTRIES:
+                    break
+                R0, _ = self.kept.pop(old)
+                self.entries -= R0.nrows() * R0.ncols()
         return self.kept[key]
 
 
