@@ -212,28 +212,23 @@ def lagrange_top():
 
 @pytest.mark.slow
 def test_lagrange_top_what_is_extracted_is_right():
-    """The kernel at degree <= 2 shows 4.  m3, and then the two pencils of the kernel on the level sets
-    m3 = c (candidates free of m3) interpolated in c: Hirota-Kimura's J and the modified energy.  Each
-    is conserved by SymPy's Kahan step at rational points (not the code under test); the rank of
-    their gradients, by Fractions and SymPy, equals their number."""
+    """The kernel at degree <= 2 shows 4.  m3; the two pencils of the kernel on the level sets m3 = c
+    (candidates free of m3) interpolated in c: Hirota-Kimura's J and the modified energy; and a ratio of
+    degree 8/6 of the HK basis {1, p3, m1^2, m2^2, p3^2} (hkbases.py; the catalogue's K is quadratic in
+    the catalogue's J, but the J found is a Moebius transform of it with coefficients depending on m3, so
+    K is of higher degree in it).  Nothing is left unextracted."""
     res = lagrange_top()
-    assert res.visible == 4 and len(res.integrals) == 3 and res.independent == 3
-    assert check_found("lagrange-top", res, "1/10", points=2) == 3
+    assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4
     assert sum("on the level sets m3 = c" in n for n in res.notes) == 2
-    assert "kernel 10, extracted 3, independent 3 (the kernel shows 4" in res.summary()
-    assert any("the kernel shows 4 independent integrals" in w for w in res.warnings)  # said plainly
+    assert sum("of the HK basis" in n for n in res.notes) == 1
+    assert "kernel 10, extracted 4, independent 4 (the kernel shows 4" in res.summary()
+    assert not any("the kernel shows 4 independent integrals" in w for w in res.warnings)
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="issue 41 target not reached: 3 of 4. On m3 = c the third 'pencil' "
-                   "pencil_integrals separates changes with the four orbits at the same c (coefficients of "
-                   "60-90 digits): the kernel's third direction is no pencil; the catalogue's K is not found by "
-                   "the fits (degree <= 4, coefficients of degree <= 3 in one integral found or <= 2 in all, <= 1300 "
-                   "unknowns): K is quadratic in the catalogue's J, but the J' found is a Moebius transform of J "
-                   "whose coefficients depend on m3 (a J J' + b J + c J' + 1 = 0 with (a, b, c) = (-149/500, "
-                   "3/500, 1/3) at m3 = 1/3 and (-19/500, 1/1000, 12) at m3 = 2, by SymPy), so K in J' needs "
-                   "coefficients of higher degree in x")
 def test_lagrange_top_four():
+    """All 4, each conserved by SymPy's Kahan step at rational points (not the code under test), the rank
+    of their gradients (by Fractions and SymPy) equal to their number."""
     res = lagrange_top()
     assert res.visible == 4 and len(res.integrals) == 4 and res.independent == 4
     assert check_found("lagrange-top", res, "1/10", points=2) == 4

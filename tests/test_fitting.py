@@ -163,3 +163,28 @@ def test_kqv_chain_n10_every_integral_certified(tmp_path, capsys):
     capsys.readouterr()
     assert main(["certify", "--system", str(out), "--quiet"]) == 0
     assert "VALID" in capsys.readouterr().out
+
+
+def test_solve_with_numerator_and_denominator_over_different_monomials():
+    """EntryFitter.solve, as the HK-basis route calls it: on the Euler top's circuit {x², z², 1} the entry
+    c_{x²}/c_1 is fitted with N over {1, z²} and D over the even monomials of degree <= 2; the pair is
+    conserved by SymPy's Kahan step.  Negative control: with D over {1, x²}, which cannot hold the
+    denominator, no pair is returned."""
+    euler = "euler-top"
+    _, fld = resolve_field(euler, "f")
+    sub = [(2, 0, 0), (0, 0, 2), (0, 0, 0)]
+    primes = list(random_primes(4, 1))
+    fitter = EntryFitter(fld, F(1, 10), sub, 12, (0, 1), 0, 4)
+    even = [e for e in monomials(3, 2) if not any(k % 2 for k in e)]
+    num, den = fitter.solve((0, 2), [(0, 0, 0), (0, 0, 2)], even, primes)
+    assert set(num) <= {(0, 0, 0), (0, 0, 2)} and set(den) <= set(even) and len(den) > 1
+    xs, comps = sympy_field(euler)
+    I = sum(c * sympy.Mul(*[v ** k for v, k in zip(xs, e)]) for e, c in num.items()) / \
+        sum(c * sympy.Mul(*[v ** k for v, k in zip(xs, e)]) for e, c in den.items())
+    eps = sympy.Rational(1, 10)   # the entry depends on the map's ε, the one the fitter was given
+    rng = random.Random(2)
+    for _ in range(2):
+        x = [sympy.Rational(rng.randint(1, 9), rng.randint(1, 5)) for _ in xs]
+        y = kahan_step(xs, comps, eps, x)
+        assert I.subs(dict(zip(xs, x))) == I.subs(dict(zip(xs, y)))
+    assert fitter.solve((0, 2), [(0, 0, 0), (0, 0, 2)], [(0, 0, 0), (2, 0, 0)], primes) is None

@@ -91,3 +91,21 @@ def test_invariant_monomials_under_sign_flips():
     flips = [(-1, -1)]
     assert _invariant(monomials(2, 2), flips) == [e for e in monomials(2, 2) if sum(e) % 2 == 0]
     assert len(_invariant(monomials(2, 2), flips)) == 4   # 1, m², mp, p²
+
+
+def test_evaluator_plans_sign_invariant_monomials_by_products_of_two():
+    """A set without the parents e − x_j (monomials invariant under the flip of (x0, x1) and of x2: x0 x1,
+    x2², ... but no x0) is evaluated through e − x_j x_k; its values mod p and over Q equal the powers
+    computed directly with Fractions."""
+    import flint
+
+    from exact_khk.diagnostics.kernels import _Evaluator
+    exps = _invariant(monomials(3, 6), [(-1, -1, 1), (1, 1, -1)])
+    ev = _Evaluator(exps)
+    assert ev.pairs and sum(parent is None for parent, _, _ in ev.plan) == 1   # only 1 from scratch
+    x, p = [F(3, 2), F(-5, 7), F(4, 3)], 1000003
+    direct = [F(1) * x[0] ** a * x[1] ** b * x[2] ** c for a, b, c in exps]
+    assert ev([flint.fmpq(t.numerator, t.denominator) for t in x], flint.fmpq(1)) == \
+        [flint.fmpq(v.numerator, v.denominator) for v in direct]
+    xm = [t.numerator * pow(t.denominator, -1, p) % p for t in x]
+    assert ev(xm, 1, p) == [v.numerator * pow(v.denominator, -1, p) % p for v in direct]

@@ -45,7 +45,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.diagnostics.kernels import (PROGRESS_ENTRIES, _Evaluator, _point, _rref_pivots,
-                                           _size, canonical_nullspace, evaluation_matrix, lift, monomials,
+                                           _size, canonical_nullspace, evaluation_matrix, evaluator, lift, monomials,
                                            orbit_mod_or_none, to_mpoly)
 from exact_khk.errors import InputError, SingularStepError
 
@@ -68,7 +68,20 @@ STABLE_ORBITS = 3
 CIRCUIT_ORDERS = 200
 
 
+#: the last orbit differentiated, (fld, (eps, x0, steps, p), result): a search differentiates the kernel of
+#: the reference orbit for each of its circuits (the Lagrange top's HK-basis route: 69 times, 4 of its 8 s)
+_LAST_TANGENTS = [None, None, None]
+
+
 def _orbit_with_tangents(fld, eps, x0, steps, p):
+    """(points, tangent maps dΦ^k(x0)) of the orbit of ``x0`` mod p, read only by the callers."""
+    key = (eps, tuple(x0), steps, p)
+    if _LAST_TANGENTS[0] is not fld or _LAST_TANGENTS[1] != key:
+        _LAST_TANGENTS[:] = [fld, key, _tangents(fld, eps, x0, steps, p)]
+    return _LAST_TANGENTS[2]
+
+
+def _tangents(fld, eps, x0, steps, p):
     from exact_khk.kahan.map import KahanMap
     phi = KahanMap(fld, eps, f"gf:{p}")
     pts = phi.orbit(x0, steps)
@@ -305,18 +318,21 @@ class EntryFitter:
     One orbit's conditions on a polynomial P of degree ≤ δ (P = 0 at its points) are the rows of the
     reduced echelon form of its evaluation matrix (as many as its rank, against one per point); the
     fit's system stacks, for each orbit s of the pool, those rows R_s as [R_s ⊗ c_s^b | −e_s R_s ⊗ c_s^b],
-    filled straight into one ``nmod_mat`` (its memory planned first, :func:`fit_bytes`)."""
+    filled straight into one ``nmod_mat`` (its memory planned first, :func:`fit_bytes`).  N and D may
+    range over different monomials (:meth:`solve`; the HK-basis route, :mod:`.hkbases`): R_s is then
+    the echelon form of the evaluation of their union, its columns of each taken into its half."""
 
     def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=(), progress=None, max_bytes=None,
                  orbits=None):
         self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
         self.margin, self.known = margin, list(known)
-        self.orbits = {} if orbits is None else orbits  # (x0, p) -> orbit mod p, shared by the fitters of a search
+        # shared by the fitters of a search: (x0, p) -> orbit mod p, and "blocks" -> their evaluations' echelon forms
+        self.orbits = {} if orbits is None else orbits
+        self.blocks = self.orbits.setdefault("blocks", _Blocks())
         self.say, self.max_bytes = progress or (lambda text: None), max_bytes
         self.rng = random.Random(f"fit-{seed}")
         self.starts = []          # pool starting points (rational) and the known integrals' values there
         self.data = {}            # p -> list of (points mod p, entry values, known values) per pool orbit
-        self.blocks = {}          # (p, monomials) -> list per pool orbit of the echelon rows of its evaluation
 
     def _orbit(self, start, p):
         x0, cvals = start
@@ -327,7 +343,7 @@ class EntryFitter:
         pts = self.orbits[tuple(x0), p]
         if pts is None:
             return None
-        ev = _Evaluator(self.exps)
+        ev = evaluator(tuple(self.exps))
         pivots, free, basis = canonical_nullspace([ev(q, 1, p) for q in pts], len(self.exps), p)
         if tuple(pivots) != self.pivots:
             return None  # a smaller invariant set or an unlucky prime: another pivot pattern
@@ -369,20 +385,12 @@ class EntryFitter:
         return data[:count]
 
     def _block(self, p, mons, i):
-        """(R, rank): the reduced echelon form of the evaluation of ``mons`` on pool orbit i (its first
-        ``rank`` rows are the orbit's conditions); None when the pool is unusable mod p.  Cached for the
-        monomials of the last fit mod p only."""
+        """(R, rank): the reduced echelon form of the evaluation of ``mons`` (a tuple) on pool orbit i (its
+        first ``rank`` rows are the orbit's conditions); None when the pool is unusable mod p."""
         data = self.pool(p, i + 1)
         if data is None:
             return None
-        key = (p, tuple(mons))
-        if key not in self.blocks:
-            self.blocks = {k: v for k, v in self.blocks.items() if k[0] != p}
-            self.blocks[key] = []
-        cache = self.blocks[key]
-        while len(cache) <= i:
-            cache.append(evaluation_matrix(mons, data[len(cache)][0], p).rref())
-        return cache[i]
+        return self.blocks.get((self.starts[i][0], p, mons), lambda: evaluation_matrix(mons, data[i][0], p).rref())
 
     def _orbits_for(self, p, mons, rows):
         """The number of pool orbits whose echelon rows first reach ``rows`` (None: pool unusable)."""
@@ -397,58 +405,64 @@ class EntryFitter:
                 return None
         return count
 
-    def _system(self, p, mons, cmons, key, start, stop):
+    def _system(self, p, shape, key, start, stop):
         """The ``nmod_mat`` of the conditions [R_s ⊗ c^b | −e_s·R_s ⊗ c^b] of pool orbits start..stop-1
-        (class docstring), or None when the pool is unusable mod p."""
-        blocks = [self._block(p, mons, i) for i in range(start, stop)]
+        (class docstring; R_s over ``shape.union``, its columns of N's and of D's monomials in each
+        half), or None when the pool is unusable mod p."""
+        blocks = [self._block(p, shape.union, i) for i in range(start, stop)]
         if any(b is None for b in blocks):
             return None
         data = self.data[p]
-        md, half = len(mons), len(mons) * len(cmons)
-        A = flint.nmod_mat(sum(rank for _, rank in blocks), 2 * half, p)
+        mu, nn, nd = len(shape.union), len(shape.num), len(shape.den)
+        A = flint.nmod_mat(sum(rank for _, rank in blocks), shape.width, p)
         i = 0
         for (_, values, cv), (R, rank) in zip(data[start:stop], blocks):
             e = values[key]
-            ws = [math.prod(pow(c, k, p) for c, k in zip(cv, b)) % p for b in cmons]
-            pairs = [(k * md, w, (-e * w) % p) for k, w in enumerate(ws)]
+            ws = [math.prod(pow(c, k, p) for c, k in zip(cv, b)) % p for b in shape.cmons]
+            left = [(k * nn, w) for k, w in enumerate(ws)]
+            right = [(shape.half + k * nd, (-e * w) % p) for k, w in enumerate(ws)]
+            flat = [int(t) for t in R.entries()[:rank * mu]]
             for r in range(rank):
-                nz = [(j, v) for j, v in ((j, int(R[r, j])) for j in range(md)) if v]
-                for off, w, we in pairs:
+                row = flat[r * mu:(r + 1) * mu]
+                nz = [(j, v) for j, v in enumerate(row[:nn]) if v]  # N's monomials lead the union
+                for off, w in left:
+                    for j, v in nz:
+                        A[i, off + j] = v * w % p if w != 1 else v
+                if not shape.same:
+                    nz = [(j, v) for j, v in enumerate([row[c] for c in shape.dcols]) if v]
+                for off, w in right:
                     for j, v in nz:
                         A[i, off + j] = v * w % p
-                        A[i, half + off + j] = v * we % p
                 i += 1
         return A
 
-    def _junk(self, mons, J, p):
-        """Reduced echelon rows (mod p) of the span of the vectors μ·c^b·(A_i − c_i·B_i) in both halves."""
+    def _junk(self, shape, J, p):
+        """Reduced echelon rows (mod p) of the span of the vectors μ·c^b·(A_i − c_i·B_i) in each half."""
         if not self.known or J == 0:
             return []
-        md, pos = len(mons), {e: i for i, e in enumerate(mons)}
-        cmons = monomials(len(self.known), J)
-        cpos = {b: i for i, b in enumerate(cmons)}
-        width = 2 * md * len(cmons)
+        cpos = {b: i for i, b in enumerate(shape.cmons)}
         vecs = []
-        for i, (num, den) in enumerate(self.known):
-            for mu in mons:
-                shifted = [(tuple(x + y for x, y in zip(e, mu)), c, bb) for poly, bb in ((num, 0), (den, 1))
-                           for e, c in poly.items()]
-                if any(s not in pos for s, _, _ in shifted):
-                    continue
-                for b in cmons:
-                    b1 = tuple(k + (j == i) for j, k in enumerate(b))
-                    if b1 not in cpos:
+        for mons, start in ((shape.num, 0), (shape.den, shape.half)):
+            md, pos = len(mons), {e: i for i, e in enumerate(mons)}
+            for i, (num, den) in enumerate(self.known):
+                for mu in mons:
+                    shifted = [(tuple(x + y for x, y in zip(e, mu)), c, bb) for poly, bb in ((num, 0), (den, 1))
+                               for e, c in poly.items()]
+                    if any(t not in pos for t, _, _ in shifted):
                         continue
-                    for half in (0, width // 2):
-                        v = [0] * width
-                        for s, c, bb in shifted:
-                            col = half + cpos[b1 if bb else b] * md + pos[s]
+                    for b in shape.cmons:
+                        b1 = tuple(k + (j == i) for j, k in enumerate(b))
+                        if b1 not in cpos:
+                            continue
+                        v = [0] * shape.width
+                        for t, c, bb in shifted:
+                            col = start + cpos[b1 if bb else b] * md + pos[t]
                             v[col] = (v[col] + (-1 if bb else 1) * c.numerator * pow(c.denominator, -1, p)) % p
                         vecs.append(v)
         if not vecs:
             return []
-        R, rank = flint.nmod_mat(len(vecs), width, [t for v in vecs for t in v], p).rref()
-        return [[int(R[i, j]) for j in range(width)] for i in range(rank)]
+        R, rank = flint.nmod_mat(len(vecs), shape.width, [t for v in vecs for t in v], p).rref()
+        return [[int(R[i, j]) for j in range(shape.width)] for i in range(rank)]
 
     def _representative(self, vectors, junk, p):
         """The one vector of the nullspace modulo the junk span, reduced by the junk's echelon rows
@@ -483,11 +497,12 @@ class EntryFitter:
                     B[c, j] = p - t
         return B
 
-    def _grown(self, p, mons, cmons, key, count, width):
+    def _grown(self, p, shape, key, count):
         """(nullspace basis as an nmod_mat, orbits used): the pool grows one orbit at a time until the
         nullspace has kept its dimension for STABLE_ORBITS orbits (a relation between the entry and
         the other integrals' values on few orbits loses a dimension per orbit), or is zero."""
-        A = self._system(p, mons, cmons, key, 0, count)
+        width = shape.width
+        A = self._system(p, shape, key, 0, count)
         if A is None:
             return None, count
         if A.nrows() * width > PROGRESS_ENTRIES:
@@ -496,7 +511,7 @@ class EntryFitter:
         del A
         stable = 0
         while B is not None and stable < STABLE_ORBITS and count < width + STABLE_ORBITS + 2:
-            block = self._system(p, mons, cmons, key, count, count + 1)
+            block = self._system(p, shape, key, count, count + 1)
             if block is None:
                 return None, count
             count += 1
@@ -518,29 +533,36 @@ class EntryFitter:
         N = self.fld.dim
         variables = tuple(range(N)) if variables is None else tuple(variables)
         mons = [_embedded(e, variables, N) for e in monomials(len(variables), delta)]
-        cmons = monomials(len(self.known), J) if self.known else [()]
-        md = len(mons)
-        width = 2 * md * len(cmons)
-        if width > (MAX_PLAIN_FIT_UNKNOWNS if J == 0 else MAX_FIT_UNKNOWNS):
+        if 2 * len(mons) * (math.comb(len(self.known) + J, J) if self.known else 1) \
+                > (MAX_PLAIN_FIT_UNKNOWNS if J == 0 else MAX_FIT_UNKNOWNS):
             return None
+        return self.solve(key, mons, mons, primes, J)
+
+    def solve(self, key, num, den, primes, J=0):
+        """(N, D) dicts over Q, N over the monomials ``num`` and D over ``den`` (each with coefficients
+        of degree ≤ J in the known integrals), with N/D equal to the entry ``key`` on the pool's orbits,
+        reduced; or None (no such pair, not unique, or the lift not confirmed).  Raises
+        :class:`FitTooLarge` before any work when the system's planned memory exceeds ``max_bytes``."""
+        shape = _Shape(num, den, monomials(len(self.known), J) if self.known else [()])
+        width = shape.width
         need = width + self.margin
         if self.max_bytes is not None and fit_bytes(width, need) > self.max_bytes:
             raise FitTooLarge(f"a fit with {width} unknowns needs about {_size(fit_bytes(width, need))}, beyond "
                               f"the memory limit of {_size(self.max_bytes)} (EXACT_KHK_MAX_MEMORY)")
-        count = self._orbits_for(primes[0], mons, need)
+        count = self._orbits_for(primes[0], shape.union, need)
         if count is None:
             return None
-        count = max(count, delta + J + 2)
-        B, count = self._grown(primes[0], mons, cmons, key, count, width)
+        count = max(count, max(map(sum, shape.union)) + J + 2)
+        B, count = self._grown(primes[0], shape, key, count)
         if B is None:
             return None
         vec = self._representative([[int(B[i, j]) for i in range(width)] for j in range(B.ncols())],
-                                   self._junk(mons, J, primes[0]), primes[0])
+                                   self._junk(shape, J, primes[0]), primes[0])
         if vec is None:
             return None  # no pair of this degree, or not unique: the caller raises δ
         per = [(primes[0], [vec])]
         for p in primes[1:]:
-            A = self._system(p, mons, cmons, key, 0, count)
+            A = self._system(p, shape, key, 0, count)
             if A is None:
                 continue
             B = self._nullspace(A, width, p)
@@ -548,25 +570,24 @@ class EntryFitter:
             if B is None:
                 continue
             vec = self._representative([[int(B[i, j]) for i in range(width)] for j in range(B.ncols())],
-                                       self._junk(mons, J, p), p)
+                                       self._junk(shape, J, p), p)
             if vec is None:
                 continue
             per.append((p, [vec]))
             out = lift(per)
             if out is not None:
-                return self._compose(out[0], mons, cmons, J)
+                return self._compose(out[0], shape, J)
         return None
 
-    def _compose(self, vec, mons, cmons, J):
-        """N(x, I(x))/D(x, I(x)) with the known integrals' denominators cleared, as dicts over Q."""
+    def _compose(self, vec, shape, J):
+        """N(x, I(x))/D(x, I(x)) with the known integrals' denominators cleared, reduced, as dicts over Q."""
         N = self.fld.dim
-        md = len(mons)
-        half = len(vec) // 2
         parts = []
-        for off in (0, half):
+        for mons, start in ((shape.num, 0), (shape.den, shape.half)):
+            md = len(mons)
             total = to_mpoly({}, N)
-            for k, b in enumerate(cmons):
-                coeffs = {e: c for e, c in zip(mons, vec[off + k * md: off + (k + 1) * md]) if c}
+            for k, b in enumerate(shape.cmons):
+                coeffs = {e: c for e, c in zip(mons, vec[start + k * md: start + (k + 1) * md]) if c}
                 if not coeffs:
                     continue
                 term = to_mpoly(coeffs, N)
@@ -581,6 +602,49 @@ class EntryFitter:
         num, den = num / g, den / g
         return ({tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in num.to_dict().items()},
                 {tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in den.to_dict().items()})
+
+
+#: entries of the echelon forms kept by a search (:class:`_Blocks`, 8 bytes each: 34 MB); the Lagrange top's
+#: 200 fits evaluate the monomials of degree <= 1..4 in its 6 variables on the same pool orbits
+BLOCK_ENTRIES = 2 ** 22
+
+
+class _Blocks:
+    """Echelon forms of monomial evaluations on pool orbits, (x0, p, monomials) -> (R, rank), shared by
+    the fitters of a search (their pools start from the same points); beyond BLOCK_ENTRIES entries the
+    oldest of other monomials or primes are dropped (those of the fit at work are all needed again when
+    its system is built, after :meth:`EntryFitter._orbits_for` has counted their ranks)."""
+
+    def __init__(self):
+        self.kept, self.entries = {}, 0
+
+    def get(self, key, make):
+        if key not in self.kept:
+            R, rank = make()
+            self.kept[key] = (R, rank)
+            self.entries += R.nrows() * R.ncols()
+            for old in [k for k in self.kept if k[1:] != key[1:]]:
+                if self.entries <= BLOCK_ENTRIES:
+                    break
+                R0, _ = self.kept.pop(old)
+                self.entries -= R0.nrows() * R0.ncols()
+        return self.kept[key]
+
+
+class _Shape:
+    """The unknowns of one fit: the coefficients of N over the monomials ``num`` and of D over ``den``,
+    each times every product c^b in ``cmons`` of the known integrals' values, as columns [N | D] (c^b
+    blocks in each half); ``union`` (``num``, then the rest of ``den``) is evaluated on each pool orbit."""
+
+    def __init__(self, num, den, cmons):
+        self.num, self.den, self.cmons = list(num), list(den), list(cmons)
+        have = set(self.num)
+        self.union = tuple(self.num + [e for e in self.den if e not in have])
+        pos = {e: i for i, e in enumerate(self.union)}
+        self.dcols = [pos[e] for e in self.den]
+        self.same = self.num == self.den
+        self.half = len(self.num) * len(self.cmons)
+        self.width = self.half + len(self.den) * len(self.cmons)
 
 
 def _embedded(e, variables, N) -> tuple:

@@ -14,12 +14,13 @@ monomials; this route takes the ratio the kernel makes simplest and fits it at i
   function to a generic line keeps its total degrees): values at t = 1, 2, … from one orbit per t
   (all circuits read the same orbits), univariate rational reconstruction over F_p.  The pair with
   the fewest fit unknowns is fitted.
-* **Fit.**  N − r(x_s)·D vanishes at the points of every pool orbit s, with N and D over the
-  monomials of degree ≤ d_N, d_D: one nullspace over F_p, one vector at the measured degrees (N/D
-  reduced), lifted to Q over several primes (:func:`.kernels.lift`).  Coordinate sign changes σ
-  under which r is invariant (single and paired flips, tested mod p on one orbit each) shrink the
-  fit: r = N/D reduced and r∘σ = r give N∘σ = χ(σ)N and D∘σ = χ(σ)D with χ = ±1, and the invariant
-  monomials (χ = 1) are tried first, then all monomials when within MAX_HK_UNKNOWNS.
+* **Fit.**  With c_j moved last in the circuit, r = c_i/c_j is an entry of its canonical kernel vector,
+  fitted by :meth:`.fitting.EntryFitter.solve` with N and D over the monomials of degree ≤ d_N and
+  ≤ d_D: one vector at the measured degrees (N/D reduced), lifted to Q over several primes.
+  Coordinate sign changes σ under which r is invariant (single and paired flips, tested mod p on one
+  orbit each) shrink the fit: r = N/D reduced and r∘σ = r give N∘σ = χ(σ)N and D∘σ = χ(σ)D with
+  χ = ±1, and the invariant monomials (χ = 1) are tried first, then all monomials when within
+  MAX_HK_UNKNOWNS.
 * The caller verifies each integral exactly on a fresh orbit and keeps it only if it raises the
   exact rank of the Jacobian (``_Job.complete``).
 
@@ -29,17 +30,23 @@ recomputes it with SymPy): the orbit kernel (dimension 4) lives on 1, p_k², m_k
 {1, p_k², m_k p_k} two more (entries of degree 8); every ratio that raises the rank to 4 involves an
 m_k² and has degree ≥ (10, 8): c_1/c_{m1p1} on {1, p1², m1p1, m2p2, m3p3, m2², m3²}.  Invariant under
 the flips of (m_k, p_k), its fit has 1372 + 553 unknowns (8008 + 3003 over all monomials); two
-primes lift it.
+primes lift it.  On the Lagrange top (catalogue, degree 2), after m3 and the two level-set pencils, the
+ratio c_{m1²}/c_{p3²} of {1, p3, m1², m2², p3²} has degree (8, 6) and is invariant under the flips of
+(m1, p1) and of (m2, p2): 847 + 276 unknowns, whose nullspace shrinks slowly as orbits are added (by
+7 an orbit of 41 points, 158 left after 30 orbits); the pool grows from 26 orbits to 59 before it is one
+vector.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import random
+
 import flint
 
-from exact_khk.diagnostics.fitting import circuits, entry_jacobian, rank_mod
-from exact_khk.diagnostics.kernels import (_Evaluator, _point, canonical_nullspace, lift, monomial_text, monomials,
+from exact_khk.diagnostics.fitting import EntryFitter, FitTooLarge, circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.kernels import (_Evaluator, _point, canonical_nullspace, monomial_text, monomials,
                                            orbit_mod_or_none)
 
 #: the highest degree of a fitted numerator or denominator read along the line
@@ -48,14 +55,11 @@ MAX_HK_DEGREE = 12
 MAX_HK_UNKNOWNS = 2500
 #: circuits whose ratios are examined, at most
 MAX_HK_CIRCUITS = 200
-#: pool orbits added while the fit's nullspace has more than one vector, at most
-MAX_HK_EXTRA = 10
 #: fits tried in one search, at most: the first candidate's two shapes (sign-invariant, then all
-#: monomials).  The Clebsch system's fourth integral is its first fit (7 s); on the Lagrange top every
-#: fit fails (six fits: 14 s each, 94 s of a 206 s search)
+#: monomials).  The fourth integral of the Clebsch system and that of the Lagrange top are each the
+#: first fit (Lagrange: degree 8/6, 1123 unknowns, the pool grown to 59 orbits until its nullspace is
+#: one vector; 11 s with the choice of the ratio)
 MAX_HK_FITS = 2
-#: points of each pool orbit (rows of the fit per orbit)
-POOL_STEPS = 40
 
 
 def _vector(rows, cols, p):
@@ -135,7 +139,7 @@ def _candidates(job, ref, mod_rows, p, seed):
             pts = [(t, v[i] * pow(v[j], -1, p) % p) for t, v in good if v[j]]
             deg = _degrees([t for t, _ in pts], [g for _, g in pts], p, MAX_HK_DEGREE)
             if deg is not None:
-                size = len(monomials(N, deg[0])) + len(monomials(N, deg[1]))
+                size = math.comb(N + deg[0], N) + math.comb(N + deg[1], N)
                 out.append((size, deg, S, i, j))
     return sorted(out, key=lambda r: (r[0], r[1], r[2], r[3], r[4]))
 
@@ -160,117 +164,8 @@ def _symmetries(job, cols, i, j, p, seed):
     return [s for s in flips if ratio([t * c for t, c in zip(x, s)]) == r0]
 
 
-class _Products:
-    """Values mod p of monomials (sorted by degree) at a point, each one product of an earlier one and a
-    monomial of degree ≤ 2 (a sign-invariant set holds few parents e − x_j; it holds e − x_j x_k)."""
-
-    def __init__(self, exps):
-        N = len(exps[0]) if exps else 0
-        self.small = [e for e in monomials(N, 2) if any(e)]
-        pos = {e: i for i, e in enumerate(exps)}
-        self.plan = []
-        for k, e in enumerate(exps):
-            for s, q in enumerate(self.small):
-                f = tuple(a - b for a, b in zip(e, q))
-                if min(f) >= 0 and pos.get(f, k) < k:
-                    self.plan.append((pos[f], s))
-                    break
-            else:
-                self.plan.append((None, e))
-        self.ev = _Evaluator(self.small)
-
-    def __call__(self, x, p):
-        sm = self.ev(x, 1, p)
-        vals = []
-        for f, s in self.plan:
-            if f is None:
-                v = 1
-                for t, k in zip(x, s):
-                    v = v * pow(t, k, p) % p
-                vals.append(v)
-            else:
-                vals.append(vals[f] * sm[s] % p)
-        return vals
-
-
 def _invariant(exps, flips):
     return [e for e in exps if all(sum(k for k, s in zip(e, f) if s < 0) % 2 == 0 for f in flips)]
-
-
-class _Fit:
-    """N − r·D = 0 on pool orbits, N, D over the given monomials (module docstring)."""
-
-    def __init__(self, job, cols, i, j, nb, db, seed):
-        self.job, self.nb, self.db = job, nb, db
-        sub = [c for c in cols if c != cols[j]] + [cols[j]]
-        self.sub = [job.exps[c] for c in sub]
-        self.pos = sub.index(cols[i])
-        self.starts, self.first = [], None
-        self.rng = random.Random(f"hk-pool-{seed}")
-
-    def rows(self, p, count):
-        """Rows [φ_N(x) | −r·φ_D(x)] of the first ``count`` pool orbits mod p; the first prime draws the
-        starting points (replacing any whose orbit is singular or degenerate), later primes reuse
-        them (None where one is unusable mod that prime)."""
-        ev, evn, evd = _Evaluator(self.sub), _Products(self.nb), _Products(self.db)
-        first = self.first in (None, p)
-        self.first = p if self.first is None else self.first
-        out, k, tries = [], 0, 0
-        while k < count:
-            if k == len(self.starts):
-                if not first or tries > 2 * count + 10:
-                    return None
-                tries += 1
-                self.starts.append(_point(self.rng, self.job.fld.dim))
-            pts = orbit_mod_or_none(self.job.fld, self.job.eps, self.starts[k], POOL_STEPS, p)
-            v = None if pts is None else _vector([ev(q, 1, p) for q in pts], list(range(len(self.sub))), p)
-            if v is None:
-                if not first:
-                    return None
-                del self.starts[k]
-                continue
-            r = v[self.pos]
-            for q in pts:
-                out.append(evn(q, p) + [(-r * t) % p for t in evd(q, p)])
-            k += 1
-        return out
-
-    def vector(self, p, count):
-        rows = self.rows(p, count)
-        if rows is None:
-            return None
-        width = len(self.nb) + len(self.db)
-        X, nul = flint.nmod_mat(len(rows), width, [t for r in rows for t in r], p).nullspace()
-        if nul != 1:
-            return nul
-        v = [int(X[k, 0]) for k in range(width)]
-        inv = pow(next(t for t in v if t), -1, p)
-        return [t * inv % p for t in v]
-
-    def run(self, primes):
-        """(N, D) over Q, or None."""
-        width = len(self.nb) + len(self.db)
-        count = -(-(width + 2 * POOL_STEPS) // (POOL_STEPS + 1))
-        per = []
-        for p in primes:
-            vec = self.vector(p, count)
-            extra = 0
-            while not per and isinstance(vec, int) and vec > 1 and extra < MAX_HK_EXTRA:
-                extra += 1
-                count += 1
-                vec = self.vector(p, count)
-            if not isinstance(vec, list):
-                if not per:
-                    return None  # no pair, or not unique, at these degrees and monomials
-                continue
-            per.append((p, [vec]))
-            out = lift(per)
-            if out is not None:
-                vec = out[0]
-                num = {e: c for e, c in zip(self.nb, vec[:len(self.nb)]) if c}
-                den = {e: c for e, c in zip(self.db, vec[len(self.nb):]) if c}
-                return (num, den) if num and den else None
-        return None
 
 
 def hk_basis_integrals(job, ref, mod_rows, primes, seed, wanted):
@@ -285,11 +180,19 @@ def hk_basis_integrals(job, ref, mod_rows, primes, seed, wanted):
         for _, (dn, dd), S, i, j in cands:
             tried.add((S, i, j))
             flips = _symmetries(job, S, i, j, p, seed)
+            # c_j last: c_i/c_j is the entry (i, last) of the circuit's canonical kernel vector
+            sub = [c for c in S if c != S[j]] + [S[j]]
+            fitter = EntryFitter(job.fld, job.eps, [job.exps[c] for c in sub], job.steps, range(len(sub) - 1),
+                                 seed, job.margin, (), job.progress, job.max_bytes)
             shapes = [(_invariant(monomials(N, dn), flips), _invariant(monomials(N, dd), flips))] if flips else []
             for nb, db in shapes + [(monomials(N, dn), monomials(N, dd))]:
                 if len(nb) + len(db) <= MAX_HK_UNKNOWNS and budget > 0:
                     budget -= 1
-                    pair = _Fit(job, S, i, j, nb, db, seed).run(primes)
+                    try:
+                        pair = fitter.solve((sub.index(S[i]), len(sub) - 1), nb, db, primes)
+                    except FitTooLarge as exc:
+                        job.warnings.append(f"HK basis: {exc}: not tried")
+                        continue
                     if pair is not None:
                         break
             if pair is not None or budget <= 0:
