@@ -68,7 +68,9 @@ STABLE_ORBITS = 3
 CIRCUIT_ORDERS = 200
 
 
-def _orbit_with_tangents(fld, eps, x0, steps, p):
+def orbit_with_tangents(fld, eps, x0, steps, p):
+    """(points, tangents) of the orbit of ``x0`` over F_p: the points x_k and T_k = dx_k/dx_0 (``nmod_mat``).
+    Raises SingularStepError / ZeroDivisionError / InputError where a step is singular mod p."""
     from exact_khk.kahan.map import KahanMap
     phi = KahanMap(fld, eps, f"gf:{p}")
     pts = phi.orbit(x0, steps)
@@ -102,15 +104,16 @@ def _gradients(exps, x, p):
     return flint.nmod_mat(len(exps), N, out, p)
 
 
-def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
+def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0, orbit=None):
     """(pivots, free, {(pivot, free): value}, {(pivot, free): gradient row}) of the canonical
     kernel of the orbit of ``x0`` over F_p (module docstring), or None where the orbit is
-    singular mod p or the work would exceed MAX_TANGENT_WORK."""
+    singular mod p or the work would exceed MAX_TANGENT_WORK.  ``orbit``: :func:`orbit_with_tangents`
+    of the same x0, steps and p, computed once for all the supports of a search (it is most of the work)."""
     m, N = len(exps), fld.dim
     if (steps + 1) * m * N > MAX_TANGENT_WORK:
         return None
     try:
-        pts, tangents = _orbit_with_tangents(fld, eps, x0, steps, p)
+        pts, tangents = orbit or orbit_with_tangents(fld, eps, x0, steps, p)
     except (SingularStepError, ZeroDivisionError, InputError):
         return None
     ev = _Evaluator(exps)
@@ -120,7 +123,6 @@ def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
         return pivots, free, {}, {}
     A = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p)
     AP = flint.nmod_mat(len(rows), len(pivots), [A[k, c] for k in range(len(rows)) for c in pivots], p)
-    V = flint.nmod_mat(m, len(free), [basis[j][c] for c in range(m) for j in range(len(free))], p)
     rng = random.Random(f"tangent-{seed}-{p}")
     for _ in range(4):  # a random left factor G makes the consistent system A_π c' = b square
         G = flint.nmod_mat(len(pivots), len(rows), [rng.randrange(p) for _ in range(len(pivots) * len(rows))], p)
@@ -129,15 +131,14 @@ def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
             break
     else:
         return None
-    D = [_gradients(exps, q, p) * T for q, T in zip(pts, tangents)]  # m × N each: d φ(x_k) / d x_0
+    # row k of the derivative of A·v_f in x_0 is v_f^T (dφ(x_k)/dx_0): one (free × N) product per point
+    F = len(free)
+    VT = flint.nmod_mat(F, m, [basis[j][c] for j in range(F) for c in range(m)], p)
+    W = [VT * _gradients(exps, q, p) * T for q, T in zip(pts, tangents)]
+    B = flint.nmod_mat(len(rows), F * N, [-int(Wk[j, l]) % p for Wk in W for j in range(F) for l in range(N)], p)
+    X = M.solve(G * B)  # column j·N + l: the derivatives of the entries of v_{free j} in the direction e_l
     values = {(c, f): basis[j][c] for j, f in enumerate(free) for c in pivots}
-    grads = {key: [0] * N for key in values}
-    for l in range(N):
-        B = flint.nmod_mat(len(rows), m, [Dk[j, l] for Dk in D for j in range(m)], p)
-        X = M.solve(G * (-(B * V)))
-        for i, c in enumerate(pivots):
-            for j, f in enumerate(free):
-                grads[(c, f)][l] = int(X[i, j])
+    grads = {(c, f): [int(X[i, j * N + l]) for l in range(N)] for i, c in enumerate(pivots) for j, f in enumerate(free)}
     return pivots, free, values, grads
 
 
