@@ -87,20 +87,15 @@ def orbit_with_tangents(fld, eps, x0, steps, p):
 def _gradients(exps, x, p):
     """The m × N matrix of ∂φ_j/∂x_t at x mod p."""
     N = len(x)
-    out = []
-    for e in exps:
-        row = []
-        for t in range(N):
-            if not e[t]:
-                row.append(0)
-                continue
-            v = e[t]
-            for i, k in enumerate(e):
-                kk = k - (i == t)
-                if kk:
-                    v = v * pow(x[i], kk, p) % p
-            row.append(v % p)
-        out += row
+    out = [0] * (len(exps) * N)
+    for r, e in enumerate(exps):
+        used = [(i, k) for i, k in enumerate(e) if k]
+        for t, k in used:
+            v = k
+            for i, kk in used:
+                if kk - (i == t):
+                    v = v * pow(x[i], kk - (i == t), p) % p
+            out[r * N + t] = v % p
     return flint.nmod_mat(len(exps), N, out, p)
 
 
