@@ -152,8 +152,8 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
     for t in range(orders):
         order = support[:] if t == 0 else rng.sample(support, len(support))
         R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
-        for i in range(r):
-            found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
+        for row in R.tolist()[:r]:
+            found.add(frozenset(c for c, v in zip(order, row) if v))
     # each support found is minimal already: a kernel vector supported inside row i's support (its
     # pivot and non-pivot columns) is a multiple of row i, its coefficients being fixed by the pivots
     small = [tuple(sorted(S)) for S in sorted(found, key=lambda S: (len(S), sorted(S)))]
