@@ -188,3 +188,36 @@ def test_solve_with_numerator_and_denominator_over_different_monomials():
         y = kahan_step(xs, comps, eps, x)
         assert I.subs(dict(zip(xs, x))) == I.subs(dict(zip(xs, y)))
     assert fitter.solve((0, 2), [(0, 0, 0), (0, 0, 2)], [(0, 0, 0), (2, 0, 0)], primes) is None
+
+
+def test_supports_are_fitted_in_order_of_their_entries_variables(monkeypatch):
+    """KQV N = 8: the sparse kernel vectors are taken by the fewest variables a non-constant entry depends on
+    (its gradient mod p), not by the variables of their candidates: the first ones have an entry in at most
+    4 variables, and the support x1*x3, x1*x4, x2*x4 (entries in x1..x4 only, as the golden integral of
+    test_fit_in_the_entrys_own_variables_recovers_a_golden_integral) comes before every support whose
+    entries all depend on all 8 variables, among them supports of 3 candidates in fewer variables.  The
+    gradients computed from one shared orbit equal those computed alone."""
+    from exact_khk.diagnostics import integrals
+    from exact_khk.diagnostics.kernels import monomial_text
+
+    seen = {}
+
+    def capture(self, ref, found, fit_degree, plist, seed, *rest):
+        seen["subs"] = self.ordered_supports([], ref, plist[0], seed)
+        seen["args"] = (self.fld, self.eps, ref.x0, self.steps, plist[0], seed)
+        return (), 0, None, None
+
+    monkeypatch.setattr(integrals._Job, "complete", capture)
+    find_integrals(chain(8), degree=2, eps="1/10")
+    own = [min(sum(1 for g in grad if g) for grad in data[3].values() if any(grad)) for _, data in seen["subs"]]
+    assert own == sorted(own) and own[0] <= 4
+    names = [sorted(monomial_text(e, [f"x{i}" for i in range(1, 9)]) for e in sub) for sub, _ in seen["subs"]]
+    first = names.index(["x1*x3", "x1*x4", "x2*x4"])
+    assert own[first] == 4
+    full = [i for i, (sub, data) in enumerate(seen["subs"]) if all(sum(1 for g in grad if g) == 8
+                                                                   for grad in data[3].values() if any(grad))]
+    assert full and first < min(full)
+    assert any(len(seen["subs"][i][0]) == 3 for i in full)  # 3 candidates, entries in all 8 variables
+    fld, eps, x0, steps, p, seed = seen["args"]
+    for sub, data in seen["subs"][:5] + seen["subs"][-5:]:
+        assert entry_jacobian(fld, eps, x0, sub, steps, p, seed) == data

@@ -68,20 +68,9 @@ STABLE_ORBITS = 3
 CIRCUIT_ORDERS = 200
 
 
-#: the last orbit differentiated, (fld, (eps, x0, steps, p), result): a search differentiates the kernel of
-#: the reference orbit for each of its circuits (the Lagrange top's HK-basis route: 69 times, 4 of its 8 s)
-_LAST_TANGENTS = [None, None, None]
-
-
-def _orbit_with_tangents(fld, eps, x0, steps, p):
-    """(points, tangent maps dΦ^k(x0)) of the orbit of ``x0`` mod p, read only by the callers."""
-    key = (eps, tuple(x0), steps, p)
-    if _LAST_TANGENTS[0] is not fld or _LAST_TANGENTS[1] != key:
-        _LAST_TANGENTS[:] = [fld, key, _tangents(fld, eps, x0, steps, p)]
-    return _LAST_TANGENTS[2]
-
-
-def _tangents(fld, eps, x0, steps, p):
+def orbit_with_tangents(fld, eps, x0, steps, p):
+    """(points, tangents) of the orbit of ``x0`` over F_p: the points x_k and T_k = dx_k/dx_0 (``nmod_mat``).
+    Raises SingularStepError / ZeroDivisionError / InputError where a step is singular mod p."""
     from exact_khk.kahan.map import KahanMap
     phi = KahanMap(fld, eps, f"gf:{p}")
     pts = phi.orbit(x0, steps)
@@ -98,32 +87,28 @@ def _tangents(fld, eps, x0, steps, p):
 def _gradients(exps, x, p):
     """The m × N matrix of ∂φ_j/∂x_t at x mod p."""
     N = len(x)
-    out = []
-    for e in exps:
-        row = []
-        for t in range(N):
-            if not e[t]:
-                row.append(0)
-                continue
-            v = e[t]
-            for i, k in enumerate(e):
-                kk = k - (i == t)
-                if kk:
-                    v = v * pow(x[i], kk, p) % p
-            row.append(v % p)
-        out += row
+    out = [0] * (len(exps) * N)
+    for r, e in enumerate(exps):
+        used = [(i, k) for i, k in enumerate(e) if k]
+        for t, k in used:
+            v = k
+            for i, kk in used:
+                if kk - (i == t):
+                    v = v * pow(x[i], kk - (i == t), p) % p
+            out[r * N + t] = v % p
     return flint.nmod_mat(len(exps), N, out, p)
 
 
-def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
+def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0, orbit=None):
     """(pivots, free, {(pivot, free): value}, {(pivot, free): gradient row}) of the canonical
     kernel of the orbit of ``x0`` over F_p (module docstring), or None where the orbit is
-    singular mod p or the work would exceed MAX_TANGENT_WORK."""
+    singular mod p or the work would exceed MAX_TANGENT_WORK.  ``orbit``: :func:`orbit_with_tangents`
+    of the same x0, steps and p, computed once for all the supports of a search (it is most of the work)."""
     m, N = len(exps), fld.dim
     if (steps + 1) * m * N > MAX_TANGENT_WORK:
         return None
     try:
-        pts, tangents = _orbit_with_tangents(fld, eps, x0, steps, p)
+        pts, tangents = orbit or orbit_with_tangents(fld, eps, x0, steps, p)
     except (SingularStepError, ZeroDivisionError, InputError):
         return None
     ev = _Evaluator(exps)
@@ -133,7 +118,6 @@ def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
         return pivots, free, {}, {}
     A = flint.nmod_mat(len(rows), m, [v for r in rows for v in r], p)
     AP = flint.nmod_mat(len(rows), len(pivots), [A[k, c] for k in range(len(rows)) for c in pivots], p)
-    V = flint.nmod_mat(m, len(free), [basis[j][c] for c in range(m) for j in range(len(free))], p)
     rng = random.Random(f"tangent-{seed}-{p}")
     for _ in range(4):  # a random left factor G makes the consistent system A_π c' = b square
         G = flint.nmod_mat(len(pivots), len(rows), [rng.randrange(p) for _ in range(len(pivots) * len(rows))], p)
@@ -142,15 +126,14 @@ def entry_jacobian(fld, eps, x0, exps, steps, p, seed=0):
             break
     else:
         return None
-    D = [_gradients(exps, q, p) * T for q, T in zip(pts, tangents)]  # m × N each: d φ(x_k) / d x_0
+    # row k of the derivative of A·v_f in x_0 is v_f^T (dφ(x_k)/dx_0): one (free × N) product per point
+    F = len(free)
+    VT = flint.nmod_mat(F, m, [basis[j][c] for j in range(F) for c in range(m)], p)
+    W = [VT * _gradients(exps, q, p) * T for q, T in zip(pts, tangents)]
+    B = flint.nmod_mat(len(rows), F * N, [-int(Wk[j, l]) % p for Wk in W for j in range(F) for l in range(N)], p)
+    X = M.solve(G * B)  # column j·N + l: the derivatives of the entries of v_{free j} in the direction e_l
     values = {(c, f): basis[j][c] for j, f in enumerate(free) for c in pivots}
-    grads = {key: [0] * N for key in values}
-    for l in range(N):
-        B = flint.nmod_mat(len(rows), m, [Dk[j, l] for Dk in D for j in range(m)], p)
-        X = M.solve(G * (-(B * V)))
-        for i, c in enumerate(pivots):
-            for j, f in enumerate(free):
-                grads[(c, f)][l] = int(X[i, j])
+    grads = {(c, f): [int(X[i, j * N + l]) for l in range(N)] for i, c in enumerate(pivots) for j, f in enumerate(free)}
     return pivots, free, values, grads
 
 
@@ -169,8 +152,8 @@ def circuits(basis, m, p, seed=0, orders=CIRCUIT_ORDERS) -> list:
     for t in range(orders):
         order = support[:] if t == 0 else rng.sample(support, len(support))
         R, r = flint.nmod_mat(d, len(order), [v[c] for v in basis for c in order], p).rref()
-        for i in range(r):
-            found.add(frozenset(order[j] for j in range(len(order)) if int(R[i, j])))
+        for row in R.tolist()[:r]:
+            found.add(frozenset(c for c, v in zip(order, row) if v))
     # each support found is minimal already: a kernel vector supported inside row i's support (its
     # pivot and non-pivot columns) is a multiple of row i, its coefficients being fixed by the pivots
     small = [tuple(sorted(S)) for S in sorted(found, key=lambda S: (len(S), sorted(S)))]

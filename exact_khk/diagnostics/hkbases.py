@@ -45,9 +45,11 @@ import random
 
 import flint
 
-from exact_khk.diagnostics.fitting import EntryFitter, FitTooLarge, circuits, entry_jacobian, rank_mod
+from exact_khk.diagnostics.fitting import (EntryFitter, FitTooLarge, circuits, entry_jacobian, orbit_with_tangents,
+                                           rank_mod)
 from exact_khk.diagnostics.kernels import (_Evaluator, _point, canonical_nullspace, monomial_text, monomials,
                                            orbit_mod_or_none)
+from exact_khk.errors import InputError, SingularStepError
 
 #: the highest degree of a fitted numerator or denominator read along the line
 MAX_HK_DEGREE = 12
@@ -101,8 +103,12 @@ def _candidates(job, ref, mod_rows, p, seed):
     N, m = job.fld.dim, len(job.exps)
     base = rank_mod(mod_rows, N, p)
     raising = []
+    try:  # the orbit and its tangents, shared by every circuit (most of entry_jacobian's work)
+        orbit = orbit_with_tangents(job.fld, job.eps, ref.x0, job.steps, p)
+    except (SingularStepError, ZeroDivisionError, InputError):
+        return []
     for S in circuits(ref.basis, m, p, seed)[:MAX_HK_CIRCUITS]:
-        data = entry_jacobian(job.fld, job.eps, ref.x0, [job.exps[c] for c in S], job.steps, p, seed)
+        data = entry_jacobian(job.fld, job.eps, ref.x0, [job.exps[c] for c in S], job.steps, p, seed, orbit)
         if data is None or len(data[1]) != 1:
             continue
         last = data[1][0]

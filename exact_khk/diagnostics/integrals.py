@@ -67,7 +67,7 @@ import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.fitting import (MAX_FIT_UNKNOWNS, MAX_PLAIN_FIT_UNKNOWNS, EntryFitter, FitTooLarge,
-                                           circuits, entry_jacobian, entry_line, rank_mod)
+                                           circuits, entry_jacobian, entry_line, orbit_with_tangents, rank_mod)
 from exact_khk.diagnostics.hkbases import hk_basis_integrals
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
@@ -87,6 +87,9 @@ MORE_ORBITS = 12
 #: sparse kernel vectors whose entries are fitted, and fits (one entry at one degree) tried, at most
 MAX_CIRCUITS = 60
 MAX_FITS = 200
+#: sparse kernel vectors whose entries' variables are computed to order them (_Job.ordered_supports), from the
+#: level sets and from the full kernel each, at most
+MAX_ORDERED = 600
 #: level sets L = c of a linear integral L at most, for pencils interpolated in c (Job.level_pencils)
 MAX_LEVELS = 40
 #: the degree of a fit's coefficients in the integrals already found (the Lagrange top's integrals
@@ -561,26 +564,19 @@ class _Job:
             self.notes.append(f"I{len(kept)} from a pencil of the kernel on the level sets {text} = c (candidates "
                               f"free of one of its variables), its coefficients interpolated in c")
         budget, orbits = MAX_FITS, {}
-        subs = self.level_circuits(kept, ref.x0, p0, seed)
-        subs += [[self.exps[c] for c in S] for S in circuits(ref.basis, len(self.exps), p0, seed)]
-        # a support found both on the level sets and in the full kernel carries the same vector: fitted once;
-        # supports in fewer variables first (KQV N = 20: the three-term vectors in 4 variables give 16 of the 19
-        # integrals, fitted in those 4 variables, while fits of entries depending on all 20 fail for minutes)
-        seen = set()
-        subs = [sub for sub in subs if not (frozenset(sub) in seen or seen.add(frozenset(sub)))]
-        subs.sort(key=lambda sub: sum(any(e[j] for e in sub) for j in range(N)))
-        for sub in subs[:MAX_CIRCUITS]:
+        for sub, data in self.ordered_supports(kept, ref, p0, seed)[:MAX_CIRCUITS]:
             if len(kept) >= visible or budget <= 0:
                 break
-            data = entry_jacobian(self.fld, self.eps, ref.x0, sub, self.steps, p0, seed)
-            if data is None or len(data[1]) != 1:
-                continue
             fitters = {}
-            # one entry per sparse vector: its entries are functions of the same conserved point
-            for key, grad in [kg for kg in sorted(data[3].items())
-                              if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)][:1]:
+            # one entry per sparse vector (its entries are functions of the same conserved point): of those
+            # not functions of the integrals found, the one in fewest variables
+            raising = [kg for kg in sorted(data[3].items())
+                       if rank_mod(mod_rows + [kg[1]], N, p0) > rank_mod(mod_rows, N, p0)]
+            for key, grad in sorted(raising, key=lambda kg: sum(1 for g in kg[1] if g))[:1]:
                 pair = None
                 for T, delta, J, variables in self.fit_plan(sub, data[0], key, grad, kept, fit_degree, p0, seed):
+                    if budget <= 0:  # checked fit by fit: one support's fits may be many and long
+                        break
                     budget -= 1
                     if T not in fitters:
                         fitters[T] = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
@@ -611,6 +607,35 @@ class _Job:
                                  f"mod p), {len(kept)} extracted: the others have no numerator and denominator of "
                                  f"degree <= {fit_degree} (--fit-degree) that the fit found")
         return tuple(kept), len(rows), ((point, len(rows)) if rows else None), visible
+
+    def ordered_supports(self, kept, ref, p, seed) -> list:
+        """[(candidates, :func:`.fitting.entry_jacobian` data)] of the sparse kernel vectors whose entries are
+        fitted: those on the level sets of the linear integrals found (:meth:`level_circuits`), then those of
+        the full kernel (:func:`.fitting.circuits`), MAX_ORDERED of each (smallest supports first), each once
+        and with one free column, ordered by the fewest variables a non-constant entry depends on (its
+        gradient mod p at the reference point), then by the variables their candidates use.  A fit's unknowns
+        grow with the variables of its entry, and the candidates' variables do not bound them (KQV N = 14: the
+        supports x2, x3, x1·x3 use 3 variables, their entries depend on 13 or 14 (through x2 + … + x14);
+        the three-term supports x_{k-2}x_k, x_{k-2}x_{k+1}, x_{k-1}x_{k+1} have entries in 4 variables)."""
+        N = self.fld.dim
+        subs = self.level_circuits(kept, ref.x0, p, seed)[:MAX_ORDERED]
+        subs += [[self.exps[c] for c in S] for S in circuits(ref.basis, len(self.exps), p, seed)[:MAX_ORDERED]]
+        try:
+            orbit = orbit_with_tangents(self.fld, self.eps, ref.x0, self.steps, p)  # shared by all supports
+        except (SingularStepError, ZeroDivisionError, InputError):
+            return []
+        seen, out = set(), []
+        for sub in subs:
+            if frozenset(sub) in seen:  # found both on a level set and in the full kernel: the same vector
+                continue
+            seen.add(frozenset(sub))
+            data = entry_jacobian(self.fld, self.eps, ref.x0, sub, self.steps, p, seed, orbit)
+            own = [] if data is None or len(data[1]) != 1 else [sum(1 for g in grad if g % p)
+                                                                 for grad in data[3].values() if any(grad)]
+            if own:
+                out.append((min(own), sum(any(e[j] for e in sub) for j in range(N)), sub, data))
+        out.sort(key=lambda t: t[:2])
+        return [(sub, data) for _, _, sub, data in out]
 
     def fit_plan(self, sub, pivots, key, grad, kept, fit_degree, p, seed) -> list:
         """The fits (T, δ, J, variables) tried for the entry ``key`` of the kernel of ``sub``, fewest unknowns
