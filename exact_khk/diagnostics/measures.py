@@ -22,7 +22,7 @@ of each factor is computed exactly and written over the F_i.
 
 **Verification** of each density m = U/V (U, V polynomials of degrees u, v):
 
-* exactly, m(x̃)·det dΦ(x) = m(x) at the points of a fresh exact orbit (Fractions;
+* exactly, m(x̃)·det dΦ(x) = m(x) at the points of a fresh exact orbit (exact rationals;
   det dΦ = det(I + εf′(x̃))/det(I − εf′(x)));
 * as an identity over F_p, at random points of a prime not used to find it: after
   clearing denominators the identity is G(x) = 0 with deg G ≤ (N + 1)(u + v + N),
@@ -45,6 +45,8 @@ import random
 import time
 from dataclasses import dataclass
 from fractions import Fraction
+
+import flint
 
 from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, cofactor, eval_poly, exact_orbit, fresh_point,
                                            lifted_kernel, mpoly_dict, mpoly_text, primitive, rows_of_points,
@@ -491,7 +493,7 @@ def _verify(fld, eps, num, den, variables, seed, steps, used, shown=None, x0=Non
             return all(eval_poly(fn, xt) * eval_poly(dn, x) * B == eval_poly(fn, x) * eval_poly(dn, xt) * A
                        for x, xt, A, B, _ in data)
         checks.append(Check("exact orbit", holds(num, den),
-                            f"m(x~) det dPhi(x) = m(x) with Fractions at {len(data)} points of the orbit of "
+                            f"m(x~) det dPhi(x) = m(x) exactly (fmpq) at {len(data)} points of the orbit of "
                             f"({', '.join(map(str, x0))})"))
         moving = next((j for j in range(N) if any(x[j] != xt[j] for x, xt, *_ in data)), None)
         if moving is None:
@@ -530,7 +532,7 @@ def _conserved_ratio(fld, eps, num, den, seed, steps, x0):
         return None
     _, data = orbit
     pts = [x for x, *_ in data] + [data[-1][1]]
-    return len({Fraction(eval_poly(num, x)) / eval_poly(den, x) for x in pts}) == 1
+    return len({flint.fmpq(eval_poly(num, x)) / eval_poly(den, x) for x in pts}) == 1
 
 
 def _fresh_orbit(fld, eps, seed, steps, num, den, start=None):

@@ -333,9 +333,9 @@ def _tensor(fld, eps, pi, N, degree, variables, seed, steps, used, darboux, casi
                             "exact, as a polynomial identity (fmpq_mpoly)"))
 
     def full(x):
-        P = [[Fraction(0)] * N for _ in range(N)]
+        P = [[flint.fmpq(0)] * N for _ in range(N)]
         for (a, b), poly in pi.items():
-            P[a][b] = Fraction(eval_poly(poly, x))
+            P[a][b] = flint.fmpq(eval_poly(poly, x))  # the orbit's points are fmpq
             P[b][a] = -P[a][b]
         return P
 
@@ -356,7 +356,7 @@ def _tensor(fld, eps, pi, N, degree, variables, seed, steps, used, darboux, casi
                     return False
             return True
         checks.append(Check("exact orbit", preserved(lambda x: 1),
-                            f"dPhi pi dPhi^T = pi o Phi with Fractions at {len(data)} points of the orbit of "
+                            f"dPhi pi dPhi^T = pi o Phi exactly (fmpq) at {len(data)} points of the orbit of "
                             f"({', '.join(map(str, x0))})"))
         moving = next((j for j in range(N) if any(x[j] != xt[j] for x, xt, *_ in data)), None)
         if moving is None:
@@ -468,8 +468,8 @@ def _conserved(fld, eps, U, V, seed, steps, x0):
     if orbit is None:
         return None
     _, data = orbit
-    vals = [Fraction(eval_poly(U, x)) / eval_poly(V, x) for x, *_ in data] + \
-        [Fraction(eval_poly(U, data[-1][1])) / eval_poly(V, data[-1][1])]
+    vals = [flint.fmpq(eval_poly(U, x)) / eval_poly(V, x) for x, *_ in data] + \
+        [flint.fmpq(eval_poly(U, data[-1][1])) / eval_poly(V, data[-1][1])]
     return len(set(vals)) == 1
 
 
