@@ -37,7 +37,7 @@ from dataclasses import dataclass, field as dc_field
 from fractions import Fraction
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count
+from exact_khk.parsing import any_int_digits, check_count
 
 #: the verdict rules, as stated in the output and in docs/diagnostics.md
 RULES = {
@@ -81,6 +81,7 @@ class Evidence:
     how: str
     standing: str
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"what": self.what, "how": self.how, "standing": self.standing}
 
@@ -116,6 +117,7 @@ class Classification:
         return {"status": "found" if verified_found(key, r) else "nothing found",
                 "verified": [found_text(key, x) for x in verified_found(key, r)], **r.to_json()}
 
+    @any_int_digits()
     def to_json(self) -> dict:
         fit = self.degrees.fit
         dd = fit.dynamical_degree
@@ -145,6 +147,7 @@ class Classification:
             "decide": list(self.decide), "seconds": self.seconds, "notes": list(self.notes),
         }
 
+    @any_int_digits()
     def summary(self) -> str:
         d = self.degrees
         fit = d.fit
@@ -260,6 +263,7 @@ def default_fit_degree(dim: int, degree: int) -> int:
     return degree if dim >= CAPPED_FIT_DIM else 2 * degree
 
 
+@any_int_digits()
 def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6, confirm=3,
              discover=("measure", "poisson"), progress=None, fit_degree=None) -> Classification:
     """Classify the Kahan map of ``system`` (a System, catalogue name or system file) at step

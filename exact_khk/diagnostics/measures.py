@@ -54,7 +54,7 @@ from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, cofactor,
 from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import monomials, poly_text, rational_reconstruction
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_count, parse_vector
 
 #: random points of the identity check over F_p
 SZ_POINTS = 8
@@ -80,6 +80,7 @@ class Check:
     holds: object
     detail: str
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self):
         return {"name": self.name, "holds": self.holds, "detail": self.detail}
 
@@ -100,6 +101,7 @@ class Darboux:
     factors: tuple   # ((factor text, its cofactor text), ...)
     polys: tuple = ()  # P and its irreducible factors as ((exponents, Fraction), ...) tuples
 
+    @any_int_digits()
     def to_json(self):
         return {"polynomial": self.polynomial, "cofactor": self.cofactor,
                 "factors": [{"polynomial": a, "cofactor": b} for a, b in self.factors]}
@@ -119,6 +121,7 @@ class Density:
         """The exact orbit check held, no other check failed, and every applicable control failed."""
         return verified(self.checks)
 
+    @any_int_digits()
     def to_json(self):
         return {"density": self.text, "verified": self.verified, "checks": [c.to_json() for c in self.checks]}
 
@@ -139,6 +142,7 @@ class MeasureSearch:
     seconds: float
     integrals: tuple = ()  # ((text, conserved on a fresh exact orbit: True/False/None), ...)
 
+    @any_int_digits()
     def to_json(self):
         return {"field": self.label, "eps": str(self.eps), "degree": self.degree, "factors": list(self.factors),
                 "det_dPhi": self.det_text,
@@ -149,6 +153,7 @@ class MeasureSearch:
                 "primes": list(self.primes),
                 "notes": list(self.notes), "seconds": self.seconds}
 
+    @any_int_digits()
     def toml(self) -> str:
         """A ``[measure]`` block of a system file (the first verified density), or a comment."""
         good = [d for d in self.densities if d.verified]
@@ -156,6 +161,7 @@ class MeasureSearch:
             return f"# no preserved density found at degree <= {self.degree}\n"
         return f'[measure]\n# found by exact-khk find-measure at eps = {self.eps}\ndensity = "{good[0].text}"\n'
 
+    @any_int_digits()
     def summary(self) -> str:
         out = [f"measure search for {self.label} at eps = {self.eps}: Darboux polynomials of degree <= {self.degree}"]
         if self.factors:
@@ -185,6 +191,7 @@ class MeasureSearch:
         return "\n".join(out)
 
 
+@any_int_digits()
 def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, x0=None,
                  progress=None) -> MeasureSearch:
     """Darboux polynomials and preserved densities of the Kahan map (module docstring); ``x0``:

@@ -51,6 +51,7 @@ from exact_khk.certification.verify.orbit import _Recheck
 from exact_khk.certification.verify.records import (EXPRESSION_KINDS, LIE_POISSON_KINDS, Context, Expressions,
                                                     LiePoisson, declared_claims, rederive)
 from exact_khk.errors import InputError
+from exact_khk.parsing import any_int_digits
 
 __all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotomic_polynomial", "RATIONAL_ARITHS",
            "_Evaluate", "_Rationals"]
@@ -114,12 +115,14 @@ class VerifyReport:
         status = next((d for n, _, d in self.results if n == "status"), "")
         return status.split()[1] if status.startswith("recomputed") else "?"
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def summary(self) -> str:
         """The results, one per line, the informational notes, then the verdict line."""
         lines = [f"  {'ok  ' if ok else 'FAIL'}  {name}: {detail}" for name, ok, detail in self.results]
         lines += [f"  info  {note}" for note in self.notes]
         return "\n".join(lines + [self.verdict()])
 
+    @any_int_digits()
     def to_json(self) -> dict:
         return {"ok": self.ok, "checkable": self.checkable, "partial": self.partial, "verdict": self.verdict(),
                 "records": self.records, "rederived": self.rederived, "not_rechecked": list(self.not_rechecked),
@@ -127,6 +130,7 @@ class VerifyReport:
                 "results": [{"name": n, "ok": ok, "detail": d} for n, ok, d in self.results]}
 
 
+@any_int_digits()
 def verify(data) -> VerifyReport:
     """Re-derive the certificate ``data`` (the JSON dict of ``Certificate.to_json``); see
     the module docstring.  Malformed structures raise :class:`~exact_khk.errors.InputError`
