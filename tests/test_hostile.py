@@ -624,3 +624,31 @@ def test_real_vectors_of_unknown_length_are_limited_per_coordinate():
     assert len(parse_real_vector(",".join(["sqrt(2)"] * 300), 64, "--a")) == 300
     with pytest.raises(InputError, match="per coordinate"):
         parse_real_vector("1" * (MAX_REAL_CHARS + 1), 64, "--a")
+
+
+def test_classify_reports_progress_during_its_degree_stage(monkeypatch, capsys):
+    """classify's degree stage (minutes for a long run) passed no callback: a terminal showed nothing.
+    The command's progress display now hears each step over F_p and each later stage by name."""
+    import exact_khk.cli.classify as cli_classify
+
+    heard = []
+
+    class Recording:
+        def __init__(self, *args, **kw):
+            pass
+
+        def __call__(self, where):
+            heard.append(where)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+    monkeypatch.setattr(cli_classify, "Progress", Recording)
+    code = main(["classify", "euler-top", "--steps", "6", "--degree", "2", "--no-discover", "--exact", "0"])
+    assert code == 4  # undetermined: 6 iterates do not confirm the growth
+    steps = [w for w in heard if str(w).startswith("degrees over F_p: step")]
+    assert [int(w.rsplit(" ", 1)[1]) for w in steps] == list(range(1, 13))  # 2 lines (primes) of 6 steps
+    assert heard.index(steps[-1]) < heard.index("integrals of degree <= 2")

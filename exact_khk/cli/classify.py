@@ -47,7 +47,7 @@ def cmd_classify(args):
         check_output(args.json)
     system, _x0, eps = system_from_args(args)
     try:
-        with Progress(args, 3, "classify", unit="stage") as progress:
+        with Progress(args, None, "classify", unit="stage") as progress:
             res = classify(system, eps=eps, steps=args.steps, degree=args.degree, field=field_name(system, args),
                            seed=args.line_seed, exact=args.exact,
                            discover=() if args.no_discover else ("measure", "poisson"), progress=progress,
