@@ -293,3 +293,19 @@ def test_exact_orbit_checks_refuse_a_point_beyond_their_height_limit():
             find_measure(TOP, x0=x0, verify_steps=3)
         res = find_measure(TOP, x0=x0, verify_steps=1)  # the control: one step is within it
     assert any(c.name == "exact orbit" and c.holds is True for d in res.densities for c in d.checks)
+
+
+def test_classify_survives_a_discovery_that_cannot_decide(monkeypatch):
+    """classify at eps = 1e400 stopped with exit 4 and nothing else when the measure search's lift was
+    not confirmed (UndecidedError): the verdict and the other evidence were lost.  That search now reads
+    'could not run: ...' and classify goes on."""
+    import exact_khk.diagnostics.measures as measures
+    from exact_khk.errors import UndecidedError
+
+    def undecided(*args, **kw):
+        raise UndecidedError("the rational reconstruction of the kernel was not confirmed with 12 primes")
+
+    monkeypatch.setattr(measures, "find_measure", undecided)
+    res = classify(TOP, steps=6, degree=2, exact=0, discover=("measure",))
+    assert res.discoveries["measure"].startswith("could not run: the rational reconstruction")
+    assert res.verdict in ("integrable", "non-integrable", "undetermined") and "could not run" in res.summary()

@@ -36,7 +36,7 @@ import time
 from dataclasses import dataclass, field as dc_field
 from fractions import Fraction
 
-from exact_khk.errors import InputError
+from exact_khk.errors import InputError, UndecidedError
 from exact_khk.parsing import any_int_digits, check_count
 
 #: the verdict rules, as stated in the output and in docs/diagnostics.md
@@ -229,7 +229,7 @@ def _discover(key, system, eps, field, progress=None):
         return "not available in this installation"
     try:
         return fn(system, eps=eps, field=field, progress=progress)
-    except InputError as exc:
+    except (InputError, UndecidedError) as exc:  # e.g. a lift not confirmed at an eps of 400 digits
         return f"could not run: {exc}"
 
 
