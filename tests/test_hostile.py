@@ -199,6 +199,8 @@ ROWS += [
     row(["find-integrals", "--system", "euler-top", "--line-seed", BIG], 2, id="find-integrals 5000-digit --line-seed"),
     row(["classify", "--system", "euler-top", "--line-seed", BIG], 2, id="classify 5000-digit --line-seed"),
     row(["classify", "euler-top", "--x0", "1,2,3"], 2, id="classify --x0 (read and ignored before)"),
+    row(["find-integrals", "euler-top", "--degree", "2"], 0, id="find-integrals SYSTEM (as find-measure takes it)"),
+    row(["find-integrals", "euler-top", "--system", "clebsch"], 2, id="find-integrals SYSTEM and another --system"),
     row(["find-measure", "euler-top", "--x0", "1" + "3" * 10000 + ",2,3", "--steps", "6"], 2,
         id="find-measure 10^4-digit --x0, 6 steps: past MAX_ORBIT_BITS"),
     row(["find-poisson", "euler-top", "--degree", "1", "--eps", "1/1" + "0" * 5000], 0,
