@@ -132,6 +132,15 @@ ROWS += [
     ("poisson in dimension 1", lambda: find_poisson(ExpressionSystem.from_expressions(["x"], field=["x**2"]))),
     ("classify discover None", lambda: classify(TOP, steps=8, discover=None)),
     ("classify discover 5", lambda: classify(TOP, steps=8, discover=5)),
+    # a progress callback that is not a function, a monomial list that is not a list: raw TypeErrors before
+    ("measure progress 5", lambda: find_measure(TOP, progress=5)),
+    ("poisson progress 5", lambda: find_poisson(TOP, progress=5)),
+    ("integrals progress 5", lambda: find_integrals(TOP, degree=2, progress=5)),
+    ("classify progress 5", lambda: classify(TOP, steps=8, progress=5)),
+    ("symbolic progress 5", lambda: __import__("exact_khk.diagnostics.parametric", fromlist=["x"]).symbolic_integrals(
+        TOP, ["eps"], degree=2, progress=5)),
+    ("integrals monomials 5", lambda: find_integrals(TOP, monomials_list=5)),
+    ("integrals monomials 'x1'", lambda: find_integrals(TOP, monomials_list="x1,x2")),
 ]
 BIG_INT_ROWS = [
     ("degree_sequence seed 10^5000", lambda: degree_sequence(TOP, steps=6, seed=10 ** 5000)),

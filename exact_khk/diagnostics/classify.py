@@ -37,7 +37,7 @@ from dataclasses import dataclass, field as dc_field
 from fractions import Fraction
 
 from exact_khk.errors import InputError, UndecidedError
-from exact_khk.parsing import any_int_digits, check_count
+from exact_khk.parsing import any_int_digits, check_progress, check_count
 
 #: the verdict rules, as stated in the output and in docs/diagnostics.md
 RULES = {
@@ -292,7 +292,7 @@ def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6
     auto = degree is None and fit_degree is None
     degree = default_degree(fld.dim) if degree is None else degree
     fit_degree = default_fit_degree(fld.dim, degree) if fit_degree is None else fit_degree
-    stage = progress or (lambda s: None)
+    stage = check_progress(progress) or (lambda s: None)
     stage("degrees over F_p")
     degs = degree_sequence(sysobj if sysobj is not None else fld, steps=steps, eps=eps, field=field, seed=seed,
                            exact=exact, confirm=confirm,

@@ -75,7 +75,7 @@ from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, indepe
 from exact_khk.diagnostics.pencils import (canonical_pair, echelon_pencil, interpolated_pencils,
                                            pencil_integrals, ratio_integrals)
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.parsing import any_int_digits, check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_progress, check_count, parse_vector
 
 #: candidates at most: 20 variables at degree <= 4 (10 626) measured, one orbit kernel 293 s CPU and
 #: 2.3 GB peak (docs/benchmarks.md, "find-integrals at 10⁴ candidates")
@@ -270,7 +270,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     a search whose evaluation matrices would need more memory (:func:`planned_bytes`) is refused
     before any work (InputError naming EXACT_KHK_MAX_MEMORY)."""
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim

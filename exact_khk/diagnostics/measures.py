@@ -54,7 +54,7 @@ from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, cofactor,
 from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import monomials, poly_text, rational_reconstruction
 from exact_khk.errors import InputError
-from exact_khk.parsing import any_int_digits, check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_progress, check_count, parse_vector
 
 #: random points of the identity check over F_p
 SZ_POINTS = 8
@@ -197,7 +197,7 @@ def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, 
     """Darboux polynomials and preserved densities of the Kahan map (module docstring); ``x0``:
     the start of the exact orbit check (default a fresh reproducible point)."""
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim

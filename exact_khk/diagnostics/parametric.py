@@ -64,7 +64,7 @@ import flint
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
 from exact_khk.diagnostics.kernels import monomials, poly_text
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.parsing import any_int_digits, check_count
+from exact_khk.parsing import any_int_digits, check_progress, check_count
 
 EPS = "eps"
 #: the highest total degree t of a coefficient's numerator and denominator in the symbols
@@ -681,7 +681,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     from exact_khk.diagnostics.degrees import eps_of, resolve_field
 
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     if sysobj is None:
         raise InputError("symbolic: needs a system (a catalogue name or a system file), not a bare field")

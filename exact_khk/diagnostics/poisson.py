@@ -48,7 +48,7 @@ from exact_khk.diagnostics.kernels import independent_count, monomials
 from exact_khk.diagnostics.measures import (SZ_POINTS, Check, _fresh_orbit, _variables, expr, find_measure,
                                             verified)
 from exact_khk.errors import InputError
-from exact_khk.parsing import any_int_digits, check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_progress, check_count, parse_vector
 
 #: the largest dimension of the preserved-tensor space on which the Jacobi identity is solved
 MAX_JACOBI_DIM = 4
@@ -141,7 +141,7 @@ def find_poisson(system, degree=2, field="f", eps=None, seed=0, verify_steps=3, 
     """Preserved Poisson tensors with polynomial entries of degree ≤ ``degree`` and their Casimirs
     (module docstring); ``x0``: the start of the exact orbit checks (default a fresh reproducible point)."""
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim
