@@ -109,6 +109,14 @@ def check_count(value, name: str, low: int, high: int) -> int:
     return value
 
 
+def check_progress(value, name: str = "progress"):
+    """``value`` if it is None or callable (a progress callback), else InputError naming ``name``
+    (an int there was a raw TypeError 'int' object is not callable, deep inside a search)."""
+    if value is not None and not callable(value):
+        raise InputError(f"{name}: expected a function (a progress callback) or None, got {_short(value)}")
+    return value
+
+
 def _short(value, width: int = 60) -> str:
     """repr of ``value``, cut to ``width`` characters for a one-line message (an integer
     beyond Python's int-to-str limit by its size)."""

@@ -198,6 +198,13 @@ ROWS += [
     row(["find-poisson", "TOML:onevar"], 2, id="find-poisson in dimension 1"),
     row(["find-integrals", "--system", "euler-top", "--line-seed", BIG], 2, id="find-integrals 5000-digit --line-seed"),
     row(["classify", "--system", "euler-top", "--line-seed", BIG], 2, id="classify 5000-digit --line-seed"),
+    row(["classify", "euler-top", "--x0", "1,2,3"], 2, id="classify --x0 (read and ignored before)"),
+    row(["find-integrals", "euler-top", "--degree", "2"], 0, id="find-integrals SYSTEM (as find-measure takes it)"),
+    row(["find-integrals", "euler-top", "--system", "clebsch"], 2, id="find-integrals SYSTEM and another --system"),
+    row(["find-measure", "euler-top", "--x0", "1" + "3" * 10000 + ",2,3", "--steps", "6"], 2,
+        id="find-measure 10^4-digit --x0, 6 steps: past MAX_ORBIT_BITS"),
+    row(["find-poisson", "euler-top", "--degree", "1", "--eps", "1/1" + "0" * 5000], 0,
+        id="find-poisson at an eps of 5000 digits"),
     row(["find-measure", "--system", "euler-top", "--line-seed", BIG], 2, id="find-measure 5000-digit --line-seed"),
     row(["find-integrals", "--system", "euler-top", "--toml", ""], 2, id="find-integrals --toml ''"),
     row(["find-integrals", "--system", "euler-top", "--toml", "-"], 2, id="find-integrals --toml - (no file named '-')"),
@@ -624,3 +631,31 @@ def test_real_vectors_of_unknown_length_are_limited_per_coordinate():
     assert len(parse_real_vector(",".join(["sqrt(2)"] * 300), 64, "--a")) == 300
     with pytest.raises(InputError, match="per coordinate"):
         parse_real_vector("1" * (MAX_REAL_CHARS + 1), 64, "--a")
+
+
+def test_classify_reports_progress_during_its_degree_stage(monkeypatch, capsys):
+    """classify's degree stage (minutes for a long run) passed no callback: a terminal showed nothing.
+    The command's progress display now hears each step over F_p and each later stage by name."""
+    import exact_khk.cli.classify as cli_classify
+
+    heard = []
+
+    class Recording:
+        def __init__(self, *args, **kw):
+            pass
+
+        def __call__(self, where):
+            heard.append(where)
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+    monkeypatch.setattr(cli_classify, "Progress", Recording)
+    code = main(["classify", "euler-top", "--steps", "6", "--degree", "2", "--no-discover", "--exact", "0"])
+    assert code == 4  # undetermined: 6 iterates do not confirm the growth
+    steps = [w for w in heard if str(w).startswith("degrees over F_p: step")]
+    assert [int(w.rsplit(" ", 1)[1]) for w in steps] == list(range(1, 13))  # 2 lines (primes) of 6 steps
+    assert heard.index(steps[-1]) < heard.index("integrals of degree <= 2")

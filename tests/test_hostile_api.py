@@ -132,6 +132,15 @@ ROWS += [
     ("poisson in dimension 1", lambda: find_poisson(ExpressionSystem.from_expressions(["x"], field=["x**2"]))),
     ("classify discover None", lambda: classify(TOP, steps=8, discover=None)),
     ("classify discover 5", lambda: classify(TOP, steps=8, discover=5)),
+    # a progress callback that is not a function, a monomial list that is not a list: raw TypeErrors before
+    ("measure progress 5", lambda: find_measure(TOP, progress=5)),
+    ("poisson progress 5", lambda: find_poisson(TOP, progress=5)),
+    ("integrals progress 5", lambda: find_integrals(TOP, degree=2, progress=5)),
+    ("classify progress 5", lambda: classify(TOP, steps=8, progress=5)),
+    ("symbolic progress 5", lambda: __import__("exact_khk.diagnostics.parametric", fromlist=["x"]).symbolic_integrals(
+        TOP, ["eps"], degree=2, progress=5)),
+    ("integrals monomials 5", lambda: find_integrals(TOP, monomials_list=5)),
+    ("integrals monomials 'x1'", lambda: find_integrals(TOP, monomials_list="x1,x2")),
 ]
 BIG_INT_ROWS = [
     ("degree_sequence seed 10^5000", lambda: degree_sequence(TOP, steps=6, seed=10 ** 5000)),
@@ -241,3 +250,71 @@ def test_find_integrals_memory_limit_is_an_integer_of_bytes(bad):
     was a raw TypeError: both InputError naming max_bytes."""
     with pytest.raises(InputError, match="max_bytes"):
         find_integrals("euler-top", degree=2, max_bytes=bad)
+
+
+BIG_EPS = Fraction(1, 10 ** 5000)
+
+
+def _big_eps_records():
+    """One record of each discovery and certification result class, its eps (or a fixed parameter)
+    replaced by a 5000-digit rational: summary() and to_json() print it under Python's 4300-digit limit."""
+    import dataclasses
+
+    from exact_khk.diagnostics.parametric import ParametricSearch
+
+    top = System.load(TOP)
+    res = find_integrals(top, degree=2)  # its numbers: the independence certificate's point
+    yield dataclasses.replace(res, certificate=((BIG_EPS,) * 3,) + tuple(res.certificate[1:]))
+    yield dataclasses.replace(find_measure(top, degree=1), eps=BIG_EPS)
+    yield dataclasses.replace(find_poisson(top, degree=1), eps=BIG_EPS)
+    yield dataclasses.replace(classify(top, steps=6, discover=()), eps=BIG_EPS)
+    yield ParametricSearch("euler-top f", ("a",), (("eps", BIG_EPS),), (), 0, 0, 0, (), 0.0)
+
+
+def test_results_print_an_eps_beyond_pythons_digit_limit():
+    for res in _big_eps_records():
+        with python_digit_limit():
+            text, data = res.summary(), res.to_json()
+        assert str(flint.fmpq(1, 10 ** 5000)) in text + str(data), type(res).__name__
+
+
+def test_discovery_and_certification_run_at_an_eps_beyond_pythons_digit_limit():
+    """find_poisson computed texts of a 5000-digit eps (the orbit check) before it printed them; certify's
+    record printed them: both gave ValueError 'Exceeds the limit (4300 digits)'."""
+    with python_digit_limit():
+        res = find_poisson(TOP, degree=1, eps=BIG_EPS)
+        cert = certify(TOP, steps=1, eps=BIG_EPS)
+        texts = [res.summary(), str(res.to_json()), cert.summary(), str(cert.to_json())]
+        assert sys.get_int_max_str_digits() == 4300  # the caller's limit is restored
+    assert all(str(flint.fmpq(1, 10 ** 5000)) in t for t in texts)
+    assert cert.status == "VALID"
+
+
+def test_exact_orbit_checks_refuse_a_point_beyond_their_height_limit():
+    """find-measure's exact orbit from an x0 of 10^4 digits used Fractions (minutes); in fmpq it takes
+    seconds, and a start too high for the steps asked is refused naming x0 (command line: exit 2)."""
+    from exact_khk.diagnostics import darboux
+
+    x0 = [10 ** 700 + 1, 2, 3]  # 2326 bits; 3x per step: past 2^12 bits at the first step
+    with python_digit_limit(), contextlib.ExitStack() as stack:
+        stack.enter_context(pytest.MonkeyPatch.context()).setattr(darboux, "MAX_ORBIT_BITS", 4096)
+        with pytest.raises(InputError, match="x0: .* beyond the limit of 4096"):
+            find_measure(TOP, x0=x0, verify_steps=3)
+        res = find_measure(TOP, x0=x0, verify_steps=1)  # the control: one step is within it
+    assert any(c.name == "exact orbit" and c.holds is True for d in res.densities for c in d.checks)
+
+
+def test_classify_survives_a_discovery_that_cannot_decide(monkeypatch):
+    """classify at eps = 1e400 stopped with exit 4 and nothing else when the measure search's lift was
+    not confirmed (UndecidedError): the verdict and the other evidence were lost.  That search now reads
+    'could not run: ...' and classify goes on."""
+    import exact_khk.diagnostics.measures as measures
+    from exact_khk.errors import UndecidedError
+
+    def undecided(*args, **kw):
+        raise UndecidedError("the rational reconstruction of the kernel was not confirmed with 12 primes")
+
+    monkeypatch.setattr(measures, "find_measure", undecided)
+    res = classify(TOP, steps=6, degree=2, exact=0, discover=("measure",))
+    assert res.discoveries["measure"].startswith("could not run: the rational reconstruction")
+    assert res.verdict in ("integrable", "non-integrable", "undetermined") and "could not run" in res.summary()

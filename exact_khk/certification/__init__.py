@@ -9,7 +9,10 @@ proofs, by :mod:`~exact_khk.certification.lie_poisson`.
 
 from __future__ import annotations
 
+from exact_khk.parsing import any_int_digits
 
+
+@any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
 def certify(system=None, x0=None, eps=None, steps: int = 20, arith=None, **options):
     """Certify ``system`` (default: the built-in Lie–Poisson system) on the orbit of
     ``x0``; see :func:`exact_khk.certification.lie_poisson.certify` (options

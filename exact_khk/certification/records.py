@@ -27,6 +27,7 @@ from dataclasses import asdict, dataclass, field
 from fractions import Fraction
 
 from exact_khk.errors import InputError
+from exact_khk.parsing import any_int_digits
 
 #: version of the certificate JSON (``Certificate.to_json``)
 SCHEMA_VERSION = 2
@@ -82,6 +83,7 @@ class Check:
             return "UNDECIDED"
         return "WRONG" if self.expected else "DID NOT FAIL"
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return asdict(self)
 
@@ -170,6 +172,7 @@ class Certificate:
         return (f"INCONCLUSIVE: no claim is false, but {len(open_)} check(s) are undecided or did not fail, "
                 f"e.g. {open_[0]!r} ({where})")
 
+    @any_int_digits()
     def summary(self) -> str:
         """A few lines: the system, the orbit, the verdict."""
         return "\n".join([self.system.describe(),
@@ -267,6 +270,7 @@ class Certificate:
                    tuple(orbit), {k: (None if v is None else list(v)) for k, v in values.items()},
                    _json_key(d, "path", str, ""))
 
+    @any_int_digits()
     def to_json(self) -> dict:
         return {"schema_version": SCHEMA_VERSION, "system": self.system.to_json(),
                 "x0": [str(t) for t in self.x0], "eps": str(self.eps), "steps": self.steps,

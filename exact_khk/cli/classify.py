@@ -43,11 +43,14 @@ def cmd_classify(args):
         if args.system is not None and args.system != args.target:
             raise InputError(f"classify: two systems given ({args.target!r} and --system {args.system!r})")
         args.system = args.target
+    if args.x0 is not None:  # it was read and ignored: the evidence uses random lines and fresh orbits
+        raise InputError("--x0: classify starts from no given point (degrees on random lines over F_p, integrals "
+                         "and measures checked on fresh orbits); use find-measure/find-poisson --x0 for an orbit")
     if args.json not in (None, "-"):
         check_output(args.json)
     system, _x0, eps = system_from_args(args)
     try:
-        with Progress(args, 3, "classify", unit="stage") as progress:
+        with Progress(args, None, "classify", unit="stage") as progress:
             res = classify(system, eps=eps, steps=args.steps, degree=args.degree, field=field_name(system, args),
                            seed=args.line_seed, exact=args.exact,
                            discover=() if args.no_discover else ("measure", "poisson"), progress=progress,

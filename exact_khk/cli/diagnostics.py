@@ -40,6 +40,8 @@ def register(sub):
                        description="Evaluate candidate monomials on orbits, compute the kernels modulo primes, "
                        "lift them to Q and report conserved ratios of kernel polynomials, each checked exactly on "
                        "a fresh orbit (docs/diagnostics.md).")
+    q.add_argument("system_spec", nargs="?", metavar="SYSTEM",  # as find-measure, find-poisson, classify
+                   help="a catalogue system or a system file (the same as --system)")
     add_system_options(q, steps_default=0, arith=False)
     add_field_options(q)
     g = q.add_mutually_exclusive_group()
@@ -143,6 +145,10 @@ def cmd_degrees(args):
 def cmd_find_integrals(args):
     from exact_khk.diagnostics import find_integrals
 
+    if args.system_spec is not None:
+        if args.system is not None and args.system != args.system_spec:
+            raise InputError(f"SYSTEM {args.system_spec!r} and --system {args.system!r} differ: give one")
+        args.system = args.system_spec
     check_output(args.json)
     system, x0, eps = system_from_args(args)
     if args.toml == "-":  # check_output takes '-' for stdout; a file named '-' would surprise

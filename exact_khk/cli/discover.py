@@ -72,7 +72,7 @@ def _system(args):
 def _rename(exc):
     msg = str(exc)
     for name, option in (("degree", "--degree"), ("casimir_degree", "--casimir-degree"), ("verify_steps", "--steps"),
-                         ("symbolic", "--symbolic"), ("max_degree", "--symbolic-degree"),
+                         ("symbolic", "--symbolic"), ("max_degree", "--symbolic-degree"), ("x0", "--x0"),
                          ("seed", "--line-seed")):
         if msg.startswith(name + ":"):
             return InputError(option + msg[len(name):])

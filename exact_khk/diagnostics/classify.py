@@ -36,8 +36,8 @@ import time
 from dataclasses import dataclass, field as dc_field
 from fractions import Fraction
 
-from exact_khk.errors import InputError
-from exact_khk.parsing import check_count
+from exact_khk.errors import InputError, UndecidedError
+from exact_khk.parsing import any_int_digits, check_progress, check_count
 
 #: the verdict rules, as stated in the output and in docs/diagnostics.md
 RULES = {
@@ -81,6 +81,7 @@ class Evidence:
     how: str
     standing: str
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"what": self.what, "how": self.how, "standing": self.standing}
 
@@ -116,6 +117,7 @@ class Classification:
         return {"status": "found" if verified_found(key, r) else "nothing found",
                 "verified": [found_text(key, x) for x in verified_found(key, r)], **r.to_json()}
 
+    @any_int_digits()
     def to_json(self) -> dict:
         fit = self.degrees.fit
         dd = fit.dynamical_degree
@@ -145,6 +147,7 @@ class Classification:
             "decide": list(self.decide), "seconds": self.seconds, "notes": list(self.notes),
         }
 
+    @any_int_digits()
     def summary(self) -> str:
         d = self.degrees
         fit = d.fit
@@ -218,15 +221,15 @@ def lambda_upper_bound(exact_degrees) -> tuple | None:
     return k, dk, f"{q // 10 ** 6}.{q % 10 ** 6:06d}"
 
 
-def _discover(key, system, eps, field):
+def _discover(key, system, eps, field, progress=None):
     module, name, _ = DISCOVERIES[key]
     try:
         fn = getattr(importlib.import_module(module), name)
     except (ImportError, AttributeError):
         return "not available in this installation"
     try:
-        return fn(system, eps=eps, field=field)
-    except InputError as exc:
+        return fn(system, eps=eps, field=field, progress=progress)
+    except (InputError, UndecidedError) as exc:  # e.g. a lift not confirmed at an eps of 400 digits
         return f"could not run: {exc}"
 
 
@@ -260,12 +263,14 @@ def default_fit_degree(dim: int, degree: int) -> int:
     return degree if dim >= CAPPED_FIT_DIM else 2 * degree
 
 
+@any_int_digits()
 def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6, confirm=3,
              discover=("measure", "poisson"), progress=None, fit_degree=None) -> Classification:
     """Classify the Kahan map of ``system`` (a System, catalogue name or system file) at step
     ``eps``: degrees d_0..d_steps over F_p, the first ``exact`` exactly over Q (where affordable),
     integrals of degree ≤ ``degree`` (default :func:`default_degree`), and the discoveries named in ``discover``
-    (module docstring for the rules)."""
+    (module docstring for the rules).  ``progress(stage)``: called with the name of each stage and, during the
+    degree stage, with ``'degrees over F_p: step k'`` (k counts the steps of all lines)."""
     from exact_khk.diagnostics.degrees import degree_sequence, eps_of, resolve_field
     from exact_khk.diagnostics.integrals import find_integrals
 
@@ -287,23 +292,26 @@ def classify(system, eps=None, steps=20, degree=None, field="f", seed=0, exact=6
     auto = degree is None and fit_degree is None
     degree = default_degree(fld.dim) if degree is None else degree
     fit_degree = default_fit_degree(fld.dim, degree) if fit_degree is None else fit_degree
-    stage = (lambda s: progress(s)) if progress is not None else (lambda s: None)
+    stage = check_progress(progress) or (lambda s: None)
+    stage("degrees over F_p")
     degs = degree_sequence(sysobj if sysobj is not None else fld, steps=steps, eps=eps, field=field, seed=seed,
-                           exact=exact, confirm=confirm)
-    stage(1)
+                           exact=exact, confirm=confirm,
+                           progress=None if progress is None else lambda k: progress(f"degrees over F_p: step {k}"))
     notes = list(degs.notes)
     if auto and (math.comb(fld.dim + 4, 4) > MAX_DEFAULT_CANDIDATES or fit_degree < 2 * degree):
         notes.append(f"integral search capped: degree {degree}, fitted entries of degree <= {fit_degree} (defaults "
                      f"for dimension {fld.dim}, chosen by measured cost; --degree and --fit-degree search further)")
     integrals, inote = None, ""
+    stage(f"integrals of degree <= {degree}")
     try:
         integrals = find_integrals(sysobj if sysobj is not None else fld, degree=degree, field=field, eps=eps,
-                                   seed=seed, fit_degree=fit_degree)
+                                   seed=seed, fit_degree=fit_degree, progress=progress)
     except InputError as exc:
         inote = str(exc)
-    stage(2)
-    discoveries = {key: _discover(key, sysobj if sysobj is not None else fld, eps, field) for key in discover}
-    stage(3)
+    discoveries = {}
+    for key in discover:
+        stage(f"{key} search")
+        discoveries[key] = _discover(key, sysobj if sysobj is not None else fld, eps, field, progress)
     fit = degs.fit
     upper = lambda_upper_bound(degs.exact) if degs.exact else None
     verified = 0 if integrals is None else sum(1 for it in integrals.integrals if it.verified)

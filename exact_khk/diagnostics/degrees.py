@@ -74,7 +74,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import _short, check_count, parse_rational
+from exact_khk.parsing import any_int_digits, _short, check_count, parse_rational
 from exact_khk.systems.quadratic import QuadraticField
 
 MAX_STEPS = 100_000
@@ -543,6 +543,7 @@ class DegreeSequence:
         """(prime, line) of the runs that undercount somewhere (bad prime or line)."""
         return tuple((p, i) for p, i, d in self.runs if tuple(d) != self.degrees[:len(d)])
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"field": self.label, "dim": self.dim, "eps": str(self.eps), "degrees": list(self.degrees),
                 "degree_kind": "projective degree of Phi^k (max degree of numerators and common denominator)",
@@ -555,6 +556,7 @@ class DegreeSequence:
                 "heights": self.heights.to_json() if self.heights is not None else None,
                 "notes": list(self.notes)}
 
+    @any_int_digits()
     def summary(self) -> str:
         lines = [f"degrees of Phi^k for {self.label} (dimension {self.dim}, eps = {self.eps}), k = 0..{len(self.degrees) - 1}:",
                  "  " + ", ".join(map(str, self.degrees)),
@@ -577,6 +579,7 @@ class DegreeSequence:
         return "\n".join(lines)
 
 
+@any_int_digits()
 def degree_sequence(system, steps=20, eps=None, field="f", primes=2, lines=1, seed=0, exact=0,
                     exact_terms=10_000, confirm=3, heights=False, x0=None, max_bits=200_000, max_degree=20_000,
                     progress=None):

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 from exact_khk.arith import get_arith, point_height
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count, parse_rational
+from exact_khk.parsing import any_int_digits, check_count, parse_rational
 
 MODELS = ("linear", "quadratic", "exponential")
 
@@ -82,11 +82,13 @@ class HeightGrowth:
         params = self.models[model][0]
         return math.exp(params[0] + params[1] * k) if model == "exponential" else _poly(params, k)
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"heights": list(self.heights), "growth": self.growth, "rate": self.rate,
                 "truncated": self.truncated,
                 "models": {m: {"parameters": list(p), "relative_rms": e} for m, (p, e) in self.models.items()}}
 
+    @any_int_digits()
     def summary(self) -> str:
         cut = " (cut at the bit limit)" if self.truncated else ""
         tail = ", ".join(map(str, self.heights[-4:]))
@@ -125,6 +127,7 @@ def _rel_rms(ys, fs):
     return math.sqrt(sum(((y - f) / y) ** 2 for y, f in zip(ys, fs)) / len(ys))
 
 
+@any_int_digits()
 def height_growth(field, x0, eps, steps=30, max_bits=200_000, arith="flint") -> HeightGrowth:
     """Heights of the exact orbit of ``x0`` under the Kahan map of ``field`` (a
     QuadraticField) at step size ``eps``, and their fitted growth."""

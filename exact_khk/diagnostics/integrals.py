@@ -75,7 +75,7 @@ from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, indepe
 from exact_khk.diagnostics.pencils import (canonical_pair, echelon_pencil, interpolated_pencils,
                                            pencil_integrals, ratio_integrals)
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.parsing import check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_progress, check_count, parse_vector
 
 #: candidates at most: 20 variables at degree <= 4 (10 626) measured, one orbit kernel 293 s CPU and
 #: 2.3 GB peak (docs/benchmarks.md, "find-integrals at 10⁴ candidates")
@@ -181,6 +181,7 @@ class Integral:
             raise PoleError(f"the denominator {self.denominator} of a found integral vanishes at the point")
         return [(d0 * value(self.num, j) - n0 * value(self.den, j)) / d0 ** 2 for j in range(len(x))]
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"numerator": self.numerator, "denominator": self.denominator, "verified": self.verified}
 
@@ -210,6 +211,7 @@ class IntegralSearch:
         """Kernel directions that are not products of smaller kernel polynomials."""
         return self.kernel_dim - self.trivial_dim
 
+    @any_int_digits()
     def to_json(self) -> dict:
         return {"field": self.label, "candidates": list(self.candidates), "orbit_kernel_dims": list(self.orbit_dims),
                 "kernel_dim": self.kernel_dim, "trivial_dim": self.trivial_dim, "new_dim": self.new_dim,
@@ -228,6 +230,7 @@ class IntegralSearch:
         return (f"kernel {self.kernel_dim}, extracted {len(self.integrals)}, independent {self.independent}"
                 + shows)
 
+    @any_int_digits()
     def summary(self) -> str:
         out = [f"integral search for {self.label}: {len(self.candidates)} candidate monomials",
                f"  orbit kernel dimensions {list(self.orbit_dims)}: generic {self.kernel_dim} "
@@ -251,6 +254,7 @@ class IntegralSearch:
         return "\n".join(out)
 
 
+@any_int_digits()
 def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None, homogeneous=False,
                    orbits=3, steps=None, margin=None, primes=None, seed=0, x0=None, verify_steps=6,
                    max_primes=16, progress=None, fit_degree=None, max_bytes=None):
@@ -269,7 +273,7 @@ def find_integrals(system, degree=None, monomials_list=None, field="f", eps=None
     a search whose evaluation matrices would need more memory (:func:`planned_bytes`) is refused
     before any work (InputError naming EXACT_KHK_MAX_MEMORY)."""
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim

@@ -56,6 +56,8 @@ def parse_monomials(spec, variables) -> list:
     >>> parse_monomials(["1", "x*y", "y^2"], ["x", "y"])
     [(0, 0), (1, 1), (0, 2)]
     """
+    if isinstance(spec, (str, bytes, dict)) or not hasattr(spec, "__iter__"):
+        raise InputError(f"monomials: expected a list of monomials such as ['1', 'x*y'], got {_short(spec)}")
     N = len(variables)
     index = {v: i for i, v in enumerate(variables)}
     out = []

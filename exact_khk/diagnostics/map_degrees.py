@@ -27,7 +27,7 @@ import flint
 
 from exact_khk.diagnostics.degrees import check_primes
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count
+from exact_khk.parsing import any_int_digits, check_count
 
 MAX_STEPS = 10_000
 #: the largest degree of an iterate on a line (nmod_poly of 10^5 terms: seconds per step)
@@ -177,11 +177,13 @@ class MapDegrees:
         except InputError as exc:
             self.fit = too_short(self.degrees, str(exc))
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"map": self.components, "variables": self.variables, "degrees": list(self.degrees),
                 "degree_kind": "degree of F^k on P^N after removing the common factor of its components",
                 "undercount_bound": self.undercount_bound, "fit": self.fit.to_json()}
 
+    @any_int_digits()
     def summary(self) -> str:
         N = len(self.variables) - 1
         return "\n".join([

@@ -22,7 +22,7 @@ of each factor is computed exactly and written over the F_i.
 
 **Verification** of each density m = U/V (U, V polynomials of degrees u, v):
 
-* exactly, m(x̃)·det dΦ(x) = m(x) at the points of a fresh exact orbit (Fractions;
+* exactly, m(x̃)·det dΦ(x) = m(x) at the points of a fresh exact orbit (exact rationals;
   det dΦ = det(I + εf′(x̃))/det(I − εf′(x)));
 * as an identity over F_p, at random points of a prime not used to find it: after
   clearing denominators the identity is G(x) = 0 with deg G ≤ (N + 1)(u + v + N),
@@ -46,13 +46,15 @@ import time
 from dataclasses import dataclass
 from fractions import Fraction
 
+import flint
+
 from exact_khk.diagnostics.darboux import (MARGIN, ModMap, _Evaluator, cofactor, eval_poly, exact_orbit, fresh_point,
                                            lifted_kernel, mpoly_dict, mpoly_text, primitive, rows_of_points,
                                            symbolic_map)
 from exact_khk.diagnostics.degrees import eps_of, random_primes, resolve_field
 from exact_khk.diagnostics.kernels import monomials, poly_text, rational_reconstruction
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_progress, check_count, parse_vector
 
 #: random points of the identity check over F_p
 SZ_POINTS = 8
@@ -78,6 +80,7 @@ class Check:
     holds: object
     detail: str
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self):
         return {"name": self.name, "holds": self.holds, "detail": self.detail}
 
@@ -98,6 +101,7 @@ class Darboux:
     factors: tuple   # ((factor text, its cofactor text), ...)
     polys: tuple = ()  # P and its irreducible factors as ((exponents, Fraction), ...) tuples
 
+    @any_int_digits()
     def to_json(self):
         return {"polynomial": self.polynomial, "cofactor": self.cofactor,
                 "factors": [{"polynomial": a, "cofactor": b} for a, b in self.factors]}
@@ -117,6 +121,7 @@ class Density:
         """The exact orbit check held, no other check failed, and every applicable control failed."""
         return verified(self.checks)
 
+    @any_int_digits()
     def to_json(self):
         return {"density": self.text, "verified": self.verified, "checks": [c.to_json() for c in self.checks]}
 
@@ -137,6 +142,7 @@ class MeasureSearch:
     seconds: float
     integrals: tuple = ()  # ((text, conserved on a fresh exact orbit: True/False/None), ...)
 
+    @any_int_digits()
     def to_json(self):
         return {"field": self.label, "eps": str(self.eps), "degree": self.degree, "factors": list(self.factors),
                 "det_dPhi": self.det_text,
@@ -147,6 +153,7 @@ class MeasureSearch:
                 "primes": list(self.primes),
                 "notes": list(self.notes), "seconds": self.seconds}
 
+    @any_int_digits()
     def toml(self) -> str:
         """A ``[measure]`` block of a system file (the first verified density), or a comment."""
         good = [d for d in self.densities if d.verified]
@@ -154,6 +161,7 @@ class MeasureSearch:
             return f"# no preserved density found at degree <= {self.degree}\n"
         return f'[measure]\n# found by exact-khk find-measure at eps = {self.eps}\ndensity = "{good[0].text}"\n'
 
+    @any_int_digits()
     def summary(self) -> str:
         out = [f"measure search for {self.label} at eps = {self.eps}: Darboux polynomials of degree <= {self.degree}"]
         if self.factors:
@@ -183,12 +191,13 @@ class MeasureSearch:
         return "\n".join(out)
 
 
+@any_int_digits()
 def find_measure(system, degree=2, field="f", eps=None, seed=0, verify_steps=4, x0=None,
                  progress=None) -> MeasureSearch:
     """Darboux polynomials and preserved densities of the Kahan map (module docstring); ``x0``:
     the start of the exact orbit check (default a fresh reproducible point)."""
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim
@@ -491,7 +500,7 @@ def _verify(fld, eps, num, den, variables, seed, steps, used, shown=None, x0=Non
             return all(eval_poly(fn, xt) * eval_poly(dn, x) * B == eval_poly(fn, x) * eval_poly(dn, xt) * A
                        for x, xt, A, B, _ in data)
         checks.append(Check("exact orbit", holds(num, den),
-                            f"m(x~) det dPhi(x) = m(x) with Fractions at {len(data)} points of the orbit of "
+                            f"m(x~) det dPhi(x) = m(x) exactly (fmpq) at {len(data)} points of the orbit of "
                             f"({', '.join(map(str, x0))})"))
         moving = next((j for j in range(N) if any(x[j] != xt[j] for x, xt, *_ in data)), None)
         if moving is None:
@@ -530,7 +539,7 @@ def _conserved_ratio(fld, eps, num, den, seed, steps, x0):
         return None
     _, data = orbit
     pts = [x for x, *_ in data] + [data[-1][1]]
-    return len({Fraction(eval_poly(num, x)) / eval_poly(den, x) for x in pts}) == 1
+    return len({flint.fmpq(eval_poly(num, x)) / eval_poly(den, x) for x in pts}) == 1
 
 
 def _fresh_orbit(fld, eps, seed, steps, num, den, start=None):

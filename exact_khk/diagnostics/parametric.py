@@ -64,7 +64,7 @@ import flint
 from exact_khk.arith.cyclotomic import DEFAULT_PRIME
 from exact_khk.diagnostics.kernels import monomials, poly_text
 from exact_khk.errors import InputError, PoleError, SingularStepError
-from exact_khk.parsing import check_count
+from exact_khk.parsing import any_int_digits, check_progress, check_count
 
 EPS = "eps"
 #: the highest total degree t of a coefficient's numerator and denominator in the symbols
@@ -96,6 +96,7 @@ class ParametricIntegral:
     proof: str
     entries: tuple = ()  # a Poisson tensor: its N x N entries (numerator, denominator unused)
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         if self.entries:
             return {"matrix": [list(r) for r in self.entries], "coefficient_degree": self.degree,
@@ -121,6 +122,7 @@ class ParametricSearch:
     field: str = "f"
     kind: str = "integrals"  # "measure": densities m of invariant measures m(x) dx; "poisson": tensors
 
+    @any_int_digits()
     def to_json(self) -> dict:
         key = {"measure": "densities", "poisson": "tensors"}.get(self.kind, "integrals")
         return {"field": self.label, "kind": self.kind, "symbols": list(self.symbols),
@@ -129,6 +131,7 @@ class ParametricSearch:
                 "dropped_samples": self.dropped, "ansatz_degree": self.degree, "notes": list(self.notes),
                 "sample_search": self.sample_summary, "seconds": self.seconds}
 
+    @any_int_digits()
     def summary(self) -> str:
         fixed = ", ".join(f"{k} = {v}" for k, v in self.fixed)
         what, name = {"measure": ("measure densities", "m"), "poisson": ("Poisson tensors", "pi")}.get(
@@ -622,6 +625,7 @@ def prove_tensor_sz(pi, K, M, r, N, p=DEFAULT_PRIME, trials=SZ_TRIALS, seed=0):
 # --- the driver ------------------------------------------------------------------------------
 
 
+@any_int_digits()
 def symbolic_measures(system, symbols=(EPS,), degree=2, field="f", eps=None, seed=0, **kw):
     """Invariant measure densities m of :func:`~exact_khk.diagnostics.measures.find_measure` as
     rational functions of the ``symbols``, reconstructed like :func:`symbolic_integrals` (a density
@@ -630,6 +634,7 @@ def symbolic_measures(system, symbols=(EPS,), degree=2, field="f", eps=None, see
     return symbolic_integrals(system, symbols, degree=degree, field=field, eps=eps, seed=seed, kind="measure", **kw)
 
 
+@any_int_digits()
 def symbolic_tensors(system, symbols=(EPS,), degree=2, field="f", eps=None, seed=0, **kw):
     """Preserved Poisson tensors of :func:`~exact_khk.diagnostics.poisson.find_poisson` as
     polynomial matrices in x and the ``symbols`` (all entries scaled by one function of the
@@ -663,6 +668,7 @@ def _tensor(d, R, N, k, K, M, r, exact, names, seed, perturb):
     return ParametricIntegral("", "", deg, holds and jac, how, entries)
 
 
+@any_int_digits()
 def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None, field="f", eps=None,
                        max_degree=MAX_DEGREE, confirm=CONFIRM, seed=0, progress=None, perturb=None, proof="auto",
                        kind="integrals", **find_kw):
@@ -675,7 +681,7 @@ def symbolic_integrals(system, symbols=(EPS,), degree=None, monomials_list=None,
     from exact_khk.diagnostics.degrees import eps_of, resolve_field
 
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     if sysobj is None:
         raise InputError("symbolic: needs a system (a catalogue name or a system file), not a bare field")

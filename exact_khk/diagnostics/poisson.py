@@ -48,7 +48,7 @@ from exact_khk.diagnostics.kernels import independent_count, monomials
 from exact_khk.diagnostics.measures import (SZ_POINTS, Check, _fresh_orbit, _variables, expr, find_measure,
                                             verified)
 from exact_khk.errors import InputError
-from exact_khk.parsing import check_count, parse_vector
+from exact_khk.parsing import any_int_digits, check_progress, check_count, parse_vector
 
 #: the largest dimension of the preserved-tensor space on which the Jacobi identity is solved
 MAX_JACOBI_DIM = 4
@@ -61,6 +61,7 @@ class Casimir:
     den: tuple
     conserved: object      # True/False on a fresh exact orbit
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self):
         return {"casimir": self.text, "proven": True, "conserved_by_map": self.conserved}
 
@@ -78,6 +79,7 @@ class Tensor:
         """The exact orbit check held, no other check failed, and every applicable control failed."""
         return verified(self.checks)
 
+    @any_int_digits()
     def to_json(self):
         return {"matrix": [list(r) for r in self.entries], "rank": self.rank, "verified": self.verified,
                 "checks": [c.to_json() for c in self.checks], "casimirs": [c.to_json() for c in self.casimirs]}
@@ -95,11 +97,13 @@ class PoissonSearch:
     notes: tuple
     seconds: float
 
+    @any_int_digits()
     def to_json(self):
         return {"field": self.label, "eps": str(self.eps), "degree": self.degree, "kernel_dim": self.kernel_dim,
                 "tensors": [t.to_json() for t in self.tensors], "primes": list(self.primes),
                 "notes": list(self.notes), "seconds": self.seconds}
 
+    @any_int_digits()
     def toml(self) -> str:
         good = [t for t in self.tensors if t.verified]
         if not good:
@@ -107,6 +111,7 @@ class PoissonSearch:
         rows = ",\n          ".join("[" + ", ".join(f'"{e}"' for e in r) + "]" for r in good[0].entries)
         return f"[poisson]\n# found by exact-khk find-poisson at eps = {self.eps}\nmatrix = [{rows}]\n"
 
+    @any_int_digits()
     def summary(self) -> str:
         out = [f"Poisson search for {self.label} at eps = {self.eps}: entries of degree <= {self.degree}",
                f"  preserved bivectors (dPhi pi dPhi^T = pi o Phi): a space of dimension {self.kernel_dim}"]
@@ -130,12 +135,13 @@ class PoissonSearch:
         return "\n".join(out)
 
 
+@any_int_digits()
 def find_poisson(system, degree=2, field="f", eps=None, seed=0, verify_steps=3, casimir_degree=2,
                  measure_degree=2, x0=None, progress=None) -> PoissonSearch:
     """Preserved Poisson tensors with polynomial entries of degree ≤ ``degree`` and their Casimirs
     (module docstring); ``x0``: the start of the exact orbit checks (default a fresh reproducible point)."""
     t0 = time.perf_counter()
-    stage = progress or (lambda name: None)
+    stage = check_progress(progress) or (lambda name: None)
     sysobj, fld = resolve_field(system, field)
     eps = eps_of(sysobj, eps)
     N = fld.dim
@@ -333,9 +339,9 @@ def _tensor(fld, eps, pi, N, degree, variables, seed, steps, used, darboux, casi
                             "exact, as a polynomial identity (fmpq_mpoly)"))
 
     def full(x):
-        P = [[Fraction(0)] * N for _ in range(N)]
+        P = [[flint.fmpq(0)] * N for _ in range(N)]
         for (a, b), poly in pi.items():
-            P[a][b] = Fraction(eval_poly(poly, x))
+            P[a][b] = flint.fmpq(eval_poly(poly, x))  # the orbit's points are fmpq
             P[b][a] = -P[a][b]
         return P
 
@@ -356,7 +362,7 @@ def _tensor(fld, eps, pi, N, degree, variables, seed, steps, used, darboux, casi
                     return False
             return True
         checks.append(Check("exact orbit", preserved(lambda x: 1),
-                            f"dPhi pi dPhi^T = pi o Phi with Fractions at {len(data)} points of the orbit of "
+                            f"dPhi pi dPhi^T = pi o Phi exactly (fmpq) at {len(data)} points of the orbit of "
                             f"({', '.join(map(str, x0))})"))
         moving = next((j for j in range(N) if any(x[j] != xt[j] for x, xt, *_ in data)), None)
         if moving is None:
@@ -468,8 +474,8 @@ def _conserved(fld, eps, U, V, seed, steps, x0):
     if orbit is None:
         return None
     _, data = orbit
-    vals = [Fraction(eval_poly(U, x)) / eval_poly(V, x) for x, *_ in data] + \
-        [Fraction(eval_poly(U, data[-1][1])) / eval_poly(V, data[-1][1])]
+    vals = [flint.fmpq(eval_poly(U, x)) / eval_poly(V, x) for x, *_ in data] + \
+        [flint.fmpq(eval_poly(U, data[-1][1])) / eval_poly(V, data[-1][1])]
     return len(set(vals)) == 1
 
 

@@ -55,7 +55,7 @@ from fractions import Fraction
 import flint
 
 from exact_khk.errors import InputError
-from exact_khk.parsing import poly_text as _poly_text
+from exact_khk.parsing import any_int_digits, poly_text as _poly_text
 
 DIGITS = 10
 
@@ -99,6 +99,7 @@ class DynamicalDegree:
     enclosure: tuple
     value: float
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def to_json(self) -> dict:
         return {"minimal_polynomial": self.minimal_polynomial, "coefficients": list(self.coefficients),
                 "enclosure": list(self.enclosure), "value": self.value}
@@ -138,6 +139,7 @@ class RecurrenceFit:
     def characteristic_text(self) -> str:
         return poly_text(self.characteristic)
 
+    @any_int_digits()
     def to_json(self) -> dict:
         return {"order": self.order, "coefficients": [str(c) for c in self.coefficients],
                 "characteristic_polynomial": self.characteristic_text(), "fitted_on": self.fitted_on,
@@ -146,6 +148,7 @@ class RecurrenceFit:
                 "dynamical_degree": self.dynamical_degree.to_json() if self.dynamical_degree else None,
                 "reason": self.reason}
 
+    @any_int_digits()
     def summary(self) -> str:
         if not self.determined:  # no recurrence is stated that the terms do not determine
             return f"recurrence: not determined\ngrowth: not classified ({self.reason})"

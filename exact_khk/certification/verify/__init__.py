@@ -58,6 +58,7 @@ from exact_khk.certification.verify.modes import IDENTITY, PROOF, Identities, Pr
 from exact_khk.certification.verify.records import (Context, _short, _tf, differs, expected_records,
                                                     outcome_differs, rederive)
 from exact_khk.errors import InputError
+from exact_khk.parsing import any_int_digits
 
 __all__ = ["verify", "VerifyReport", "SCHEMA_VERSIONS", "exact_field", "cyclotomic_polynomial", "RATIONAL_ARITHS",
            "_Evaluate", "_Rationals"]
@@ -120,12 +121,14 @@ class VerifyReport:
         status = next((d for n, _, d in self.results if n == "status"), "")
         return status.split()[1] if status.startswith("recomputed") else "?"
 
+    @any_int_digits()  # numbers of any size print (e.g. an eps of 5000 digits)
     def summary(self) -> str:
         """The results, one per line, the informational notes, then the verdict line."""
         lines = [f"  {'ok  ' if ok else 'FAIL'}  {name}: {detail}" for name, ok, detail in self.results]
         lines += [f"  info  {note}" for note in self.notes]
         return "\n".join(lines + [self.verdict()])
 
+    @any_int_digits()
     def to_json(self) -> dict:
         return {"ok": self.ok, "checkable": self.checkable, "partial": self.partial, "verdict": self.verdict(),
                 "records": self.records, "rederived": self.rederived, "not_rechecked": list(self.not_rechecked),
@@ -133,6 +136,7 @@ class VerifyReport:
                 "results": [{"name": n, "ok": ok, "detail": d} for n, ok, d in self.results]}
 
 
+@any_int_digits()
 def verify(data, seed=None, proof_budget=None) -> VerifyReport:
     """Re-derive the certificate ``data`` (the JSON dict of ``Certificate.to_json``); see
     the module docstring.  ``seed``: of the verifier's own random draws for the ``identity:``
