@@ -10,7 +10,6 @@ regenerated report can be compared with the committed one with that section mask
 from __future__ import annotations
 
 import json
-import re
 import time
 from pathlib import Path
 
