@@ -90,3 +90,19 @@ def test_integrals_text_and_json(capsys):
     s2 = LiePoissonSystem.random(2, 3)
     x2 = [ar(t) for t in random_point(2, 3)]
     assert data["Ktilde"]["+-"] == ar.format(Htilde(s2.field("g", "+-"), x2, DEFAULT_EPS, ar))
+
+
+def test_a_drawn_point_whose_orbit_meets_a_singular_step_is_redrawn(capsys):
+    """certify --n 2 --seed 4: the seed's first point meets a singular step at step 5 (exit 3 when given as
+    --x0); the tool drew it, so it takes the seed's next draw and says so; the certificate is VALID there."""
+    system = LiePoissonSystem.random(2, 4)
+    first = random_point(2, 4, system=system, eps=DEFAULT_EPS)
+    second = random_point(2, 4, system=system, eps=DEFAULT_EPS, skip=1)
+    assert first != second
+    x0 = ",".join(str(t) for t in first)
+    assert main(["certify", "--n", "2", "--seed", "4", "--x0", x0]) == 3       # the user's point: no redraw
+    capsys.readouterr()
+    assert main(["certify", "--n", "2", "--seed", "4"]) == 0
+    out, err = capsys.readouterr()
+    assert "draw 2 is used" in err and "singular step at step 5" in err and "VALID" in out
+    assert f"x0 = ({', '.join(str(t) for t in second)})" in out

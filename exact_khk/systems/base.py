@@ -198,10 +198,11 @@ class System:
         """(integrals, commuting fields) that studies follow along an orbit (default: all of them)."""
         return self.integrals(), {name: self.field(name) for name in self.field_names()[1:]}
 
-    def seeded_point(self, seed: int, eps=None) -> tuple:
+    def seeded_point(self, seed: int, eps=None, skip: int = 0) -> tuple:
         """The point a command draws for ``--seed``: off the degenerate sets the system knows of
-        (default: :meth:`random_point`)."""
-        return self.random_point(seed)
+        (default: :meth:`random_point`); ``skip``: the draws of the same seed to pass over (a command
+        redraws when a later step from the point is singular)."""
+        return self.random_point(seed + skip)
 
     def random_point(self, seed: int, bound: int = 3) -> tuple:
         """A reproducible small-integer point (not all zero), coordinates in [-bound, bound]."""

@@ -417,11 +417,12 @@ class ExpressionSystem(System):
             self._default_x0 = self._regular_point(self.default_eps)
         return self._default_x0
 
-    def seeded_point(self, seed: int, eps=None) -> tuple:
-        """The point drawn for ``--seed``: the first regular point (:meth:`_regular_point`) from ``seed`` on."""
-        return self._regular_point(self.default_eps if eps is None else eps, seed)
+    def seeded_point(self, seed: int, eps=None, skip: int = 0) -> tuple:
+        """The point drawn for ``--seed``: the first regular point (:meth:`_regular_point`) from ``seed`` on
+        (``skip``: regular points passed over first)."""
+        return self._regular_point(self.default_eps if eps is None else eps, seed, skip)
 
-    def _regular_point(self, eps, start=0):
+    def _regular_point(self, eps, start=0, skip=0):
         """The first small random point (seeds ``start``, ``start`` + 1, …) where every declared
         function is finite, f(x) ≠ 0 (no equilibrium: there no control can fail) and
         I − ε g'(x) is invertible for every field g (reproducible)."""
@@ -436,7 +437,9 @@ class ExpressionSystem(System):
                     flint.fmpq_mat([[_fmpq(int(i == j) - eps * t) for j, t in enumerate(row)]
                                     for i, row in enumerate(g.jacobian(fr, x))]).det() != 0
                     for g in self._fields.values()):
-                return x
+                if not skip:
+                    return x
+                skip -= 1
         return self.random_point(start)
 
     # --- constructors -------------------------------------------------------------

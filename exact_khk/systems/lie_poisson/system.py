@@ -439,8 +439,8 @@ class LiePoissonSystem(System):
         """A point off the degenerate sets of every map the certificate steps (:func:`random_point`)."""
         return random_point(self.n, seed, bound, system=self, eps=eps)
 
-    def seeded_point(self, seed: int, eps=None) -> tuple:
-        return self.random_point(seed, eps=eps)
+    def seeded_point(self, seed: int, eps=None, skip: int = 0) -> tuple:
+        return random_point(self.n, seed, system=self, eps=eps, skip=skip)
 
     # matrices ------------------------------------------------------------
     @property
@@ -667,7 +667,7 @@ def _check_seed_bound(seed, bound):
     check_count(bound, "bound", 1, 2 ** 63)
 
 
-def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tuple:
+def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None, skip: int = 0) -> tuple:
     """A reproducible small-integer point of Q^{2n}, off the known degenerate sets.
 
     Points are drawn from one random stream per ``seed`` (integers in
@@ -691,7 +691,8 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
 
     The system-dependent rules only reject draws of the same stream: a first draw off
     the singular sets that passes them is the point drawn without a system.  After 200 draws the system-dependent rules
-    are dropped (a system whose every small point is degenerate, e.g. Hs = 0).
+    are dropped (a system whose every small point is degenerate, e.g. Hs = 0).  ``skip``: the
+    accepted draws to pass over (``certify --seed`` redraws when a later step is singular).
     """
     if not isinstance(n, int) or isinstance(n, bool) or n < 1:
         raise InputError(f"n: expected a positive integer, got {n!r}")
@@ -705,7 +706,9 @@ def random_point(n: int, seed: int, bound: int = 3, system=None, eps=None) -> tu
             continue
         draws += 1
         if not check_system or draws > _MAX_DRAWS or not _degenerate_for(system, x, eps):
-            return x
+            if not skip:
+                return x
+            skip -= 1
 
 
 def _degenerate_for(system, x, eps) -> bool:
