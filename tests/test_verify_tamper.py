@@ -370,3 +370,15 @@ def test_the_registry_rules_tampered_are_refused(rule_certs, which, record, fiel
     assert check[field] != value
     check[field] = value
     refused(consistent(d), record)
+
+
+def test_an_orbit_of_the_wrong_length_is_refused_before_any_point_is_parsed():
+    """A certificate whose orbit was padded (here with points that are not even numbers) is refused by
+    its length alone; the same certificate unpadded verifies (the control)."""
+    data = json.loads(json.dumps(certify(steps=2, signs=["-++"]).to_json()))
+    assert verify(data, seed=1).ok
+    data["orbit"] = data["orbit"] + [["not a number"] * len(data["orbit"][0])] * 1000
+    report = verify(data, seed=1)
+    assert not report.ok
+    assert report.results[-1] == ("orbit length", False,
+                                  "1003 points recorded; 2 steps need 3: nothing else is re-derived")

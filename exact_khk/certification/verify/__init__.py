@@ -50,6 +50,7 @@ certificate does not record).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
 from exact_khk.certification.verify.fields import (RATIONAL_ARITHS, Undefined, _Evaluate, _Rationals,  # noqa: F401
                                                    cyclotomic_polynomial, exact_field, _show)
@@ -164,6 +165,10 @@ def verify(data, seed=None, proof_budget=None) -> VerifyReport:
             raise InputError(f"{key}: missing key {key!r}")
         if not isinstance(data[key], types):
             raise InputError(f"{key}: expected {'a string' if types is str else 'true or false'}")
+    if isinstance(cert.steps, int) and len(cert.orbit) != cert.steps + 1:  # before parsing any point of it
+        return VerifyReport(False, tuple(results) + (("orbit length", False, (
+            f"{len(cert.orbit)} points recorded; {_show(Fraction(cert.steps))} steps need "
+            f"{_show(Fraction(cert.steps + 1))}: nothing else is re-derived")),))
     info = [key for key in data if key in INFORMATIONAL and key != "invocation"]
     notes = (("invocation (the command line and options): informational, not re-checked and not counted",)
              if "invocation" in data else ()) \
