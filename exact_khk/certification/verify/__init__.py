@@ -50,11 +50,10 @@ certificate does not record).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from fractions import Fraction
 
 from exact_khk.certification.verify.fields import (RATIONAL_ARITHS, Undefined, _Evaluate, _Rationals,  # noqa: F401
                                                    cyclotomic_polynomial, exact_field, _show)
-from exact_khk.certification.verify.orbit import _Recheck
+from exact_khk.certification.verify.orbit import _Recheck, orbit_length
 from exact_khk.certification.verify.modes import IDENTITY, PROOF, Identities, Proofs
 from exact_khk.certification.verify.records import (Context, _short, _tf, differs, expected_records,
                                                     outcome_differs, rederive)
@@ -165,10 +164,6 @@ def verify(data, seed=None, proof_budget=None) -> VerifyReport:
             raise InputError(f"{key}: missing key {key!r}")
         if not isinstance(data[key], types):
             raise InputError(f"{key}: expected {'a string' if types is str else 'true or false'}")
-    if isinstance(cert.steps, int) and len(cert.orbit) != cert.steps + 1:  # before parsing any point of it
-        return VerifyReport(False, tuple(results) + (("orbit length", False, (
-            f"{len(cert.orbit)} points recorded; {_show(Fraction(cert.steps))} steps need "
-            f"{_show(Fraction(cert.steps + 1))}: nothing else is re-derived")),))
     info = [key for key in data if key in INFORMATIONAL and key != "invocation"]
     notes = (("invocation (the command line and options): informational, not re-checked and not counted",)
              if "invocation" in data else ()) \
@@ -187,6 +182,9 @@ def verify(data, seed=None, proof_budget=None) -> VerifyReport:
         results += _status_results(data, data["checks"], [])
         return VerifyReport(False, tuple(results), checkable=False, records=total, notes=notes)
     results.append(("exact arithmetic", True, f"{cert.arith}: re-checked in {F.name}"))
+    results.append(orbit_length(cert))  # before any point of the orbit is parsed
+    if not results[-1][1]:
+        return VerifyReport(False, tuple(results), records=total, notes=notes)
     results += _Recheck(cert, data, F).run()
     orbit_ok = all(ok for _, ok, _ in results)
     try:

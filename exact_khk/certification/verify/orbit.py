@@ -11,6 +11,15 @@ from exact_khk.certification.verify.maps import (_expression_field, _htilde, _id
 from exact_khk.certification.verify.records import LiePoisson, evaluator, family, reduced
 
 
+def orbit_length(cert) -> tuple:
+    """The result line on the orbit's length (steps + 1 points), read before any point is parsed."""
+    K, got = cert.steps, len(cert.orbit)
+    if got != K + 1:
+        return ("orbit length", False, f"{got} points recorded; {_show(Fraction(K))} steps need "
+                f"{_show(Fraction(K + 1))}: nothing else is re-derived")
+    return ("orbit length", True, f"{K + 1} points")
+
+
 class _Recheck:
     """The orbit and the integrals of one certificate, re-checked in the field F."""
 
@@ -29,17 +38,11 @@ class _Recheck:
             self.f = _expression_field(self.system.field("f"), F)
 
     def run(self) -> list:
-        out = [self.orbit_length(), self.starts_at_x0()]
+        """The re-checks of an orbit whose length :func:`orbit_length` accepted."""
+        out = [self.starts_at_x0()]
         out += self.steps()
         out += self.integrals()
         return out
-
-    def orbit_length(self):
-        K, got = self.cert.steps, len(self.pts)
-        if got != K + 1:
-            return ("orbit length", False,
-                    f"{got} points recorded; {_show(Fraction(K))} steps need {_show(Fraction(K + 1))}")
-        return ("orbit length", True, f"{K + 1} points")
 
     def starts_at_x0(self):
         if not self.pts:
