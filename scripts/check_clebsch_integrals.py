@@ -177,7 +177,8 @@ def mono_val(e, x, one):
     return v
 
 
-def nullspace_mod(rows, m):
+def rref_mod(rows, m):
+    """(R, pivots): the reduced echelon form mod P of ``rows`` over their first m columns."""
     R, piv, r0 = [r[:] for r in rows], [], 0
     for c in range(m):
         r = next((r for r in range(r0, len(R)) if R[r][c]), None)
@@ -192,6 +193,11 @@ def nullspace_mod(rows, m):
                 R[r] = [(a - k * b) % P for a, b in zip(R[r], R[r0])]
         piv.append(c)
         r0 += 1
+    return R, piv
+
+
+def nullspace_mod(rows, m):
+    R, piv = rref_mod(rows, m)
     out = []
     for fc in [c for c in range(m) if c not in piv]:
         v = [0] * m
@@ -261,18 +267,8 @@ def circuit_vector(rows_, S, kind):
     # c' with c'_last = 0: ra[:, :-1] c' = rhs (consistent, full column rank)
     aug = [row[:-1] + [b] for row, b in zip(ra, rhs)]
     n = len(S) - 1
-    R, r0 = [r[:] for r in aug], 0
-    for col in range(n):
-        r = next((r for r in range(r0, len(R)) if R[r][col]), None)
-        R[r0], R[r] = R[r], R[r0]
-        iv = pow(R[r0][col], -1, P)
-        R[r0] = [v * iv % P for v in R[r0]]
-        for r in range(len(R)):
-            if r != r0 and R[r][col]:
-                k = R[r][col]
-                R[r] = [(a - k * b) % P for a, b in zip(R[r], R[r0])]
-        r0 += 1
-    assert all(not R[r][n] for r in range(r0, len(R)))
+    R, piv = rref_mod(aug, n)
+    assert piv == list(range(n)) and all(not R[r][n] for r in range(n, len(R)))
     return c, [R[i][n] for i in range(n)] + [0]
 
 
