@@ -34,14 +34,26 @@ def kqv_integral(N, k):
     return xs, b * d * (a + b) / (a * c * (c + d))
 
 
+def conserved_by_sympy(I, xs, comps, seed, den_max, eps=sympy.Rational(1, 10), points=2):
+    """I(x~) == I(x) at ``points`` random rational points, x~ by SymPy's Kahan step (not the code under test)."""
+    rng = random.Random(seed)
+    for _ in range(points):
+        x = [sympy.Rational(rng.randint(1, 9), rng.randint(1, den_max)) for _ in xs]
+        y = kahan_step(xs, comps, eps, x)
+        assert sympy.simplify(I.subs(dict(zip(xs, y))) - I.subs(dict(zip(xs, x)))) == 0
+    return rng
+
+
+def sympy_poly(d, xs):
+    """The polynomial of a {exponents: coefficient} dict, in SymPy."""
+    return sum(sympy.Rational(c.numerator, c.denominator) * sympy.Mul(*[v ** k for v, k in zip(xs, e)])
+               for e, c in d.items())
+
+
 def test_the_golden_kqv_integral_is_conserved():
     xs, comps = sympy_field(chain(6))
     _, I = kqv_integral(6, 4)
-    rng = random.Random(3)
-    for _ in range(2):
-        x = [sympy.Rational(rng.randint(1, 9), rng.randint(1, 4)) for _ in xs]
-        y = kahan_step(xs, comps, sympy.Rational(1, 10), x)
-        assert sympy.simplify(I.subs(dict(zip(xs, y))) - I.subs(dict(zip(xs, x)))) == 0
+    conserved_by_sympy(I, xs, comps, seed=3, den_max=4)
 
 
 def _fitter_of(system, sub_texts, known=(), max_bytes=None, seed=0):
@@ -73,15 +85,9 @@ def test_fit_in_the_entrys_own_variables_recovers_a_golden_integral():
     num, den = fitter.fit(key, 3, primes, 0, own)
     assert all(not e[4] and not e[5] for e in list(num) + list(den))
     xs, comps = sympy_field(chain(6))
-    poly = lambda d: sum(sympy.Rational(c.numerator, c.denominator) * sympy.Mul(*[v ** k for v, k in zip(xs, e)])
-                         for e, c in d.items())  # noqa: E731
-    fitted = poly(num) / poly(den)
+    fitted = sympy_poly(num, xs) / sympy_poly(den, xs)
     _, golden = kqv_integral(6, 3)
-    rng = random.Random(5)
-    for _ in range(2):
-        x = [sympy.Rational(rng.randint(1, 9), rng.randint(1, 4)) for _ in xs]
-        y = kahan_step(xs, comps, sympy.Rational(1, 10), x)
-        assert sympy.simplify(fitted.subs(dict(zip(xs, y))) - fitted.subs(dict(zip(xs, x)))) == 0
+    rng = conserved_by_sympy(fitted, xs, comps, seed=5, den_max=4)
     # functionally dependent on the golden integral: their gradients are parallel at a point
     x = {v: sympy.Rational(rng.randint(1, 9), rng.randint(1, 4)) for v in xs}
     J = sympy.Matrix([[sympy.diff(f, v).subs(x) for v in xs] for f in (fitted, golden)])
@@ -179,14 +185,8 @@ def test_solve_with_numerator_and_denominator_over_different_monomials():
     num, den = fitter.solve((0, 2), [(0, 0, 0), (0, 0, 2)], even, primes)
     assert set(num) <= {(0, 0, 0), (0, 0, 2)} and set(den) <= set(even) and len(den) > 1
     xs, comps = sympy_field(euler)
-    I = sum(c * sympy.Mul(*[v ** k for v, k in zip(xs, e)]) for e, c in num.items()) / \
-        sum(c * sympy.Mul(*[v ** k for v, k in zip(xs, e)]) for e, c in den.items())
-    eps = sympy.Rational(1, 10)   # the entry depends on the map's ε, the one the fitter was given
-    rng = random.Random(2)
-    for _ in range(2):
-        x = [sympy.Rational(rng.randint(1, 9), rng.randint(1, 5)) for _ in xs]
-        y = kahan_step(xs, comps, eps, x)
-        assert I.subs(dict(zip(xs, x))) == I.subs(dict(zip(xs, y)))
+    # the entry depends on the map's ε, the one the fitter was given (1/10)
+    conserved_by_sympy(sympy_poly(num, xs) / sympy_poly(den, xs), xs, comps, seed=2, den_max=5)
     assert fitter.solve((0, 2), [(0, 0, 0), (0, 0, 2)], [(0, 0, 0), (2, 0, 0)], primes) is None
 
 
