@@ -306,12 +306,10 @@ class EntryFitter:
     the echelon form of the evaluation of their union, its columns of each taken into its half."""
 
     def __init__(self, fld, eps, exps, steps, pivots, seed, margin, known=(), progress=None, max_bytes=None,
-                 orbits=None):
+                 cache=None):
         self.fld, self.eps, self.exps, self.steps, self.pivots = fld, eps, exps, steps, tuple(pivots)
         self.margin, self.known = margin, list(known)
-        # shared by the fitters of a search: (x0, p) -> orbit mod p, and "blocks" -> their evaluations' echelon forms
-        self.orbits = {} if orbits is None else orbits
-        self.blocks = self.orbits.setdefault("blocks", _Blocks())
+        self.cache = FitCache() if cache is None else cache  # shared by the fitters of a search
         self.say, self.max_bytes = progress or (lambda text: None), max_bytes
         self.rng = random.Random(f"fit-{seed}")
         self.starts = []          # pool starting points (rational) and the known integrals' values there
@@ -321,9 +319,9 @@ class EntryFitter:
         x0, cvals = start
         if any(c.denominator % p == 0 for c in cvals):
             return None
-        if (tuple(x0), p) not in self.orbits:
-            self.orbits[tuple(x0), p] = orbit_mod_or_none(self.fld, self.eps, x0, self.steps, p)
-        pts = self.orbits[tuple(x0), p]
+        if (tuple(x0), p) not in self.cache.orbits:
+            self.cache.orbits[tuple(x0), p] = orbit_mod_or_none(self.fld, self.eps, x0, self.steps, p)
+        pts = self.cache.orbits[tuple(x0), p]
         if pts is None:
             return None
         ev = evaluator(tuple(self.exps))
@@ -373,7 +371,7 @@ class EntryFitter:
         data = self.pool(p, i + 1)
         if data is None:
             return None
-        return self.blocks.get((self.starts[i][0], p, mons), lambda: evaluation_matrix(mons, data[i][0], p).rref())
+        return self.cache.block((self.starts[i][0], p, mons), lambda: evaluation_matrix(mons, data[i][0], p).rref())
 
     def _orbits_for(self, p, mons, rows):
         """The number of pool orbits whose echelon rows first reach ``rows`` (None: pool unusable)."""
@@ -587,21 +585,22 @@ class EntryFitter:
                 {tuple(int(t) for t in e): Fraction(int(c.p), int(c.q)) for e, c in den.to_dict().items()})
 
 
-#: entries of the echelon forms kept by a search (:class:`_Blocks`, 8 bytes each: 34 MB); the Lagrange top's
+#: entries of the echelon forms kept by a search (:class:`FitCache`, 8 bytes each: 34 MB); the Lagrange top's
 #: 200 fits evaluate the monomials of degree <= 1..4 in its 6 variables on the same pool orbits
 BLOCK_ENTRIES = 2 ** 22
 
 
-class _Blocks:
-    """Echelon forms of monomial evaluations on pool orbits, (x0, p, monomials) -> (R, rank), shared by
-    the fitters of a search (their pools start from the same points); beyond BLOCK_ENTRIES entries the
-    oldest of other monomials or primes are dropped (those of the fit at work are all needed again when
-    its system is built, after :meth:`EntryFitter._orbits_for` has counted their ranks)."""
+class FitCache:
+    """What the fitters of a search share (their pools start from the same points): ``orbits``, (x0, p) ->
+    the orbit mod p (None where singular), and the echelon forms of monomial evaluations on them,
+    (x0, p, monomials) -> (R, rank) (:meth:`block`); beyond BLOCK_ENTRIES entries the oldest of other
+    monomials or primes are dropped (those of the fit at work are all needed again when its system is
+    built, after :meth:`EntryFitter._orbits_for` has counted their ranks)."""
 
     def __init__(self):
-        self.kept, self.entries = {}, 0
+        self.orbits, self.kept, self.entries = {}, {}, 0
 
-    def get(self, key, make):
+    def block(self, key, make):
         if key not in self.kept:
             R, rank = make()
             self.kept[key] = (R, rank)

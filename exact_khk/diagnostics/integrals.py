@@ -66,8 +66,9 @@ from math import comb
 import flint
 
 from exact_khk.diagnostics.degrees import check_primes, eps_of, random_primes, resolve_field
-from exact_khk.diagnostics.fitting import (MAX_FIT_UNKNOWNS, MAX_PLAIN_FIT_UNKNOWNS, EntryFitter, FitTooLarge,
-                                           circuits, entry_jacobian, entry_line, orbit_with_tangents, rank_mod)
+from exact_khk.diagnostics.fitting import (MAX_FIT_UNKNOWNS, MAX_PLAIN_FIT_UNKNOWNS, EntryFitter, FitCache,
+                                           FitTooLarge, circuits, entry_jacobian, entry_line, orbit_with_tangents,
+                                           rank_mod)
 from exact_khk.diagnostics.hkbases import hk_basis_integrals
 from exact_khk.diagnostics.kernels import (_point, _rref_rows, by_degree, independent_count, jacobian_rows, lift,
                                            monomial_text, monomials, orbit_kernel_mod, parse_monomials, poly_text,
@@ -567,7 +568,7 @@ class _Job:
                 continue
             self.notes.append(f"I{len(kept)} from a pencil of the kernel on the level sets {text} = c (candidates "
                               f"free of one of its variables), its coefficients interpolated in c")
-        budget, orbits = MAX_FITS, {}
+        budget, cache = MAX_FITS, FitCache()
         for sub, data in self.ordered_supports(kept, ref, p0, seed)[:MAX_CIRCUITS]:
             if len(kept) >= visible or budget <= 0:
                 break
@@ -585,7 +586,7 @@ class _Job:
                     if T not in fitters:
                         fitters[T] = EntryFitter(self.fld, self.eps, sub, self.steps, data[0], seed, self.margin,
                                                  [kept[i].polynomials() for i in T], self.progress, self.max_bytes,
-                                                 orbits)
+                                                 cache)
                     try:
                         pair = fitters[T].fit(key, delta, primes, J, variables)
                     except FitTooLarge as exc:  # said once: the larger fits are refused the same way
